@@ -1,0 +1,1 @@
+"""Shared pieces every ACDS node needs: units, topic names, scenario loading, the lockstep base."""

@@ -1,0 +1,1 @@
+"""Electromagnets and bridge-switch drivers with the ±ε hysteresis current band (spec §6)."""

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Create/refresh the project virtual environment at .venv (idempotent).
+# Installs the pinned requirements (requirements.lock) and the workspace
+# packages (editable, so edits take effect without reinstalling).
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+VENV="$ROOT/.venv"
+PY="${ACDS_PYTHON:-python3}"
+STAMP="$VENV/.acds_setup_stamp"
+PKGS=(acds_common dynamics magnetometer_sim em_driver acds_controller ascs_mode_manager)
+
+want=$(cd "$ROOT" && cat requirements.lock ros_ws/src/*/setup.py | sha256sum | cut -c1-16)
+if [[ -f "$STAMP" && "$(cat "$STAMP")" == "$want" && -x "$VENV/bin/python" ]]; then
+  exit 0
+fi
+echo "[setup] preparing $VENV (first run takes ~1 min)" >&2
+if [[ ! -x "$VENV/bin/python" ]]; then
+  "$PY" -m venv "$VENV"
+fi
+"$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -r "$ROOT/requirements.lock" 2> >(grep -v "is ignored: it is neither" >&2)
+args=()
+for p in "${PKGS[@]}"; do args+=(-e "$ROOT/ros_ws/src/$p"); done
+"$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation "${args[@]}" 2> >(grep -v "is ignored: it is neither" >&2)
+echo "$want" > "$STAMP"
+echo "[setup] done" >&2
