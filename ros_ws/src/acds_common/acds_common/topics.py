@@ -46,3 +46,42 @@ GROUND_ACK = 'ground/ack'                       #: std_msgs/String: acknowledgem
 EVENTS = 'events'                               #: std_msgs/String: mode transitions, automatic turn-on/off, with sim time
 
 DIAGNOSTICS = 'diagnostics'                     #: diagnostic_msgs/DiagnosticArray: health and telemetry of every node
+MONITOR_ACK = 'lockstep/monitor_ack'            #: rosgraph_msgs/Clock: the run monitor has received /clock step k
+
+#: Message type of every topic, as 'package/msg/Type' (used by the monitor, recorder and player).
+TYPES: dict[str, str] = {
+    CLOCK: 'rosgraph_msgs/msg/Clock',
+    READY: 'std_msgs/msg/String',
+    TRUTH_ODOMETRY: 'nav_msgs/msg/Odometry',
+    TRUTH_B_BODY: 'sensor_msgs/msg/MagneticField',
+    TRUTH_SUN_COSINES: 'geometry_msgs/msg/Vector3Stamped',
+    TRUTH_TORQUE_MAG: 'geometry_msgs/msg/Vector3Stamped',
+    TRUTH_TORQUE_GG: 'geometry_msgs/msg/Vector3Stamped',
+    GYRO: 'sensor_msgs/msg/Imu',
+    SUN_SENSOR: 'geometry_msgs/msg/Vector3Stamped',
+    WHEEL_MOMENTUM: 'geometry_msgs/msg/Vector3Stamped',
+    WHEEL_TORQUE: 'geometry_msgs/msg/Vector3Stamped',
+    MAG_FIELD: 'sensor_msgs/msg/MagneticField',
+    MAG_VOLTS: 'geometry_msgs/msg/Vector3Stamped',
+    MAG_BIAS_VOLTS: 'geometry_msgs/msg/Vector3Stamped',
+    MOMENT_COMMAND: 'geometry_msgs/msg/Vector3Stamped',
+    WHEEL_VOLTS: 'geometry_msgs/msg/Vector3Stamped',
+    DIPOLE_AVG: 'geometry_msgs/msg/Vector3Stamped',
+    DIPOLE_END: 'geometry_msgs/msg/Vector3Stamped',
+    COIL_CURRENT: 'geometry_msgs/msg/Vector3Stamped',
+    E_FT: 'geometry_msgs/msg/Vector3Stamped',
+    MODE: 'diagnostic_msgs/msg/DiagnosticArray',
+    GROUND_COMMAND: 'std_msgs/msg/String',
+    GROUND_ACK: 'std_msgs/msg/String',
+    EVENTS: 'std_msgs/msg/String',
+    DIAGNOSTICS: 'diagnostic_msgs/msg/DiagnosticArray',
+    MONITOR_ACK: 'rosgraph_msgs/msg/Clock',
+}
+
+#: Truth topics (hashed into the run's truth digest).
+TRUTH = (TRUTH_ODOMETRY, TRUTH_B_BODY, TRUTH_SUN_COSINES, TRUTH_TORQUE_MAG, TRUTH_TORQUE_GG, GYRO, SUN_SENSOR)
+
+
+def resolve(topic: str) -> str:
+    """Absolute topic name (``/acds/...``, or ``/clock``)."""
+    return topic if topic.startswith('/') else f'{NAMESPACE}/{topic}'

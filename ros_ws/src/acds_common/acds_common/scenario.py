@@ -1,0 +1,347 @@
+"""Scenario files: schema, unit conversion, and the node parameters they become.
+
+A scenario is a YAML file (``scenarios/<name>.yaml``). Quantities carry their
+unit in the key, e.g. ``altitude_nmi: 225`` or ``inertia_slug_ft2: [...]``;
+each field accepts a small set of units and is converted to SI here, the one
+place where seed units meet SI (spec header "Units"). ``extends: <name>``
+starts from another scenario and overrides keys (deep merge).
+
+The schema is the single source of truth: node parameter names
+(``<section>_<field>_<si unit>``), types, defaults, ranges and descriptions
+all come from :data:`SCHEMA`; nodes declare their parameters from it, and the
+launcher passes each node exactly the sections it owns (:data:`NODE_SECTIONS`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from acds_common import units as u
+
+
+class ScenarioError(ValueError):
+    """A scenario file is malformed: the message names the file and the key."""
+
+
+REQUIRED = object()
+_DEG = math.pi / 180.0
+
+
+@dataclass(frozen=True)
+class Field:
+    """One scenario key: type, SI unit suffix, accepted units → SI factor, default, range, meaning."""
+
+    kind: str  # 'float' | 'int' | 'bool' | 'str' | 'floats' | 'strs'
+    doc: str
+    default: Any = REQUIRED
+    si: str = ''
+    units: dict[str, float] = field(default_factory=dict)
+    lo: float | None = None
+    hi: float | None = None
+    choices: tuple[str, ...] = ()
+    length: int | None = None
+
+    def param_name(self, section: str, name: str) -> str:
+        """The ROS parameter name this key becomes."""
+        base = f'{section}_{name}' if section else name
+        return f'{base}_{self.si}' if self.si else base
+
+
+def _q(doc: str, default: Any, si: str, units: dict[str, float], **kw: Any) -> Field:
+    kind = 'floats' if isinstance(default, list) or kw.get('length') else 'float'
+    return Field(kind, doc, default, si, units, **kw)
+
+
+ANGLE = {'deg': _DEG, 'rad': 1.0}
+RATE = {'deg_s': _DEG, 'rad_s': 1.0, 'rpm': 2 * math.pi / 60}
+LENGTH = {'nmi': u.NMI_M, 'km': 1e3, 'm': 1.0}
+RADIUS = {**LENGTH, 'earth_radii': u.EARTH_RADIUS_M}
+INERTIA = {'slug_ft2': u.SLUG_FT2_KG_M2, 'kg_m2': 1.0}
+MOMENTUM = {'ft_lb_s': u.FT_LB_S_NMS, 'nms': 1.0}
+TIME = {'s': 1.0, 'min': 60.0}
+
+#: Every key a scenario may hold, by section ('' is the top level).
+SCHEMA: dict[str, dict[str, Field]] = {
+    '': {
+        'name': Field('str', 'scenario name (the file stem)'),
+        'description': Field('str', 'one line: what this scenario shows'),
+        'seed': Field('int', 'random seed for every noise stream', 1, lo=0, hi=2**31 - 1),
+        'control_period': _q('lockstep control period Δt (the DPA cycle)', 0.5, 's', TIME, lo=1e-3, hi=60.0),
+        'duration': _q('run length (or duration_orbits)', REQUIRED, 's',
+                       {**TIME, 'orbits': float('nan')}, lo=0.0, hi=30 * 86400.0),
+        'nodes': Field('strs', 'nodes of the graph', ['rigid_body', 'reaction_wheels'],
+                       choices=('rigid_body', 'reaction_wheels', 'magnetometer_sim', 'em_driver',
+                                'acds_controller', 'ascs_mode_manager')),
+        'input_timeout': _q('wall time a node may wait for an input', 30.0, 's', TIME, lo=0.5, hi=3600.0),
+    },
+    'spacecraft': {
+        'inertia': _q('inertia [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (Table 4-1; products Ixy = ∫xy dm, '
+                      'tensor I = [[Ixx,−Ixy,−Ixz],…])', REQUIRED, 'kg_m2', INERTIA, length=6),
+        'inertia_scale': Field('float', 'multiplies the whole tensor (Table 4-7 case 3: 2/3)', 1.0,
+                               lo=0.01, hi=100.0),
+        'initial_rates': _q('initial body rates ω0 (x, y, z)', [0.0, 0.0, 0.0], 'rad_s', RATE, length=3,
+                            lo=-1.0, hi=1.0),
+        'initial_quaternion_xyzw': Field('floats', 'initial attitude q body→ECI, scalar last',
+                                         [0.0, 0.0, 0.0, 1.0], length=4, lo=-1.0, hi=1.0),
+    },
+    'orbit': {
+        'kind': Field('str', 'circular or elliptical (Kepler)', 'circular', choices=('circular', 'elliptical')),
+        'altitude': _q('circular orbit altitude', 225 * u.NMI_M, 'm', LENGTH, lo=100e3, hi=1e8),
+        'perigee_altitude': _q('elliptical: perigee altitude', 120 * u.NMI_M, 'm', LENGTH, lo=100e3, hi=1e8),
+        'apogee_radius': _q('elliptical: apogee radius, geocentric', 5.2 * u.EARTH_RADIUS_M, 'm', RADIUS,
+                            lo=6.4e6, hi=1e9),
+        'inclination': _q('orbit inclination', 22.5 * _DEG, 'rad', ANGLE, lo=0.0, hi=math.pi),
+        'raan': _q('right ascension of the ascending node', 0.0, 'rad', ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
+        'arg_latitude0': _q('circular: argument of latitude at t0', 0.0, 'rad', ANGLE,
+                            lo=-2 * math.pi, hi=2 * math.pi),
+        'arg_perigee': _q('elliptical: argument of perigee', 0.0, 'rad', ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
+        'mean_anomaly0': _q('elliptical: mean anomaly at t0', 0.0, 'rad', ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
+    },
+    'earth': {
+        'greenwich_angle0': _q('Greenwich meridian from the vernal equinox at t0', 0.0, 'rad', ANGLE,
+                               lo=-2 * math.pi, hi=2 * math.pi),
+        'dipole_tilt': _q('dipole axis tilt from the spin axis (study: 11°)', 11 * _DEG, 'rad', ANGLE,
+                          lo=0.0, hi=math.pi),
+        'dipole_longitude': _q('dipole axis longitude offset from Greenwich (study: 20°)', 20 * _DEG, 'rad',
+                               ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
+        'dipole_moment': _q('Earth dipole moment', 7.94e22, 'am2', {'am2': 1.0}, lo=1e20, hi=1e24),
+    },
+    'sun': {
+        'right_ascension': _q('sun right ascension (ECI)', 0.0, 'rad', ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
+        'declination': _q('sun declination (ECI)', 0.0, 'rad', ANGLE, lo=-math.pi / 2, hi=math.pi / 2),
+        'eclipse': Field('bool', 'model the Earth shadow (cylindrical)', False),
+    },
+    'dynamics': {
+        'gravity_gradient': Field('bool', 'apply the gravity-gradient torque', True),
+        'substeps': Field('int', 'RK4 substeps per control period', 10, lo=1, hi=10000),
+    },
+    'wheels': {
+        'layout': Field('str', 'three_orthogonal or four_cant20 (spec §4)', 'three_orthogonal',
+                        choices=('three_orthogonal', 'four_cant20')),
+        'failed_wheel': Field('int', 'index of a failed wheel of the 4-wheel cluster, −1 for none', -1,
+                              lo=-1, hi=3),
+        'initial_momentum': _q('initial wheel momentum, body axes', [0.0, 0.0, 0.0], 'nms', MOMENTUM,
+                               length=3, lo=-1e3, hi=1e3),
+    },
+}
+
+#: Which scenario sections each node receives as parameters.
+NODE_SECTIONS: dict[str, tuple[str, ...]] = {
+    'rigid_body': ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics'),
+    'reaction_wheels': ('wheels',),
+    'magnetometer_sim': (),
+    'em_driver': (),
+    'acds_controller': ('spacecraft',),
+    'ascs_mode_manager': (),
+}
+
+#: Where shipped scenarios live (override with ACDS_SCENARIO_DIR).
+SCENARIO_DIR = Path(os.environ.get('ACDS_SCENARIO_DIR', Path(__file__).resolve().parents[4] / 'scenarios'))
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario: SI values by section, plus where it came from."""
+
+    name: str
+    path: Path
+    values: dict[str, dict[str, Any]]
+    raw: dict[str, Any]
+
+    def get(self, section: str, name: str) -> Any:
+        """SI value of ``section.name``."""
+        return self.values[section][name]
+
+    @property
+    def control_period_s(self) -> float:
+        """Lockstep Δt, s."""
+        return self.values['']['control_period']
+
+    def orbit_period_s(self) -> float:
+        """Orbital period from the orbit section (circular or Kepler)."""
+        o = self.values['orbit']
+        if o['kind'] == 'circular':
+            a = u.EARTH_RADIUS_M + o['altitude']
+        else:
+            a = (u.EARTH_RADIUS_M + o['perigee_altitude'] + o['apogee_radius']) / 2.0
+        return 2 * math.pi * math.sqrt(a**3 / u.EARTH_MU_M3_S2)
+
+    def duration_s(self) -> float:
+        """Run length, s (``duration_orbits`` × the orbit period when given in orbits)."""
+        top = self.values['']
+        if 'duration_orbits' in top:
+            return top['duration_orbits'] * self.orbit_period_s()
+        return top['duration']
+
+    def total_steps(self) -> int:
+        """Number of control steps in the run."""
+        return max(1, round(self.duration_s() / self.control_period_s))
+
+    def node_parameters(self, node: str) -> dict[str, Any]:
+        """ROS parameters (SI, unit in the name) for ``node`` from its sections."""
+        params: dict[str, Any] = {}
+        for section in NODE_SECTIONS[node]:
+            for name, f in SCHEMA[section].items():
+                params[f.param_name(section, name)] = self.values[section][name]
+        return params
+
+
+def scenario_path(name_or_path: str) -> Path:
+    """Resolve a shipped scenario name or a path to a YAML file."""
+    p = Path(name_or_path)
+    if p.suffix in ('.yaml', '.yml') or p.exists():
+        return p
+    return SCENARIO_DIR / f'{name_or_path}.yaml'
+
+
+def list_scenarios() -> list[tuple[str, str]]:
+    """(name, description) of every shipped scenario."""
+    out = []
+    for p in sorted(SCENARIO_DIR.glob('*.yaml')):
+        try:
+            out.append((p.stem, load_scenario(str(p)).values['']['description']))
+        except ScenarioError as exc:
+            out.append((p.stem, f'INVALID: {exc}'))
+    return out
+
+
+def _read_yaml(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:
+    if not path.exists():
+        known = ', '.join(n for n, _ in ((p.stem, '') for p in sorted(SCENARIO_DIR.glob('*.yaml'))))
+        raise ScenarioError(f'scenario {path} not found (shipped: {known})')
+    if path in chain:
+        raise ScenarioError(f'{path}: "extends" loops back on itself')
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, 'problem_mark', None)
+        where = f' line {mark.line + 1}, column {mark.column + 1}' if mark else ''
+        raise ScenarioError(f'{path}:{where} is not valid YAML: {getattr(exc, "problem", exc)}') from None
+    if not isinstance(data, dict):
+        raise ScenarioError(f'{path}: a scenario is a mapping of keys, got {type(data).__name__}')
+    base_name = data.pop('extends', None)
+    if base_name is None:
+        return data
+    base = _read_yaml(scenario_path(str(base_name)), (*chain, path))
+    for key, value in data.items():
+        if isinstance(value, dict) and isinstance(base.get(key), dict):
+            merged = dict(base[key])
+            for sub, v in value.items():  # a key given in another unit replaces the base's
+                stem = _stem(key, sub)
+                for old in [o for o in merged if _stem(key, o) == stem]:
+                    del merged[old]
+                merged[sub] = v
+            base[key] = merged
+        else:
+            base[key] = value
+    return base
+
+
+def _stem(section: str, key: str) -> str:
+    schema = SCHEMA.get(section, {})
+    for name, f in schema.items():
+        if key == name or any(key == f'{name}_{unit}' for unit in f.units):
+            return name
+    return key
+
+
+def _check_value(where: str, f: Field, value: Any, factor: float) -> Any:
+    def number(v: Any) -> float:
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise ScenarioError(f'{where}: expected a number, got {v!r}')
+        x = float(v) * factor
+        if not math.isfinite(x):
+            raise ScenarioError(f'{where}: {v!r} is not a finite number')
+        if (f.lo is not None and x < f.lo) or (f.hi is not None and x > f.hi):
+            lo = f.lo / factor if f.lo is not None else None
+            hi = f.hi / factor if f.hi is not None else None
+            raise ScenarioError(f'{where}: {v!r} is out of range [{lo:g}, {hi:g}]')
+        return x
+
+    if f.kind == 'float':
+        return number(value)
+    if f.kind == 'int':
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ScenarioError(f'{where}: expected an integer, got {value!r}')
+        return int(number(value))
+    if f.kind == 'bool':
+        if not isinstance(value, bool):
+            raise ScenarioError(f'{where}: expected true or false, got {value!r}')
+        return value
+    if f.kind == 'str':
+        if not isinstance(value, str):
+            raise ScenarioError(f'{where}: expected a string, got {value!r}')
+        if f.choices and value not in f.choices:
+            raise ScenarioError(f'{where}: {value!r} is not one of {", ".join(f.choices)}')
+        return value
+    if not isinstance(value, list):
+        raise ScenarioError(f'{where}: expected a list, got {value!r}')
+    if f.length is not None and len(value) != f.length:
+        raise ScenarioError(f'{where}: expected {f.length} values, got {len(value)}')
+    if f.kind == 'strs':
+        bad = [v for v in value if v not in f.choices]
+        if bad:
+            raise ScenarioError(f'{where}: unknown {", ".join(map(str, bad))} (known: {", ".join(f.choices)})')
+        return list(value)
+    return [number(v) for v in value]
+
+
+def _validate_section(path: Path, section: str, given: dict[str, Any]) -> dict[str, Any]:
+    schema = SCHEMA[section]
+    prefix = f'{section}.' if section else ''
+    allowed: dict[str, tuple[str, str | None]] = {}
+    for name, f in schema.items():
+        if f.units:
+            for unit in f.units:
+                allowed[f'{name}_{unit}'] = (name, unit)
+        else:
+            allowed[name] = (name, None)
+    out: dict[str, Any] = {}
+    for key, value in given.items():
+        if key not in allowed:
+            hint = ', '.join(sorted(allowed))
+            raise ScenarioError(f'{path}: unknown key "{prefix}{key}" (allowed here: {hint})')
+        name, unit = allowed[key]
+        if name in out or (name == 'duration' and 'duration_orbits' in out):
+            raise ScenarioError(f'{path}: "{prefix}{name}" is given twice (in two units?)')
+        f = schema[name]
+        where = f'{path}: {prefix}{key}'
+        if unit == 'orbits':
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value <= 1000:
+                raise ScenarioError(f'{where}: expected a number of orbits in (0, 1000], got {value!r}')
+            out['duration_orbits'] = float(value)
+            continue
+        out[name] = _check_value(where, f, value, f.units[unit] if unit else 1.0)
+    for name, f in schema.items():
+        if name not in out and not (name == 'duration' and 'duration_orbits' in out):
+            if f.default is REQUIRED:
+                units = ', '.join(f'{name}_{x}' for x in f.units) if f.units else name
+                raise ScenarioError(f'{path}: missing required key "{prefix}{name}" (as {units})')
+            out[name] = f.default
+    return out
+
+
+def load_scenario(name_or_path: str) -> Scenario:
+    """Read, merge (``extends``), validate and convert a scenario; raise ScenarioError on any problem."""
+    path = scenario_path(name_or_path)
+    data = _read_yaml(path)
+    unknown = sorted(k for k, v in data.items() if isinstance(v, dict) and k not in SCHEMA)
+    if unknown:
+        raise ScenarioError(f'{path}: unknown section "{unknown[0]}" (sections: {", ".join(s for s in SCHEMA if s)})')
+    values = {'': _validate_section(path, '', {k: v for k, v in data.items() if not isinstance(v, dict)})}
+    for section in SCHEMA:
+        if section:
+            given = data.get(section, {})
+            if not isinstance(given, dict):
+                raise ScenarioError(f'{path}: "{section}" must be a mapping')
+            values[section] = _validate_section(path, section, given)
+    sc = Scenario(values['']['name'], path, values, data)
+    if path.parent == SCENARIO_DIR and sc.name != path.stem:
+        raise ScenarioError(f'{path}: name "{sc.name}" differs from the file name "{path.stem}"')
+    return sc

@@ -1,0 +1,1 @@
+"""User commands of the ACDS emulator (``scripts/acds``): launcher, monitor, tools."""

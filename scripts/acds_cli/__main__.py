@@ -1,0 +1,185 @@
+"""``scripts/acds``: one user entry, one verb per job. Every verb has ``--help``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from acds_common.scenario import ScenarioError, list_scenarios, load_scenario
+
+ROOT = Path(__file__).resolve().parents[2]
+DEFAULT_SCENARIO = 'free_tumble_heao_b'
+
+
+class Progress:
+    """One progress line: sim time / total and the real-time factor (in place on a TTY, else every 10 %)."""
+
+    def __init__(self, dt_s: float) -> None:
+        self.dt_s = dt_s
+        self.tty = sys.stderr.isatty()
+        self.last_pct = -10
+        self.last_print = 0.0
+
+    def __call__(self, k: int, total: int, wall_s: float) -> None:
+        pct = 100.0 * k / total
+        now = time.monotonic()
+        if self.tty and now - self.last_print < 0.2 and k < total:
+            return
+        if not self.tty and pct < self.last_pct + 10 and k < total:
+            return
+        self.last_print, self.last_pct = now, pct
+        sim_min = k * self.dt_s / 60
+        rtf = k * self.dt_s / wall_s if wall_s > 0 else 0.0
+        line = (f'[progress] sim {sim_min:7.1f} / {total * self.dt_s / 60:.1f} min ({pct:5.1f} %)  '
+                f'step {k}/{total}  real-time factor {rtf:,.0f}x')
+        print(('\r' + line) if self.tty else line, end='' if self.tty and k < total else '\n',
+              file=sys.stderr, flush=True)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    """Run a scenario through the full process graph and print its summary."""
+    from .launcher import GraphRun, LaunchError
+    from .summary import dynamics_summary, truth_digest
+
+    scenario = load_scenario(args.scenario or DEFAULT_SCENARIO)
+    steps = args.steps
+    if args.until_min is not None:
+        steps = max(1, round(args.until_min * 60 / scenario.control_period_s))
+    run_dir = Path(args.run_dir or ROOT / 'runs' / f'{scenario.name}_{time.strftime("%Y%m%d_%H%M%S")}')
+    quiet = args.quiet
+    echo = (lambda line: None) if quiet else None
+    graph = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=Progress(scenario.control_period_s))
+    print(f'[acds] scenario {scenario.name}: {graph.steps} steps of {scenario.control_period_s} s '
+          f'({graph.steps * scenario.control_period_s / 60:.1f} min sim), nodes {", ".join(scenario.get("", "nodes"))}; '
+          f'run folder {run_dir}', file=sys.stderr, flush=True)
+    try:
+        with graph:
+            result = graph.wait()
+            inertia = _inertia(scenario)
+            summary = {
+                'scenario': scenario.name,
+                'steps': result.steps,
+                'sim_minutes': result.steps * scenario.control_period_s / 60,
+                'wall_seconds': round(result.wall_seconds, 3),
+                **dynamics_summary(result.monitor, inertia),
+                'truth_digest': truth_digest(result.monitor),
+            }
+    except LaunchError as exc:
+        print(f'[acds] run failed: {exc}', file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print('\n[acds] interrupted: all nodes stopped', file=sys.stderr)
+        return 130
+    _print_summary(summary)
+    if args.summary_json:
+        Path(args.summary_json).write_text(json.dumps(summary, indent=2) + '\n')
+    return 0
+
+
+def _inertia(scenario):  # noqa: ANN001, ANN202
+    from dynamics.rigid_body_model import inertia_tensor
+    return inertia_tensor(*scenario.get('spacecraft', 'inertia')) * scenario.get('spacecraft', 'inertia_scale')
+
+
+def _print_summary(summary: dict) -> None:
+    print(f'\n== {summary["scenario"]}: {summary["steps"]} steps, {summary["sim_minutes"]:.1f} min sim '
+          f'in {summary["wall_seconds"]:.1f} s wall ==')
+    for key, value in summary.items():
+        if key in ('scenario', 'steps', 'sim_minutes', 'wall_seconds'):
+            continue
+        if isinstance(value, float):
+            value = f'{value:.6g}'
+        elif isinstance(value, list):
+            value = ', '.join(f'{v:.6g}' if isinstance(v, float) else str(v) for v in value)
+        print(f'  {key:28s} {value}')
+
+
+def cmd_scenarios(_args: argparse.Namespace) -> int:
+    """List the shipped scenarios."""
+    for name, description in list_scenarios():
+        print(f'{name:32s} {description}')
+    return 0
+
+
+def cmd_test(args: argparse.Namespace) -> int:
+    """Lint, then run the whole test suite."""
+    env = dict(os.environ)
+    lint = subprocess.run([sys.executable, '-m', 'ruff', 'check', '--output-format', 'concise', str(ROOT)],
+                          cwd=ROOT, check=False)
+    if lint.returncode != 0:
+        print('[acds] lint failed (ruff): fix the findings above', file=sys.stderr)
+        return lint.returncode
+    cmd = [sys.executable, '-m', 'pytest', '-q', '-n', str(args.jobs), *args.pytest_args]
+    return subprocess.run(cmd, cwd=ROOT, env=env, check=False).returncode
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    """Benchmark: graph lockstep steps/s, a bare rclpy chain with the same hops, core-only steps/s."""
+    from .bench import main as bench_main
+    return bench_main(args)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command-line surface (later verbs register here too)."""
+    parser = argparse.ArgumentParser(prog='acds', description='ACDS emulator: HEAO wheels+magnetics, SSS magnetic control.')
+    sub = parser.add_subparsers(dest='verb', metavar='VERB', required=True)
+
+    p = sub.add_parser('run', help='run a scenario through the full node graph (default: the main job)',
+                       description='Run SCENARIO (a shipped name or a YAML path) through the full process graph.')
+    p.add_argument('scenario', nargs='?', help=f'scenario name or path (default {DEFAULT_SCENARIO})')
+    g = p.add_mutually_exclusive_group()
+    g.add_argument('--steps', type=_positive_int, help='number of control steps (default: the scenario duration)')
+    g.add_argument('--until-min', type=float, help='run until this sim time, minutes')
+    p.add_argument('--summary-json', metavar='PATH', help='write the summary as one JSON object')
+    p.add_argument('--record', metavar='PATH', help='record the run into a rosbag2 bag')
+    p.add_argument('--rtf', type=float, default=0.0, help='pace at this real-time factor (default: as fast as possible)')
+    p.add_argument('--run-dir', help='run folder (default runs/<scenario>_<time>)')
+    p.add_argument('--quiet', action='store_true', help="don't forward the nodes' output")
+    p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser('scenarios', help='list the shipped scenarios', description='List the shipped scenarios.')
+    p.set_defaults(func=cmd_scenarios)
+
+    p = sub.add_parser('test', help='run the whole test suite (lint + pytest)',
+                       description='Lint (ruff) and run every test (pytest). Extra args go to pytest.')
+    p.add_argument('--jobs', '-j', type=_positive_int, default=2, help='parallel test workers (default 2)')
+    p.add_argument('pytest_args', nargs=argparse.REMAINDER, help='passed to pytest')
+    p.set_defaults(func=cmd_test)
+
+    p = sub.add_parser('setup', help='only set up the virtual environment (idempotent)',
+                       description='Create or refresh .venv (done by scripts/acds before any verb).')
+    p.set_defaults(func=lambda _a: 0)
+
+    p = sub.add_parser('bench', help='benchmark the lockstep graph against a bare rclpy chain',
+                       description='Print graph lockstep steps/s, a bare rclpy chain with the same hops, their ratio, '
+                                   'and core-only dynamics steps/s.')
+    p.add_argument('--json', action='store_true', help='last line: one JSON object')
+    p.add_argument('--steps', type=_positive_int, default=2000, help='steps per measurement (default 2000)')
+    p.set_defaults(func=cmd_bench)
+    return parser
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f'must be a positive integer, got {text}')
+    return value
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Parse the verb and run it; scenario errors are one line, exit 2."""
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except ScenarioError as exc:
+        print(f'acds: scenario error: {exc}', file=sys.stderr)
+        return 2
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,280 @@
+"""The Python launcher: one OS process per node, an isolated ROS domain, no orphans.
+
+``GraphRun`` starts each node of a scenario from its console-script entry
+point with parameters from the scenario (a generated ``--params-file``), in
+its own ``ROS_DOMAIN_ID`` (an exclusive lock per domain, so parallel runs
+never cross-talk) with localhost-only discovery. It forwards each child's
+output with a ``[node]`` prefix, hosts the :class:`RunMonitor`, reports
+progress, and stops every child on completion, on SIGINT/SIGTERM, or as soon
+as any node dies (naming it, with its exit code and last lines).
+"""
+
+from __future__ import annotations
+
+import fcntl
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Any
+
+import yaml
+from acds_common.lockstep import MONITOR_NAME, TIME_OWNER
+from acds_common.scenario import Scenario
+
+from .monitor import RunMonitor
+
+ROOT = Path(__file__).resolve().parents[2]
+VENV_BIN = Path(sys.executable).parent
+FASTDDS_PROFILE = Path(__file__).with_name('fastdds_profile.xml')
+DOMAIN_LOCK_DIR = Path(os.environ.get('ACDS_DOMAIN_LOCK_DIR', '/tmp/acds_domains'))
+#: Domain IDs handed out to runs (0 stays free for a user's own ROS graph).
+DOMAIN_RANGE = range(11, 100)
+
+
+class _NoAliasDumper(yaml.SafeDumper):
+    """rcl's params-file parser rejects YAML aliases: write every value out."""
+
+    def ignore_aliases(self, data: Any) -> bool:
+        return True
+
+
+class LaunchError(RuntimeError):
+    """The graph could not run to completion; the message names the node and the reason."""
+
+
+@dataclass
+class NodeProcess:
+    """One child process and the tail of its output."""
+
+    name: str
+    popen: subprocess.Popen[str]
+    tail: deque[str] = field(default_factory=lambda: deque(maxlen=15))
+    reader: threading.Thread | None = None
+
+
+@dataclass
+class RunResult:
+    """What a completed run leaves: exit codes, wall time, the monitor's data."""
+
+    scenario: Scenario
+    steps: int
+    wall_seconds: float
+    exit_codes: dict[str, int]
+    monitor: RunMonitor
+
+
+class DomainLease:
+    """An exclusive ROS_DOMAIN_ID for one run (file lock in /tmp, released on close)."""
+
+    def __init__(self) -> None:
+        DOMAIN_LOCK_DIR.mkdir(parents=True, exist_ok=True)
+        start = os.getpid() % len(DOMAIN_RANGE)
+        for i in range(len(DOMAIN_RANGE)):
+            domain = DOMAIN_RANGE[(start + i) % len(DOMAIN_RANGE)]
+            fh = open(DOMAIN_LOCK_DIR / f'domain_{domain}.lock', 'w')  # noqa: SIM115 (held for the run)
+            try:
+                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                fh.close()
+                continue
+            self.domain_id, self._fh = domain, fh
+            return
+        raise LaunchError(f'no free ROS domain in {DOMAIN_RANGE.start}..{DOMAIN_RANGE.stop - 1}: '
+                          f'too many runs at once (locks in {DOMAIN_LOCK_DIR})')
+
+    def close(self) -> None:
+        """Release the domain."""
+        self._fh.close()
+
+
+def node_parameters(scenario: Scenario, steps: int, rtf: float,
+                    overrides: dict[str, dict[str, Any]] | None = None) -> dict[str, dict[str, Any]]:
+    """Per-node ROS parameters: the common lockstep ones plus the node's scenario sections."""
+    nodes = list(scenario.get('', 'nodes'))
+    common = {
+        'control_period_s': scenario.control_period_s,
+        'graph_nodes': [*nodes, MONITOR_NAME],
+        'input_timeout_s': scenario.get('', 'input_timeout'),
+        'seed': scenario.get('', 'seed'),
+    }
+    out: dict[str, dict[str, Any]] = {}
+    for node in nodes:
+        params = {**common, **scenario.node_parameters(node)}
+        if node == TIME_OWNER:
+            params.update(total_steps=steps, real_time_factor=rtf)
+        else:
+            params['use_sim_time'] = True
+        params.update((overrides or {}).get(node, {}))
+        out[node] = params
+    return out
+
+
+class GraphRun:
+    """Run a scenario's node graph to completion (use as a context manager)."""
+
+    def __init__(self, scenario: Scenario, run_dir: Path, *, steps: int | None = None, rtf: float = 0.0,
+                 echo: Callable[[str], None] | None = None, progress: Callable[[int, int, float], None] | None = None,
+                 overrides: dict[str, dict[str, Any]] | None = None):
+        self.scenario = scenario
+        self.run_dir = Path(run_dir)
+        self.steps = steps if steps is not None else scenario.total_steps()
+        self.rtf = rtf
+        self.echo = echo or (lambda line: print(line, file=sys.stderr, flush=True))
+        self.progress = progress
+        self.overrides = overrides
+        self.processes: dict[str, NodeProcess] = {}
+        self.lease: DomainLease | None = None
+        self.monitor: RunMonitor | None = None
+        self._t0 = 0.0
+
+    # ---- lifecycle ----------------------------------------------------------------------------------
+    def __enter__(self) -> GraphRun:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def env(self) -> dict[str, str]:
+        """Environment of every child: isolated domain, localhost discovery, plain log lines."""
+        assert self.lease is not None
+        env = dict(os.environ)
+        env.update(
+            ROS_DOMAIN_ID=str(self.lease.domain_id),
+            ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
+            ROS_LOG_DIR=str(self.run_dir / 'ros_log'),
+            FASTRTPS_DEFAULT_PROFILES_FILE=str(FASTDDS_PROFILE),
+            RCUTILS_CONSOLE_OUTPUT_FORMAT='[{severity}] {message}',
+            RCUTILS_COLORIZED_OUTPUT='0',
+            PYTHONUNBUFFERED='1',
+        )
+        env.pop('ROS_LOCALHOST_ONLY', None)
+        return env
+
+    def start(self) -> None:
+        """Lease a domain, write the parameters, start the monitor and every node."""
+        self.run_dir.mkdir(parents=True, exist_ok=True)
+        self.lease = DomainLease()
+        env = self.env()
+        os.environ['FASTRTPS_DEFAULT_PROFILES_FILE'] = env['FASTRTPS_DEFAULT_PROFILES_FILE']
+        os.environ.setdefault('ROS_LOG_DIR', env['ROS_LOG_DIR'])
+        os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+        params = node_parameters(self.scenario, self.steps, self.rtf, self.overrides)
+        params_file = self.run_dir / 'params.yaml'
+        params_file.write_text(yaml.dump(
+            {f'/acds/{n}': {'ros__parameters': p} for n, p in params.items()}, Dumper=_NoAliasDumper, sort_keys=True))
+        self.monitor = RunMonitor(self.lease.domain_id, on_clock=self._on_clock)
+        self._t0 = time.monotonic()
+        for name in params:
+            exe = VENV_BIN / name
+            popen = subprocess.Popen(
+                [str(exe), '--ros-args', '--params-file', str(params_file)],
+                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                text=True, env=env, start_new_session=True)
+            proc = NodeProcess(name, popen)
+            proc.reader = threading.Thread(target=self._forward, args=(proc, popen.stdout), daemon=True)
+            proc.reader.start()
+            self.processes[name] = proc
+
+    def _forward(self, proc: NodeProcess, stream: IO[str] | None) -> None:
+        assert stream is not None
+        for line in stream:
+            line = line.rstrip('\n')
+            proc.tail.append(line)
+            self.echo(f'[{proc.name}] {line}')
+
+    def _on_clock(self, t_ns: int) -> None:
+        if self.progress is not None:
+            self.progress(round(t_ns / (self.scenario.control_period_s * 1e9)), self.steps,
+                          time.monotonic() - self._t0)
+
+    def wait(self) -> RunResult:
+        """Wait until the time owner completes; raise LaunchError naming any node that dies first."""
+        owner = self.processes[TIME_OWNER]
+        while True:
+            for proc in self.processes.values():
+                code = proc.popen.poll()
+                if code is None:
+                    continue
+                if proc is owner and code == 0:
+                    return self._complete()
+                raise LaunchError(self._death_report(proc, code))
+            try:
+                owner.popen.wait(timeout=0.05)
+            except subprocess.TimeoutExpired:
+                pass
+
+    def _death_report(self, proc: NodeProcess, code: int) -> str:
+        if proc.reader is not None:
+            proc.reader.join(timeout=2.0)
+        how = f'killed by signal {signal.Signals(-code).name}' if code < 0 else f'exit code {code}'
+        failure = [line for line in proc.tail if 'FAILURE' in line or 'ERROR' in line]
+        lines = '\n'.join(f'    {line}' for line in proc.tail)
+        head = f'node {proc.name} died ({how})'
+        if failure:
+            head += f': {failure[-1]}'
+        return f'{head}\n  last lines of {proc.name}:\n{lines}'
+
+    def _complete(self) -> RunResult:
+        assert self.monitor is not None
+        wall = time.monotonic() - self._t0
+        last_ns = round(self.steps * self.scenario.control_period_s * 1e9)
+        if not self.monitor.wait_for(lambda: bool(self.monitor.clock_ns) and self.monitor.clock_ns[-1] >= last_ns,
+                                     timeout_s=10.0):
+            raise LaunchError(f'run monitor did not receive the last /clock step {self.steps}')
+        codes = self._stop_children()
+        bad = {n: c for n, c in codes.items() if c != 0}
+        if bad:
+            name = next(iter(bad))
+            raise LaunchError(self._death_report(self.processes[name], bad[name]))
+        return RunResult(self.scenario, self.steps, wall, codes, self.monitor)
+
+    def _stop_children(self, grace_s: float = 10.0) -> dict[str, int]:
+        for proc in self.processes.values():
+            if proc.popen.poll() is None:
+                try:
+                    os.killpg(proc.popen.pid, signal.SIGINT)
+                except ProcessLookupError:
+                    pass
+        deadline = time.monotonic() + grace_s
+        codes: dict[str, int] = {}
+        killed = False
+        for name, proc in self.processes.items():
+            try:
+                codes[name] = proc.popen.wait(timeout=max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.popen.pid, signal.SIGKILL)
+                codes[name] = proc.popen.wait()
+                killed = True
+        if killed:
+            self.clean_shared_memory()
+        return codes
+
+    def clean_shared_memory(self) -> None:
+        """Remove Fast DDS shared-memory segments left by killed processes."""
+        fastdds = VENV_BIN / 'fastdds'
+        if fastdds.exists():
+            subprocess.run([str(fastdds), 'shm', 'clean'], capture_output=True, check=False, timeout=30)
+
+    def stop(self) -> None:
+        """Stop every child (SIGINT, then SIGKILL after a grace period) and release the domain."""
+        if any(p.popen.poll() is None for p in self.processes.values()):
+            self._stop_children()
+        if any((p.popen.returncode or 0) < 0 for p in self.processes.values()):
+            self.clean_shared_memory()
+        for proc in self.processes.values():
+            if proc.popen.stdout is not None:
+                proc.popen.stdout.close()
+        if self.monitor is not None:
+            self.monitor.close()
+            self.monitor = None
+        if self.lease is not None:
+            self.lease.close()
+            self.lease = None
