@@ -44,9 +44,11 @@ class Progress:
 def cmd_run(args: argparse.Namespace) -> int:
     """Run a scenario through the full process graph and print its summary."""
     from .launcher import GraphRun, LaunchError
+    from .preflight import preflight
     from .summary import dynamics_summary, truth_digest
 
     scenario = load_scenario(args.scenario or DEFAULT_SCENARIO)
+    preflight(scenario)
     steps = args.steps
     if args.until_min is not None:
         steps = max(1, round(args.until_min * 60 / scenario.control_period_s))

@@ -6,7 +6,6 @@ import hashlib
 from typing import Any
 
 import numpy as np
-
 from acds_common import topics
 from acds_common.units import nms_to_ftlbs, tesla_to_gauss
 from dynamics.rigid_body_model import quat_to_dcm

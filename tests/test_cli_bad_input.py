@@ -1,0 +1,43 @@
+"""Bad input through the user command: one clear line, non-zero exit, no traceback."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+BASE = (ROOT / 'scenarios' / 'free_tumble_heao_b.yaml').read_text()
+
+
+def run_acds(*args: str) -> subprocess.CompletedProcess[str]:
+    env = {'PYTHONPATH': str(ROOT / 'scripts'), 'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': '/tmp/acds_ros_log'}
+    return subprocess.run([sys.executable, '-m', 'acds_cli', *args], capture_output=True, text=True,
+                          cwd=ROOT, env=env, timeout=120, check=False)
+
+
+@pytest.mark.parametrize(('edit', 'message'), [
+    (lambda s: s.replace('  substeps: 10', '  substeps: 10\n  subteps: 3'), 'unknown key "dynamics.subteps"'),
+    (lambda s: s.replace('[1520, 7970', '[-1520, 7970'), 'spacecraft.inertia: inertia tensor is not positive definite'),
+    (lambda s: s.replace('initial_rates_deg_s: [1.0, 1.0, 1.0]', 'initial_rates_deg_s: [.nan, 1.0, 1.0]'),
+     'spacecraft.initial_rates_deg_s: nan is not a finite number'),
+    (lambda s: s.replace('altitude_nmi: 225', 'altitude_nmi: [225'), 'is not valid YAML'),
+    (lambda s: s.replace('name: free_tumble_heao_b\n', ''), 'missing required key "name"'),
+])
+def test_bad_scenario_is_one_clear_error(tmp_path, edit, message):
+    path = tmp_path / 'bad.yaml'
+    path.write_text(edit(BASE))
+    proc = run_acds('run', str(path), '--steps', '5')
+    assert proc.returncode == 2
+    assert message in proc.stderr, proc.stderr
+    assert 'Traceback' not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_unknown_verb_and_option_are_clear_errors():
+    proc = run_acds('fly')
+    assert proc.returncode == 2 and "invalid choice: 'fly'" in proc.stderr
+    proc = run_acds('run', '--warp', '9')
+    assert proc.returncode == 2 and 'unrecognized arguments: --warp' in proc.stderr

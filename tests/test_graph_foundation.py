@@ -1,0 +1,57 @@
+"""Graph tests of the foundation: determinism, no orphans, a dying or hung node is named."""
+
+from __future__ import annotations
+
+import os
+import signal
+
+import pytest
+from acds_cli.launcher import LaunchError
+from acds_cli.summary import stream_digests, truth_digest
+from acds_cli.testing import alive, wait_for_messages
+from acds_common import topics
+from acds_common.scenario import load_scenario
+
+STEPS = 120
+
+
+def test_two_runs_publish_identical_truth(launch_graph):
+    digests, streams = [], []
+    for _ in range(2):
+        with launch_graph('free_tumble_heao_b', steps=STEPS) as graph:
+            result = graph.wait()
+            assert result.exit_codes == {'rigid_body': 0, 'reaction_wheels': 0}
+            odom = result.monitor.messages(topics.TRUTH_ODOMETRY)
+            assert len(odom) == STEPS + 1, 'one truth message per step, 0..N'
+            assert [m.header.stamp.nanosec + m.header.stamp.sec * 10**9 for m in odom[:3]] == [0, 500_000_000, 10**9]
+            digests.append(truth_digest(result.monitor))
+            streams.append(stream_digests(result.monitor))
+            pids = [p.popen.pid for p in graph.processes.values()]
+        assert not any(alive(pid) for pid in pids)
+    assert digests[0] == digests[1]
+    assert streams[0] == streams[1]
+
+
+def test_killed_node_ends_the_run_naming_it(launch_graph):
+    with launch_graph('free_tumble_heao_b', steps=100000) as graph:
+        wait_for_messages(graph, topics.CLOCK, 20)
+        os.kill(graph.processes['reaction_wheels'].popen.pid, signal.SIGKILL)
+        with pytest.raises(LaunchError, match=r'node reaction_wheels died \(killed by signal SIGKILL\)'):
+            graph.wait()
+
+
+def test_hung_node_fails_the_run_naming_node_and_topic(launch_graph):
+    sc = load_scenario('free_tumble_heao_b')
+    sc.values['']['input_timeout'] = 2.0
+    with launch_graph(sc, steps=100000) as graph:
+        wait_for_messages(graph, topics.CLOCK, 10)
+        pid = graph.processes['reaction_wheels'].popen.pid
+        os.kill(pid, signal.SIGSTOP)
+        try:
+            with pytest.raises(LaunchError) as err:
+                graph.wait()
+        finally:
+            os.kill(pid, signal.SIGCONT)
+    text = str(err.value)
+    assert 'node rigid_body died (exit code 3)' in text
+    assert '/acds/wheels/momentum (from reaction_wheels' in text
