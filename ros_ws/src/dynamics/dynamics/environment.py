@@ -1,0 +1,335 @@
+"""Environment: Keplerian orbit, tilted-dipole Earth field, Sun and the sun-pointed frame (spec §3).
+
+Frames. ECI: inertial, x to the vernal equinox, z to the celestial north pole. ECEF: rotates about
+ECI z at ``units.EARTH_RATE_RAD_S``; its x axis (Greenwich meridian) is at the Earth rotation
+angle ``greenwich_angle0_rad + EARTH_RATE_RAD_S * t`` from ECI x.
+
+Seed: 002_heao_acds_study.txt §4.3 (tilted dipole 11° / 20° from Greenwich, orbit conditions of
+§4.3.1 and §4.3.2, sun-pointed frame of Figure 4-14).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from acds_common import units
+
+#: Mean obliquity of the ecliptic, rad (spec §3).
+OBLIQUITY_RAD = math.radians(23.44)
+#: Earth dipole moment, A·m²: gives 0.253 G at the magnetic equator and 0.506 G at the magnetic pole
+#: at 225 nmi altitude (spec §3 "about 0.25 G ... 0.5 G").
+DEFAULT_DIPOLE_MOMENT_AM2 = 7.94e22
+#: Dipole tilt from the spin axis, rad (seed 002 §4.3: "inclined 11°").
+DEFAULT_DIPOLE_TILT_RAD = math.radians(11.0)
+#: East longitude of the boreal (northern-hemisphere) geomagnetic pole, rad. The seed says only
+#: "offset 20° from the Greenwich meridian" (§4.3); we take 20° WEST, the side of the real
+#: geomagnetic north pole (≈70° W in 1970). A scenario may override it.
+DEFAULT_DIPOLE_LONGITUDE_RAD = math.radians(-20.0)
+
+_KEPLER_TOL_RAD = 1e-14
+_KEPLER_MAX_ITER = 60
+
+
+class DynamicsError(ValueError):
+    """Invalid input to the dynamics package (orbit, field, sun, body or wheel parameters)."""
+
+
+def finite_float(name: str, value: float) -> float:
+    """Return ``value`` as a finite float or raise DynamicsError naming ``name``."""
+    value = float(value)
+    if not math.isfinite(value):
+        raise DynamicsError(f"{name} must be a finite number, got {value!r}")
+    return value
+
+
+def finite_vector3(name: str, value: object) -> np.ndarray:
+    """Return ``value`` as a finite float 3-vector or raise DynamicsError naming ``name``."""
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (3,):
+        raise DynamicsError(f"{name} must be a 3-vector, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise DynamicsError(f"{name} must be finite, got {arr.tolist()}")
+    return arr
+
+
+def rot_z(angle_rad: float) -> np.ndarray:
+    """Active rotation matrix about z by ``angle_rad``."""
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rot_x(angle_rad: float) -> np.ndarray:
+    """Active rotation matrix about x by ``angle_rad``."""
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+# --------------------------------------------------------------------------------------------- orbit
+
+
+@dataclass(frozen=True)
+class OrbitConfig:
+    """Orbit parameters, SI and radians (spec §3 "Orbits").
+
+    ``kind='circular'``: ``altitude_m`` above ``units.EARTH_RADIUS_M`` and ``arg_latitude0_rad`` (argument
+    of latitude at t = 0). ``kind='elliptical'``: ``perigee_altitude_m``, ``apogee_radius_m``
+    (geocentric), ``arg_perigee_rad``, ``mean_anomaly0_rad``. Both: ``inclination_rad`` and
+    ``raan_rad`` (right ascension of the ascending node).
+    """
+
+    kind: str = "circular"
+    inclination_rad: float = math.radians(22.5)
+    raan_rad: float = 0.0
+    altitude_m: float = 225.0 * units.NMI_M
+    arg_latitude0_rad: float = 0.0
+    perigee_altitude_m: float = 120.0 * units.NMI_M
+    apogee_radius_m: float = 5.2 * units.EARTH_RADIUS_M
+    arg_perigee_rad: float = 0.0
+    mean_anomaly0_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("circular", "elliptical"):
+            raise DynamicsError(f"OrbitConfig.kind must be 'circular' or 'elliptical', got {self.kind!r}")
+        for name in ("inclination_rad", "raan_rad", "altitude_m", "arg_latitude0_rad", "perigee_altitude_m",
+                     "apogee_radius_m", "arg_perigee_rad", "mean_anomaly0_rad"):
+            finite_float(f"OrbitConfig.{name}", getattr(self, name))
+        if not 0.0 <= self.inclination_rad <= math.pi:
+            raise DynamicsError(f"OrbitConfig.inclination_rad must be in [0, pi], got {self.inclination_rad}")
+        if self.kind == "circular" and self.altitude_m <= 0.0:
+            raise DynamicsError(f"OrbitConfig.altitude_m must be > 0 m, got {self.altitude_m}")
+        if self.kind == "elliptical":
+            if self.perigee_altitude_m <= 0.0:
+                raise DynamicsError(
+                    f"OrbitConfig.perigee_altitude_m must be > 0 m, got {self.perigee_altitude_m}")
+            if self.apogee_radius_m < units.EARTH_RADIUS_M + self.perigee_altitude_m:
+                raise DynamicsError(
+                    "OrbitConfig.apogee_radius_m is geocentric and must be >= the perigee radius "
+                    f"{units.EARTH_RADIUS_M + self.perigee_altitude_m} m, got {self.apogee_radius_m}")
+
+
+def solve_kepler(mean_anomaly_rad: float, eccentricity: float) -> float:
+    """Eccentric anomaly E solving Kepler's equation E − e sin E = M (0 ≤ e < 1).
+
+    Newton iteration from E0 = M (e < 0.8) or π (e ≥ 0.8), each step bracketed in [−π, π] around
+    the wrapped M and falling back to bisection if a Newton step leaves the bracket, so it converges
+    for every M and every e < 1.
+    """
+    if not 0.0 <= eccentricity < 1.0:
+        raise DynamicsError(f"eccentricity must be in [0, 1), got {eccentricity}")
+    m = math.remainder(mean_anomaly_rad, 2.0 * math.pi)  # in [-pi, pi]
+    # f(E) = E - e sin E - m is increasing; root lies in [m - e, m + e] ∩ [-pi, pi].
+    lo, hi = max(-math.pi, m - eccentricity), min(math.pi, m + eccentricity)
+    e_anom = m if eccentricity < 0.8 else math.copysign(math.pi, m)
+    e_anom = min(max(e_anom, lo), hi)
+    for _ in range(_KEPLER_MAX_ITER):
+        f = e_anom - eccentricity * math.sin(e_anom) - m
+        if f > 0.0:
+            hi = e_anom
+        else:
+            lo = e_anom
+        step = f / (1.0 - eccentricity * math.cos(e_anom))
+        new = e_anom - step
+        if not lo <= new <= hi:
+            new = 0.5 * (lo + hi)
+        if abs(new - e_anom) < _KEPLER_TOL_RAD:
+            e_anom = new
+            break
+        e_anom = new
+    return e_anom + (mean_anomaly_rad - m)
+
+
+class Orbit:
+    """Two-body Keplerian orbit about a point-mass Earth (spec §3 "Orbits")."""
+
+    def __init__(self, cfg: OrbitConfig) -> None:
+        self.cfg = cfg
+        if cfg.kind == "circular":
+            r_p = r_a = units.EARTH_RADIUS_M + cfg.altitude_m
+            self._arg0 = cfg.arg_latitude0_rad
+        else:
+            r_p = units.EARTH_RADIUS_M + cfg.perigee_altitude_m
+            r_a = cfg.apogee_radius_m
+            self._arg0 = cfg.arg_perigee_rad
+        self.perigee_radius_m = r_p
+        self.apogee_radius_m = r_a
+        self.semi_major_axis_m = 0.5 * (r_p + r_a)
+        self.eccentricity = (r_a - r_p) / (r_a + r_p)
+        self.mean_motion_rad_s = math.sqrt(units.EARTH_MU_M3_S2 / self.semi_major_axis_m ** 3)
+        #: Orbit period, s.
+        self.period_s = 2.0 * math.pi / self.mean_motion_rad_s
+        # Perifocal (or node-line) frame to ECI: R3(Ω) R1(i) R3(ω or u0).
+        self._pqw_to_eci = rot_z(cfg.raan_rad) @ rot_x(cfg.inclination_rad) @ rot_z(self._arg0)
+
+    def position_velocity_eci(self, t_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """Position (m) and velocity (m/s) in ECI at time ``t_s`` (s from scenario start)."""
+        t_s = finite_float("t_s", t_s)
+        a, e, n = self.semi_major_axis_m, self.eccentricity, self.mean_motion_rad_s
+        if self.cfg.kind == "circular":
+            u = n * t_s
+            cu, su = math.cos(u), math.sin(u)
+            r_pqw = np.array([a * cu, a * su, 0.0])
+            v_pqw = np.array([-a * n * su, a * n * cu, 0.0])
+        else:
+            e_anom = solve_kepler(self.cfg.mean_anomaly0_rad + n * t_s, e)
+            ce, se = math.cos(e_anom), math.sin(e_anom)
+            b = a * math.sqrt(1.0 - e * e)
+            edot = n / (1.0 - e * ce)
+            r_pqw = np.array([a * (ce - e), b * se, 0.0])
+            v_pqw = np.array([-a * se * edot, b * ce * edot, 0.0])
+        return self._pqw_to_eci @ r_pqw, self._pqw_to_eci @ v_pqw
+
+
+# ------------------------------------------------------------------------------------- magnetic field
+
+
+@dataclass(frozen=True)
+class EarthFieldConfig:
+    """Tilted-dipole Earth field parameters (spec §3; seed 002 §4.3).
+
+    ``dipole_moment_am2`` (A·m²), ``tilt_rad`` (dipole axis from the spin axis),
+    ``dipole_longitude_rad`` (east longitude of the northern geomagnetic pole, where the field points
+    down; default 20° W, see DEFAULT_DIPOLE_LONGITUDE_RAD), ``greenwich_angle0_rad`` (Earth rotation
+    angle at t = 0: angle from the vernal equinox to Greenwich, e.g. 50° in the seed's scan case).
+    """
+
+    dipole_moment_am2: float = DEFAULT_DIPOLE_MOMENT_AM2
+    tilt_rad: float = DEFAULT_DIPOLE_TILT_RAD
+    dipole_longitude_rad: float = DEFAULT_DIPOLE_LONGITUDE_RAD
+    greenwich_angle0_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("dipole_moment_am2", "tilt_rad", "dipole_longitude_rad", "greenwich_angle0_rad"):
+            finite_float(f"EarthFieldConfig.{name}", getattr(self, name))
+        if self.dipole_moment_am2 <= 0.0:
+            raise DynamicsError(
+                f"EarthFieldConfig.dipole_moment_am2 must be > 0 A·m², got {self.dipole_moment_am2}")
+        if not 0.0 <= self.tilt_rad <= math.pi / 2:
+            raise DynamicsError(f"EarthFieldConfig.tilt_rad must be in [0, pi/2], got {self.tilt_rad}")
+
+
+class TiltedDipoleField:
+    """Centred tilted dipole rotating with the Earth (spec §3; seed 002 §4.3).
+
+    B = μ0/(4π r³)·(3(m·r̂)r̂ − m), m = −|m|·p̂ where p̂ points to the northern geomagnetic pole, so the
+    field points down (toward the Earth) in the northern hemisphere as for the real Earth.
+    """
+
+    def __init__(self, cfg: EarthFieldConfig) -> None:
+        self.cfg = cfg
+        st = math.sin(cfg.tilt_rad)
+        lon = cfg.dipole_longitude_rad
+        self._pole_ecef = np.array([st * math.cos(lon), st * math.sin(lon), math.cos(cfg.tilt_rad)])
+        self._k = units.MU0 / (4.0 * math.pi) * cfg.dipole_moment_am2
+
+    def greenwich_angle_rad(self, t_s: float) -> float:
+        """Earth rotation angle (vernal equinox to Greenwich), rad, at ``t_s``."""
+        return self.cfg.greenwich_angle0_rad + units.EARTH_RATE_RAD_S * t_s
+
+    def dipole_axis_eci(self, t_s: float) -> np.ndarray:
+        """Unit vector to the northern geomagnetic pole in ECI at ``t_s`` (the moment is antiparallel)."""
+        return rot_z(self.greenwich_angle_rad(t_s)) @ self._pole_ecef
+
+    def b_eci(self, r_eci_m: np.ndarray, t_s: float) -> np.ndarray:
+        """Field (T) in ECI at position ``r_eci_m`` (m) and time ``t_s`` (s)."""
+        r = np.asarray(r_eci_m, dtype=float)
+        rn = math.sqrt(float(r @ r))
+        if not rn > 0.0 or not math.isfinite(rn):
+            raise DynamicsError(f"field point must be finite and away from the Earth's centre, got {r}")
+        rhat = r / rn
+        m_hat = -self.dipole_axis_eci(t_s)
+        return (self._k / rn ** 3) * (3.0 * float(m_hat @ rhat) * rhat - m_hat)
+
+
+# ------------------------------------------------------------------------------------------------ sun
+
+
+def ecliptic_normal_eci(obliquity_rad: float = OBLIQUITY_RAD) -> np.ndarray:
+    """Unit normal of the ecliptic (north ecliptic pole) in ECI: (0, −sin ε, cos ε)."""
+    return np.array([0.0, -math.sin(obliquity_rad), math.cos(obliquity_rad)])
+
+
+def ecliptic_to_radec(ecliptic_longitude_rad: float,
+                      obliquity_rad: float = OBLIQUITY_RAD) -> tuple[float, float]:
+    """(right ascension, declination), rad, of a point on the ecliptic at the given longitude."""
+    lam = ecliptic_longitude_rad
+    v = rot_x(obliquity_rad) @ np.array([math.cos(lam), math.sin(lam), 0.0])
+    return math.atan2(v[1], v[0]), math.asin(max(-1.0, min(1.0, v[2])))
+
+
+@dataclass(frozen=True)
+class SunConfig:
+    """Sun direction for a run (spec §3 "Sun").
+
+    The direction is fixed for the run (runs are ≲ 1 day; the Sun moves ≈ 1°/day along the ecliptic,
+    which is ignored). ``right_ascension_rad``/``declination_rad`` in ECI; ``eclipse`` enables a
+    cylindrical Earth shadow (default off: sun always present).
+    """
+
+    right_ascension_rad: float = 0.0
+    declination_rad: float = 0.0
+    eclipse: bool = False
+
+    def __post_init__(self) -> None:
+        finite_float("SunConfig.right_ascension_rad", self.right_ascension_rad)
+        finite_float("SunConfig.declination_rad", self.declination_rad)
+        if abs(self.declination_rad) > math.pi / 2:
+            raise DynamicsError(
+                f"SunConfig.declination_rad must be in [-pi/2, pi/2], got {self.declination_rad}")
+
+    @classmethod
+    def from_sun_angle(cls, sun_angle_rad: float, eclipse: bool = False) -> SunConfig:
+        """Sun from the study's "sun angle" (seed 002 §4.3.2.1: "Sun Angle −120 deg").
+
+        The seed does not define it. Interpretation: the Sun's ecliptic longitude measured from the
+        vernal equinox (the season), so −120° ≡ 240°, late November. The Sun is on the ecliptic
+        (latitude 0).
+        """
+        ra, dec = ecliptic_to_radec(finite_float("sun_angle_rad", sun_angle_rad))
+        return cls(right_ascension_rad=ra, declination_rad=dec, eclipse=eclipse)
+
+
+class Sun:
+    """Sun direction and presence (spec §3 "Sun"; sensors ideal per seed 002 §4.3)."""
+
+    def __init__(self, cfg: SunConfig) -> None:
+        self.cfg = cfg
+        ca, sa = math.cos(cfg.right_ascension_rad), math.sin(cfg.right_ascension_rad)
+        cd, sd = math.cos(cfg.declination_rad), math.sin(cfg.declination_rad)
+        self._dir = np.array([cd * ca, cd * sa, sd])
+
+    def direction_eci(self, t_s: float) -> np.ndarray:
+        """Unit vector to the Sun in ECI (constant over the run; ``t_s`` kept for the interface)."""
+        finite_float("t_s", t_s)
+        return self._dir.copy()
+
+    def present(self, r_eci_m: np.ndarray, t_s: float) -> bool:
+        """True when the Sun is visible from ``r_eci_m`` (always True when eclipse is disabled)."""
+        if not self.cfg.eclipse:
+            return True
+        r = np.asarray(r_eci_m, dtype=float)
+        s = self.direction_eci(t_s)
+        along = float(r @ s)
+        if along >= 0.0:
+            return True
+        perp = r - along * s
+        return float(perp @ perp) > units.EARTH_RADIUS_M ** 2
+
+
+def sun_frame_dcm(sun_eci_unit: np.ndarray, ecliptic_normal_eci: np.ndarray) -> np.ndarray:
+    """Rows = sun-pointed frame axes in ECI (spec §3; seed 002 §4.3.1, Figure 4-14).
+
+    z to the Sun, y in the ecliptic plane (y = n̂_ecl × z, i.e. toward increasing ecliptic longitude),
+    x = y × z completing the right-handed set (for a Sun on the ecliptic x = −n̂_ecl, ecliptic south).
+    """
+    z = finite_vector3("sun_eci_unit", sun_eci_unit)
+    z = z / np.linalg.norm(z)
+    n = finite_vector3("ecliptic_normal_eci", ecliptic_normal_eci)
+    y = np.cross(n, z)
+    norm_y = np.linalg.norm(y)
+    if norm_y < 1e-9:
+        raise DynamicsError("sun direction is parallel to the ecliptic normal: sun frame undefined")
+    y = y / norm_y
+    x = np.cross(y, z)
+    return np.vstack([x, y, z])
