@@ -1,0 +1,264 @@
+"""Three-axis electromagnet driver assembly with redundancy, failures and alarms (spec §6).
+
+Seed: 002_heao_acds_study.txt §4.2.5 (two complete drivers and windings per
+axis, active/standby, selected by the TA; e_ft compared with the command to
+detect a failure), §4.2.7 and Table 4-11 (EEA SELECT command, COIL CURRENT,
+TORQUER CURRENT CMD and EXCESS COIL CURRENT ALARM telemetry); seed
+001_sss_ascs_fulcher.txt (SSS saturated constant-level drive, the coil
+resistance alone limiting the current).
+
+Conventions:
+* Axis index 0, 1, 2 = body x, y, z. Units per axis are 'A' (default active)
+  and 'B' (standby). Both windings sit on the same core, so the axis dipole is
+  the sum of the two windings' moments; the standby unit is unpowered (the TA
+  removes its power), so its winding only carries a decaying current after a
+  switch-over.
+* 'bridge_switch' axes: the moment command (A·m²) is saturated at the coil's
+  max_moment_am2 and divided by moment_per_amp_am2 to give the current command.
+* 'constant_level' axes: only the sign of the command component matters
+  (−1/0/+1); the full supply is switched onto the coil.
+* Mismatch / excess-coil-current alarm: the active unit's measured current
+  (e_ft / sense gain) differs from the current a healthy driver would hold
+  (the command, limited to what the supply reaches) by more than
+  ``mismatch_tolerance_frac`` × the axis full-scale current, continuously for
+  longer than ``mismatch_settle_s``. Defaults 0.1 (0.0727 A for Table 4-3, ten
+  times the ±1 % band) and 3.0 s (a full-scale step settles within about
+  1.1 s = τ·ln(I_on/(I_on − 0.727 A)), so a healthy driver never trips it).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from em_driver.bridge_switch import (
+    BridgeSwitchCoil,
+    CoilFault,
+    CoilParams,
+    DriverParams,
+    EmDriverError,
+    PeriodResult,
+)
+
+__all__ = ['DRIVE_TYPES', 'UNITS', 'AxisConfig', 'AssemblyResult', 'DriveAssembly']
+
+#: Drive types selectable per axis.
+DRIVE_TYPES = ('bridge_switch', 'constant_level')
+#: Redundant unit names per axis (driver + winding).
+UNITS = ('A', 'B')
+
+
+def _default_constant_level_driver() -> DriverParams:
+    """Saturated switch: no transistor drop, so the current tends to E/R exactly (seed 001)."""
+    return DriverParams(v_ces_v=0.0)
+
+
+@dataclass(frozen=True)
+class AxisConfig:
+    """One axis: drive type ('bridge_switch' or 'constant_level'), coil and driver parameters.
+
+    coil: CoilParams (Table 4-3 by default); driver: DriverParams (Fig. 4-10
+    constants by default; a constant-level axis built with
+    ``AxisConfig.constant_level`` uses v_ces_v = 0 so it reaches 28 V / R).
+    """
+
+    drive_type: str = 'bridge_switch'
+    coil: CoilParams = field(default_factory=CoilParams)
+    driver: DriverParams = field(default_factory=DriverParams)
+
+    def __post_init__(self) -> None:
+        if self.drive_type not in DRIVE_TYPES:
+            raise EmDriverError(f'drive_type must be one of {DRIVE_TYPES}, got {self.drive_type!r}')
+
+    @classmethod
+    def constant_level(cls, coil: CoilParams) -> AxisConfig:
+        """A saturated constant-level axis (SSS) on the given coil, 28 V switched straight on."""
+        return cls('constant_level', coil, _default_constant_level_driver())
+
+
+@dataclass(frozen=True)
+class AssemblyResult:
+    """Per-axis outputs of one control period (arrays indexed x, y, z).
+
+    avg_dipole_am2 / end_dipole_am2: time-averaged and end dipole, A·m².
+    coil_current_a: active winding current at the end, A.
+    commanded_current_a: current command per axis, A (TA "torquer current cmd").
+    e_ft_v: active unit's current telemetry, V.
+    duty: active unit's duty cycle (0…1). switch_count: its bridge transitions.
+    power_w: electrical power drawn by both units of the axis, W.
+    alarms: excess-coil-current / mismatch alarm per axis.
+    active_units: 'A' or 'B' per axis.
+    events: unit switch-overs and alarm transitions this period.
+    diagnostics: rejected commands (NaN/inf) this period.
+    """
+
+    avg_dipole_am2: np.ndarray
+    end_dipole_am2: np.ndarray
+    coil_current_a: np.ndarray
+    commanded_current_a: np.ndarray
+    e_ft_v: np.ndarray
+    duty: np.ndarray
+    switch_count: np.ndarray
+    power_w: np.ndarray
+    alarms: np.ndarray
+    active_units: tuple[str, str, str]
+    events: tuple[str, ...]
+    diagnostics: tuple[str, ...]
+
+
+class _Axis:
+    """One axis: two units (driver + winding) and the mismatch monitor."""
+
+    def __init__(self, config: AxisConfig) -> None:
+        self.config = config
+        self.units = {name: BridgeSwitchCoil(config.coil, config.driver) for name in UNITS}
+        self.active = UNITS[0]
+        self.command = 0.0
+        self.mismatch_time_s = 0.0
+        self.alarm = False
+
+    def current_command_a(self) -> float:
+        """Current command for the held moment / level command, A (signed)."""
+        coil = self.config.coil
+        if self.config.drive_type == 'constant_level':
+            return float(np.sign(self.command)) * self.units[self.active].on_current_a
+        moment = float(np.clip(self.command, -coil.max_moment_am2, coil.max_moment_am2))
+        return moment / coil.moment_per_amp_am2
+
+    def run_unit(self, name: str, dt_s: float) -> PeriodResult:
+        unit = self.units[name]
+        powered = name == self.active
+        unit.powered = powered
+        if self.config.drive_type == 'constant_level':
+            level = int(np.sign(self.command)) if powered else 0
+            return unit.run_constant_level(level, dt_s)
+        return unit.run(self.current_command_a() if powered else 0.0, dt_s)
+
+
+class DriveAssembly:
+    """Three axes of electromagnets with active/standby drivers and windings (spec §6).
+
+    axes: three AxisConfig (default: three Table 4-3 bridge-switch axes).
+    auto_switch_to_standby: when an axis' mismatch alarm trips, switch it to the
+        other unit by itself and report it in the events.
+    mismatch_tolerance_frac: alarm tolerance as a fraction of the axis full-scale
+        current (max_current_a for bridge-switch axes, I_on for constant-level).
+    mismatch_settle_s: how long, s, the mismatch must persist before the alarm.
+    """
+
+    def __init__(self, axes: Sequence[AxisConfig] | None = None, auto_switch_to_standby: bool = False,
+                 mismatch_tolerance_frac: float = 0.1, mismatch_settle_s: float = 3.0) -> None:
+        configs = [AxisConfig() for _ in range(3)] if axes is None else list(axes)
+        if len(configs) != 3:
+            raise EmDriverError(f'DriveAssembly needs exactly 3 axis configs, got {len(configs)}')
+        if not (math.isfinite(mismatch_tolerance_frac) and mismatch_tolerance_frac > 0.0):
+            raise EmDriverError(f'mismatch_tolerance_frac must be > 0, got {mismatch_tolerance_frac!r}')
+        if not (math.isfinite(mismatch_settle_s) and mismatch_settle_s >= 0.0):
+            raise EmDriverError(f'mismatch_settle_s must be >= 0 s, got {mismatch_settle_s!r}')
+        self._axes = [_Axis(c) for c in configs]
+        self.auto_switch_to_standby = auto_switch_to_standby
+        self.mismatch_tolerance_frac = mismatch_tolerance_frac
+        self.mismatch_settle_s = mismatch_settle_s
+        self._pending_events: list[str] = []
+
+    @property
+    def active_units(self) -> tuple[str, str, str]:
+        """Active unit per axis."""
+        x, y, z = (a.active for a in self._axes)
+        return x, y, z
+
+    def select_eea(self, axis: int, unit: str) -> None:
+        """EEA SELECT (Table 4-11): make ``unit`` ('A'/'B') the active driver + winding of ``axis`` (0…2)."""
+        ax = self._axis(axis)
+        self._check_unit(unit)
+        if unit != ax.active:
+            ax.active = unit
+            ax.mismatch_time_s = 0.0
+            self._pending_events.append(f'axis {axis}: EEA select -> unit {unit}')
+
+    def inject_failure(self, axis: int, unit: str, kind: str | None) -> None:
+        """Fail one unit: kind 'open_winding', 'stuck_on_bridge' or 'dead_driver'; None clears it."""
+        self._check_unit(unit)
+        self._axis(axis).units[unit].set_fault(kind)
+
+    def unit_fault(self, axis: int, unit: str) -> CoilFault | None:
+        """The failure injected into one unit, or None."""
+        self._check_unit(unit)
+        return self._axis(axis).units[unit].fault
+
+    def step(self, moment_command_am2: np.ndarray, dt_s: float) -> AssemblyResult:
+        """Drive the three axes for dt_s (s) toward moment_command_am2 (A·m², body axes).
+
+        A NaN/inf component is rejected: that axis holds its last valid command and
+        the result carries a diagnostic (no exception: the node keeps running).
+        """
+        command = np.asarray(moment_command_am2, dtype=float)
+        if command.shape != (3,):
+            raise EmDriverError(f'moment_command_am2 must have shape (3,), got {command.shape}')
+        if not (math.isfinite(dt_s) and dt_s > 0.0):
+            raise EmDriverError(f'dt_s must be a finite positive time, got {dt_s!r}')
+        diagnostics: list[str] = []
+        events, self._pending_events = self._pending_events, []
+        out = {k: np.zeros(3) for k in ('avg', 'end', 'cur', 'cmd', 'eft', 'duty', 'power')}
+        switches = np.zeros(3, dtype=int)
+        for k, ax in enumerate(self._axes):
+            if math.isfinite(command[k]):
+                ax.command = float(command[k])
+            else:
+                diagnostics.append(f'axis {k}: rejected non-finite moment command {command[k]!r}; '
+                                   f'holding last valid command {ax.command:g}')
+            results = {name: ax.run_unit(name, dt_s) for name in UNITS}
+            active = results[ax.active]
+            out['avg'][k] = sum(r.avg_moment_am2 for r in results.values())
+            out['end'][k] = sum(r.end_moment_am2 for r in results.values())
+            out['power'][k] = sum(r.power_w for r in results.values())
+            out['cur'][k] = active.end_current_a
+            out['cmd'][k] = ax.current_command_a()
+            out['eft'][k] = active.e_ft_v
+            out['duty'][k] = active.duty
+            switches[k] = active.switch_count
+            events.extend(self._monitor(k, ax, active, dt_s))
+        return AssemblyResult(
+            avg_dipole_am2=out['avg'], end_dipole_am2=out['end'], coil_current_a=out['cur'],
+            commanded_current_a=out['cmd'], e_ft_v=out['eft'], duty=out['duty'], switch_count=switches,
+            power_w=out['power'], alarms=np.array([a.alarm for a in self._axes]),
+            active_units=self.active_units, events=tuple(events), diagnostics=tuple(diagnostics))
+
+    def _monitor(self, k: int, ax: _Axis, active: PeriodResult, dt_s: float) -> list[str]:
+        """Mismatch alarm: e_ft against the expected current; optional auto switch to standby."""
+        unit = ax.units[ax.active]
+        measured_a = active.e_ft_v / ax.config.driver.current_sense_gain_v_per_a
+        expected_a = float(np.clip(ax.current_command_a(), -unit.on_current_a, unit.on_current_a))
+        full_scale_a = (unit.on_current_a if ax.config.drive_type == 'constant_level'
+                        else ax.config.coil.max_current_a)
+        if abs(measured_a - expected_a) > self.mismatch_tolerance_frac * full_scale_a:
+            ax.mismatch_time_s += dt_s
+        else:
+            ax.mismatch_time_s = 0.0
+        events: list[str] = []
+        alarm = ax.mismatch_time_s > self.mismatch_settle_s
+        if alarm and not ax.alarm:
+            events.append(f'axis {k}: excess coil current / mismatch alarm on unit {ax.active} '
+                          f'(measured {measured_a:.4f} A, expected {expected_a:.4f} A)')
+        elif ax.alarm and not alarm:
+            events.append(f'axis {k}: mismatch alarm cleared')
+        ax.alarm = alarm
+        if alarm and self.auto_switch_to_standby:
+            standby = UNITS[1] if ax.active == UNITS[0] else UNITS[0]
+            events.append(f'axis {k}: auto switch from unit {ax.active} to standby unit {standby}')
+            ax.active = standby
+            ax.mismatch_time_s = 0.0
+        return events
+
+    def _axis(self, axis: int) -> _Axis:
+        if axis not in (0, 1, 2):
+            raise EmDriverError(f'axis must be 0, 1 or 2 (x, y, z), got {axis!r}')
+        return self._axes[axis]
+
+    @staticmethod
+    def _check_unit(unit: str) -> None:
+        if unit not in UNITS:
+            raise EmDriverError(f'unit must be one of {UNITS}, got {unit!r}')

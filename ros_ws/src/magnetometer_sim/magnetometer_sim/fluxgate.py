@@ -1,0 +1,315 @@
+"""Triaxial fluxgate magnetometer: two assemblies, coupling, residual field, faults (spec §5).
+
+Seed: 002_heao_acds_study.txt §4.2.6 (Table 4-5), §4.2.7 (Fig. 4-11: per-axis
+field voltages V_Bi and the zero-field bias voltage V_Bias), §4.3.1 (residual
+body-fixed field 1 % of the maximum Earth field per axis; electromagnet →
+magnetometer coupling eqs. 4-29 to 4-33, 5 % of the maximum Earth field on the
+other two axes for a saturated magnet in acquisition) and §4.3.2 (cruise
+coupling 8.75e-6 G per A·m² in each axis).
+
+What the sensor sees (T, body axes): B_sensed = B_true + B_residual + Δ·M, with
+M the electromagnets' achieved dipole (A·m², previous step) and Δ[i, j] the
+coupling gain of the i-magnetometer to the j-magnet (the seed's δ_ij), T/(A·m²).
+
+Volts ↔ field, per axis (b = B_sensed in gauss, V in volts):
+
+    V = V_bias + k·(b + c·(b³ − b·b_fs²)) + accuracy error + noise,
+    clipped to [0, 5] V, then quantised to steps of k·0.004 G = 0.01 V,
+
+with k = 2.5 V/G, V_bias = 2.5 V (+ any bias-shift fault), b_fs = 1 G and
+c = nonlinearity_frac/2. This end-point nonlinearity passes exactly through
+0 V / 2.5 V / 5 V at −1 / 0 / +1 G; its slope k·(1 + c·(3b² − 1)) deviates from
+k by −c at zero field and +2c = nonlinearity_frac (1 %) at full scale, so the
+deviation never exceeds ±1 % of 2.5 V/G over ±1 G (Table 4-5). To invert
+(what ``MagnetometerReading.field_t`` reports, the "naive reader"):
+b ≈ (V − 2.5 V)/(2.5 V/G), i.e. about the NOMINAL bias; a reader that uses the
+telemetered bias instead computes b ≈ (V − bias_volts)/(2.5 V/G), which removes
+a bias-shift fault. Neither inversion undoes the nonlinearity (≤ 0.4 % of
+reading, ≤ 0.0038 G at 1 G).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from acds_common.units import GAUSS_T
+
+__all__ = [
+    'MagnetometerError',
+    'FluxgateAxisParams',
+    'FluxgateAssembly',
+    'Magnetometer',
+    'MagnetometerReading',
+    'FAULT_KINDS',
+    'UNITS',
+    'MAX_EARTH_FIELD_T',
+    'coupling_cruise',
+    'coupling_acquisition',
+]
+
+#: Fault kinds accepted by ``inject_fault``.
+FAULT_KINDS = ('bias_shift', 'stuck_axis', 'dead_unit')
+#: Assembly names: active/standby pair.
+UNITS = ('A', 'B')
+#: Study's maximum Earth field at HEAO altitude, T (0.5 G at the magnetic pole, spec §3).
+MAX_EARTH_FIELD_T = 0.5 * GAUSS_T
+
+
+class MagnetometerError(ValueError):
+    """Invalid input to the magnetometer model (the one exception of the magnetometer_sim package)."""
+
+
+@dataclass(frozen=True)
+class FluxgateAxisParams:
+    """One fluxgate axis (Table 4-5). Units in the names; fields in gauss where the seed states them.
+
+    bias_v: zero-field output, V (2.5). scale_v_per_g: 2.5 V/G.
+    rail_low_v / rail_high_v: output rails, V (0 / 5).
+    range_g: full scale ±range_g, G (1).
+    nonlinearity_frac: peak slope deviation at full scale (0.01; sign selects
+        expanding (+) or compressive (−) curvature; see the module docstring).
+    resolution_g: output quantisation step, G (0.004 → 0.01 V).
+    accuracy_frac_fs: accuracy bound, fraction of full scale (0.001 → ±0.001 G).
+    accuracy_error_enabled: draw a fixed per-unit offset + scale error within the
+        accuracy bound from the unit's seeded RNG (off by default).
+    noise_std_g: white noise standard deviation, G (0: off).
+    """
+
+    bias_v: float = 2.5
+    scale_v_per_g: float = 2.5
+    rail_low_v: float = 0.0
+    rail_high_v: float = 5.0
+    range_g: float = 1.0
+    nonlinearity_frac: float = 0.01
+    resolution_g: float = 0.004
+    accuracy_frac_fs: float = 0.001
+    accuracy_error_enabled: bool = False
+    noise_std_g: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ('scale_v_per_g', 'range_g', 'resolution_g'):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise MagnetometerError(f'FluxgateAxisParams.{name} must be finite and > 0, got {value!r}')
+        for name in ('accuracy_frac_fs', 'noise_std_g'):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise MagnetometerError(f'FluxgateAxisParams.{name} must be finite and >= 0, got {value!r}')
+        if not (self.rail_low_v < self.bias_v < self.rail_high_v):
+            raise MagnetometerError('FluxgateAxisParams: need rail_low_v < bias_v < rail_high_v')
+        if not (math.isfinite(self.nonlinearity_frac) and abs(self.nonlinearity_frac) < 0.5):
+            raise MagnetometerError(f'nonlinearity_frac must be finite with |value| < 0.5, '
+                                    f'got {self.nonlinearity_frac!r}')
+
+    @property
+    def step_v(self) -> float:
+        """Output quantisation step, V (resolution_g · scale_v_per_g)."""
+        return self.resolution_g * self.scale_v_per_g
+
+    def ideal_volts(self, b_g: np.ndarray) -> np.ndarray:
+        """Noise-free, unclipped, unquantised output about the nominal bias, V, for fields b_g (G)."""
+        c = 0.5 * self.nonlinearity_frac
+        b = np.asarray(b_g, dtype=float)
+        return self.bias_v + self.scale_v_per_g * (b + c * (b**3 - b * self.range_g**2))
+
+    def variance_g2(self) -> float:
+        """Per-axis reading variance, G²: quantisation (q²/12) + accuracy (uniform, a²/3) + noise."""
+        accuracy_g = self.accuracy_frac_fs * self.range_g
+        return self.resolution_g**2 / 12.0 + accuracy_g**2 / 3.0 + self.noise_std_g**2
+
+
+@dataclass(frozen=True)
+class MagnetometerReading:
+    """One magnetometer sample (spec §5, Table 4-11 telemetry).
+
+    volts: per-axis field voltages V_Bi, V (0…5).
+    bias_volts: per-axis zero-field bias reference output, V (2.5 nominal).
+    field_t: field the volts mean to a naive reader, T: (volts − 2.5 V)/(2.5 V/G)
+        in gauss × 1e-4 (nominal bias and scale; see the module docstring).
+    b_sensed_t: the field at the sensor the volts came from (truth + residual + Δ·M), T.
+    active_unit: 'A' or 'B'.
+    covariance_t2: 3×3 reading covariance, T² (diagonal, from resolution/accuracy/noise).
+    """
+
+    volts: np.ndarray
+    bias_volts: np.ndarray
+    field_t: np.ndarray
+    b_sensed_t: np.ndarray
+    active_unit: str
+    covariance_t2: np.ndarray
+
+
+class FluxgateAssembly:
+    """One triaxial fluxgate assembly (sensor + electronics unit) with its faults (spec §5).
+
+    params: one FluxgateAxisParams used for all three axes.
+    seed: seeds this unit's RNG (accuracy error draw and noise).
+    """
+
+    def __init__(self, params: FluxgateAxisParams | None = None, seed: int = 0) -> None:
+        self.params = FluxgateAxisParams() if params is None else params
+        self._rng = np.random.default_rng(seed)
+        p = self.params
+        if p.accuracy_error_enabled:
+            # Offset and scale errors each take up to half the ±0.1 % FS budget.
+            half_g = 0.5 * p.accuracy_frac_fs * p.range_g
+            self._offset_g = self._rng.uniform(-half_g, half_g, 3)
+            self._scale_err = self._rng.uniform(-half_g, half_g, 3) / p.range_g
+        else:
+            self._offset_g = np.zeros(3)
+            self._scale_err = np.zeros(3)
+        self._bias_shift_v = np.zeros(3)
+        self._stuck = np.zeros(3, dtype=bool)
+        self._dead = False
+        self._last_v = np.full(3, p.bias_v)
+
+    def clear_faults(self) -> None:
+        """Remove every injected fault."""
+        self._bias_shift_v[:] = 0.0
+        self._stuck[:] = False
+        self._dead = False
+
+    def inject_fault(self, kind: str, axis: int | None = None, value: float | None = None) -> None:
+        """Inject 'bias_shift' (value V, one axis or all), 'stuck_axis' (one axis or all) or 'dead_unit'."""
+        axes = self._axes(axis)
+        if kind == 'bias_shift':
+            if value is None or not math.isfinite(value):
+                raise MagnetometerError(f'bias_shift needs a finite value in volts, got {value!r}')
+            self._bias_shift_v[axes] += value
+        elif kind == 'stuck_axis':
+            self._stuck[axes] = True
+        elif kind == 'dead_unit':
+            self._dead = True
+        else:
+            raise MagnetometerError(f'unknown magnetometer fault {kind!r}; expected one of {FAULT_KINDS}')
+
+    def sample(self, b_sensed_t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Output (axis volts, bias volts), V, for the field at the sensor b_sensed_t (T, body axes)."""
+        p = self.params
+        b_g = np.asarray(b_sensed_t, dtype=float) / GAUSS_T
+        b_g = b_g * (1.0 + self._scale_err) + self._offset_g
+        if p.noise_std_g > 0.0:
+            b_g = b_g + self._rng.normal(0.0, p.noise_std_g, 3)
+        bias = p.bias_v + self._bias_shift_v
+        volts = p.ideal_volts(b_g) - p.bias_v + bias
+        volts = np.clip(volts, p.rail_low_v, p.rail_high_v)
+        volts = np.round(volts / p.step_v) * p.step_v
+        volts = np.where(self._stuck, self._last_v, volts)
+        self._last_v = volts
+        if self._dead:
+            return np.zeros(3), np.zeros(3)
+        return volts.copy(), np.clip(bias, p.rail_low_v, p.rail_high_v)
+
+    @staticmethod
+    def _axes(axis: int | None) -> slice | int:
+        if axis is None:
+            return slice(None)
+        if axis not in (0, 1, 2):
+            raise MagnetometerError(f'axis must be 0, 1, 2 (x, y, z) or None for all, got {axis!r}')
+        return axis
+
+
+def _check_vec3(name: str, value: np.ndarray | Sequence[float]) -> np.ndarray:
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (3,):
+        raise MagnetometerError(f'{name} must be a 3-vector, got shape {arr.shape}')
+    if not np.all(np.isfinite(arr)):
+        raise MagnetometerError(f'{name} must be finite, got {arr}')
+    return arr
+
+
+def coupling_cruise(gain_g_per_am2: float = 8.75e-6) -> np.ndarray:
+    """Cruise coupling Δ, T/(A·m²): gain on the diagonal (seed §4.3.2: 8.75e-6 G/A·m² "in each axis").
+
+    Read as each magnetometer axis sensing its own-axis magnet; at 2000 A·m² that is
+    0.0175 G (3.5 % of a 0.5 G maximum Earth field).
+    """
+    return np.eye(3) * gain_g_per_am2 * GAUSS_T
+
+
+def coupling_acquisition(signs: np.ndarray | Sequence[Sequence[float]] | None = None, fraction: float = 0.05,
+                         max_earth_field_t: float = MAX_EARTH_FIELD_T,
+                         saturated_moment_am2: float = 2000.0) -> np.ndarray:
+    """Acquisition worst-case coupling Δ, T/(A·m²) (seed §4.3.1, Case 10).
+
+    A saturated magnet (saturated_moment_am2) adds ``fraction`` of the maximum
+    Earth field on the OTHER two magnetometer axes; the diagonal is zero.
+    signs: 3×3 array of ±1 for Δ[i, j] (i magnetometer, j magnet; diagonal
+    ignored), default all +1. The seed's eq. 4-33 argument finds δ_zx > 0,
+    δ_yx < 0 destabilising, the torque argument the opposite; simulations found
+    no universal worst case, so the pattern is a scenario choice.
+    """
+    s = np.ones((3, 3)) if signs is None else np.asarray(signs, dtype=float)
+    if s.shape != (3, 3) or not np.all(np.isin(s[~np.eye(3, dtype=bool)], (-1.0, 1.0))):
+        raise MagnetometerError('signs must be a 3x3 array with off-diagonal entries of +1 or -1')
+    if not (fraction >= 0.0 and max_earth_field_t > 0.0 and saturated_moment_am2 > 0.0):
+        raise MagnetometerError('fraction must be >= 0, max_earth_field_t and saturated_moment_am2 > 0')
+    gain = fraction * max_earth_field_t / saturated_moment_am2
+    delta = s * gain
+    np.fill_diagonal(delta, 0.0)
+    return delta
+
+
+class Magnetometer:
+    """Two fluxgate assemblies (active/standby) behind one transfer-assembly interface (spec §5).
+
+    params: axis parameters for both units. seed: base RNG seed (unit A uses seed,
+    unit B seed + 1). residual_field_t: body-fixed residual field, T (3-vector).
+    coupling_t_per_am2: Δ, 3×3, T/(A·m²) (default zero; see ``coupling_cruise`` and
+    ``coupling_acquisition``). Both units see the same field.
+    """
+
+    def __init__(self, params: FluxgateAxisParams | None = None, seed: int = 0,
+                 residual_field_t: np.ndarray | Sequence[float] = (0.0, 0.0, 0.0),
+                 coupling_t_per_am2: np.ndarray | None = None) -> None:
+        self.units = {name: FluxgateAssembly(params, seed + k) for k, name in enumerate(UNITS)}
+        self.residual_field_t = _check_vec3('residual_field_t', residual_field_t)
+        delta = np.zeros((3, 3)) if coupling_t_per_am2 is None else np.asarray(coupling_t_per_am2, dtype=float)
+        if delta.shape != (3, 3) or not np.all(np.isfinite(delta)):
+            raise MagnetometerError(f'coupling_t_per_am2 must be a finite 3x3 matrix, got shape {delta.shape}')
+        self.coupling_t_per_am2 = delta
+        self.active_unit = UNITS[0]
+
+    def select_unit(self, unit: str) -> None:
+        """Make ``unit`` ('A' or 'B') the active assembly."""
+        self._check_unit(unit)
+        self.active_unit = unit
+
+    def inject_fault(self, unit: str, kind: str, axis: int | None = None, value: float | None = None) -> None:
+        """Fault one unit: 'bias_shift' (value in V), 'stuck_axis' (output frozen), 'dead_unit' (all 0 V)."""
+        self._check_unit(unit)
+        self.units[unit].inject_fault(kind, axis, value)
+
+    def clear_faults(self, unit: str | None = None) -> None:
+        """Clear the faults of one unit, or of both when unit is None."""
+        if unit is not None:
+            self._check_unit(unit)
+        for name, assembly in self.units.items():
+            if unit is None or name == unit:
+                assembly.clear_faults()
+
+    def read(self, b_true_body_t: np.ndarray | Sequence[float],
+             em_dipole_am2: np.ndarray | Sequence[float] = (0.0, 0.0, 0.0)) -> MagnetometerReading:
+        """Sample both units (standby keeps tracking) and report the active one.
+
+        b_true_body_t: Earth field at the spacecraft, body axes, T.
+        em_dipole_am2: the electromagnets' achieved dipole from the previous step, A·m².
+        """
+        b_true = _check_vec3('b_true_body_t', b_true_body_t)
+        dipole = _check_vec3('em_dipole_am2', em_dipole_am2)
+        b_sensed = b_true + self.residual_field_t + self.coupling_t_per_am2 @ dipole
+        samples = {name: unit.sample(b_sensed) for name, unit in self.units.items()}
+        volts, bias = samples[self.active_unit]
+        p = self.units[self.active_unit].params
+        field_t = (volts - p.bias_v) / p.scale_v_per_g * GAUSS_T
+        covariance = np.eye(3) * p.variance_g2() * GAUSS_T**2
+        return MagnetometerReading(volts=volts, bias_volts=bias, field_t=field_t, b_sensed_t=b_sensed,
+                                   active_unit=self.active_unit, covariance_t2=covariance)
+
+    @staticmethod
+    def _check_unit(unit: str) -> None:
+        if unit not in UNITS:
+            raise MagnetometerError(f'unit must be one of {UNITS}, got {unit!r}')
