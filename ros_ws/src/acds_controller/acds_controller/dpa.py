@@ -1,0 +1,310 @@
+"""Digital processor (DPA): one control period of the HEAO wheel/magnetics ACDS (spec §7; seed 002 §4.1–4.2).
+
+Per step the DPA takes the sensed field (from the transfer assembly), gyro rates, the sun
+sensor vector, the wheel momentum and the attitude reference, and returns the moment
+command for the electromagnet drivers and the wheel drive volts. Modes (exact strings):
+
+* ``'standby'``: everything zero.
+* ``'mode_1a'``: rate reduction, magnetics only on the body momentum H = I·ω (B×H, G = 0.05)
+  or B-dot (K_D ≈ 1); wheels off (0 V).
+* ``'mode_1b'``: sun acquisition; the wheels close the loop on the sun-sensor error and gyro
+  rate with the acquisition gains (Table 4-2); the magnetics unload the wheels (H = h).
+  With the sun absent (zero sun vector) the position term is zero: rate damping only.
+* ``'celestial_scan'``: normal-mode gains; x/y hold the scan axis (the z axis of the target
+  attitude) on its inertial direction, z follows the scan-rate law (eq. 4-26); unloading G = 0.01.
+* ``'celestial_point'``: normal-mode gains, inertial hold of the target attitude; unloading G = 0.02.
+
+Mode 1B unloading gain: the study does not quote a separate value; its acquisition runs carry
+one gain label (K = .05) through the whole run, so 0.05 (s·G²)⁻¹ is the default
+(``unloading_gain_mode_1b_study``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from acds_common.units import FT_LB_NM, deg, nms_to_ftlbs, rad_s_to_rpm, rpm_to_rad_s, tesla_to_gauss
+
+from acds_controller.magnetic_laws import (
+    G_ACQUISITION_STUDY,
+    G_UNLOAD_POINT_STUDY,
+    G_UNLOAD_SCAN_STUDY,
+    K_D_STUDY,
+    MAX_MOMENT_AM2,
+    ControllerError,
+    as_matrix3,
+    as_vector3,
+    bdot_moment,
+    bxh_moment,
+    check_gain,
+    compensate_coupling,
+    lead_moment,
+    saturate,
+    wheel_command_momentum_nms,
+)
+from acds_controller.wheel_laws import (
+    HEAO_B_ACQUISITION,
+    NORMAL_MODE,
+    SCAN_RATE_RAD_S,
+    V_SAT_V,
+    WheelLawGains,
+    as_unit_quaternion,
+    inertial_hold_error,
+    pointing_error,
+    rotate_to_body,
+    scan_yaw_volts,
+    wheel_volts,
+)
+
+#: DPA modes, exactly as the mode manager names them.
+MODES = ('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point')
+#: Selectable magnetic laws per slot: acquisition (Mode 1A) and unloading (Mode 1B, cruise).
+LAW_CHOICES: dict[str, tuple[str, ...]] = {
+    'acquisition': ('bxh', 'bdot'),
+    'unloading': ('bxh', 'lead', 'none'),
+}
+#: Wheel torque gain k for ḣ = k·V|V|, N·m/V²: 0.117 ft-lb (Table 4-2 design torque) at V_sat.
+WHEEL_TORQUE_GAIN_NM_PER_V2 = 0.117 * FT_LB_NM / V_SAT_V**2
+#: Lead-law time constant, s: ≈ 1/(G_unld·B²) for G = 0.02 (s·G²)⁻¹ and |B| ≈ 0.3 G.
+LEAD_TIME_S = 500.0
+#: A sun-sensor vector shorter than this means "sun absent" (the sensor sends zeros).
+_SUN_PRESENT_MIN_NORM = 0.5
+
+_AXES = ('x', 'y', 'z')
+_WHEEL_SETS = {'acquisition': 'wheel_gains_acquisition', 'normal': 'wheel_gains_normal'}
+_WHEEL_PARAMS = {
+    'kp': ('k_p_v_per_rad', 0.0, 1e8, 'V/rad'),
+    'kr': ('k_r_s', 0.0, 1e5, 's'),
+    'theta_limit': ('theta_limit_rad', 1e-9, math.pi, 'rad'),
+}
+#: Scalar run-time gains: name → (DpaConfig field, low, high, unit). Ranges bracket the study's values.
+_SCALAR_GAINS: dict[str, tuple[str, float, float, str]] = {
+    'acquisition_gain': ('acquisition_gain_study', 0.0, 5.0, '(s·G²)⁻¹'),
+    'bdot_gain': ('bdot_gain_study', 0.0, 100.0, 'ft-lb-s/G²'),
+    'unloading_gain_mode_1b': ('unloading_gain_mode_1b_study', 0.0, 1.0, '(s·G²)⁻¹'),
+    'unloading_gain_scan': ('unloading_gain_scan_study', 0.0, 1.0, '(s·G²)⁻¹'),
+    'unloading_gain_point': ('unloading_gain_point_study', 0.0, 1.0, '(s·G²)⁻¹'),
+    'max_moment': ('max_moment_am2', 0.0, 5000.0, 'A·m²'),
+    'scan_rate_rpm': ('scan_rate_rad_s', -1.0, 1.0, 'rpm'),
+    'lead_time': ('lead_time_s', 0.0, 1e5, 's'),
+}
+#: Every gain accepted by :meth:`Dpa.set_gain`: name → (low, high, unit).
+GAIN_TABLE: dict[str, tuple[float, float, str]] = {
+    **{name: (lo, hi, unit) for name, (_, lo, hi, unit) in _SCALAR_GAINS.items()},
+    **{f'wheel_{s}_{p}_{a}': (lo, hi, unit)
+       for s in _WHEEL_SETS for p, (_, lo, hi, unit) in _WHEEL_PARAMS.items() for a in _AXES},
+}
+#: Gain name → (low, high), for validators outside this package (the mode manager).
+GAIN_LIMITS: dict[str, tuple[float, float]] = {name: (lo, hi) for name, (lo, hi, _) in GAIN_TABLE.items()}
+
+
+@dataclass(frozen=True)
+class DpaConfig:
+    """DPA configuration (spec §7). Gains in the study's units where the name says ``_study``.
+
+    ``inertia_kg_m2``: spacecraft inertia tensor (3×3, kg·m², symmetric positive definite),
+    used for H = I·ω in Mode 1A. ``acquisition_law``: 'bxh' | 'bdot'. ``unloading_law``:
+    'bxh' | 'lead' | 'none'. ``acquisition_gain_study``, ``unloading_gain_*_study``: (s·G²)⁻¹.
+    ``bdot_gain_study``: ft-lb-s/G². ``max_moment_am2``: per-axis limit, A·m².
+    ``coupling_compensation`` with ``coupling_delta_t_per_am2`` (3×3, T per A·m²): subtract
+    Δ·M_prev from the sensed field. ``scan_rate_rad_s``: ω_z0. ``target_q_body_to_eci``:
+    (x, y, z, w) attitude held in celestial point; its z axis is the celestial scan axis.
+    ``v_sat_v``: wheel drive limit, V. ``wheel_torque_gain_nm_per_v2`` and ``lead_time_s``:
+    express the wheel command as momentum for the lead law.
+    """
+
+    inertia_kg_m2: np.ndarray
+    acquisition_law: str = 'bxh'
+    unloading_law: str = 'bxh'
+    acquisition_gain_study: float = G_ACQUISITION_STUDY
+    bdot_gain_study: float = K_D_STUDY
+    unloading_gain_mode_1b_study: float = G_ACQUISITION_STUDY
+    unloading_gain_scan_study: float = G_UNLOAD_SCAN_STUDY
+    unloading_gain_point_study: float = G_UNLOAD_POINT_STUDY
+    max_moment_am2: float = MAX_MOMENT_AM2
+    coupling_compensation: bool = False
+    coupling_delta_t_per_am2: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
+    wheel_gains_acquisition: WheelLawGains = HEAO_B_ACQUISITION
+    wheel_gains_normal: WheelLawGains = NORMAL_MODE
+    scan_rate_rad_s: float = SCAN_RATE_RAD_S
+    target_q_body_to_eci: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 0.0, 1.0]))
+    v_sat_v: float = V_SAT_V
+    wheel_torque_gain_nm_per_v2: float = WHEEL_TORQUE_GAIN_NM_PER_V2
+    lead_time_s: float = LEAD_TIME_S
+
+    def __post_init__(self) -> None:
+        inertia = as_matrix3(self.inertia_kg_m2, 'inertia_kg_m2')
+        if not np.allclose(inertia, inertia.T) or np.min(np.linalg.eigvalsh(inertia)) <= 0.0:
+            raise ControllerError('inertia_kg_m2 must be symmetric positive definite (kg·m²)')
+        object.__setattr__(self, 'inertia_kg_m2', inertia)
+        object.__setattr__(self, 'coupling_delta_t_per_am2',
+                           as_matrix3(self.coupling_delta_t_per_am2, 'coupling_delta_t_per_am2'))
+        object.__setattr__(self, 'target_q_body_to_eci',
+                           as_unit_quaternion(self.target_q_body_to_eci, 'target_q_body_to_eci'))
+        for slot in LAW_CHOICES:
+            law = getattr(self, f'{slot}_law')
+            if law not in LAW_CHOICES[slot]:
+                raise ControllerError(f'{slot}_law {law!r} unknown; choose one of {LAW_CHOICES[slot]}')
+        for name, (attr, lo, hi, unit) in _SCALAR_GAINS.items():
+            value = getattr(self, attr)
+            if name == 'scan_rate_rpm':
+                value = rad_s_to_rpm(value)
+            check_gain(value, f'{name} ({unit})', lo, hi)
+        check_gain(self.v_sat_v, 'v_sat_v (V)', 0.0, 1e3)
+        check_gain(self.wheel_torque_gain_nm_per_v2, 'wheel_torque_gain_nm_per_v2', 0.0, 1e3)
+
+
+@dataclass(frozen=True)
+class DpaOutput:
+    """One DPA step's result: moment command (A·m², body), wheel drive volts (V, body axes), telemetry."""
+
+    moment_command_am2: np.ndarray
+    wheel_volts_v: np.ndarray
+    telemetry: dict[str, str]
+
+
+class Dpa:
+    """The per-step digital processor (spec §7; seed 002 Figure 4-2). Holds the previous field and command."""
+
+    def __init__(self, config: DpaConfig) -> None:
+        self.config = config
+        self._b_prev_t: np.ndarray | None = None
+        self._m_prev_am2 = np.zeros(3)
+
+    def set_gain(self, name: str, value: float) -> None:
+        """Change a gain at run time; unknown name or out-of-range value raises :class:`ControllerError`.
+
+        Names and ranges: :data:`GAIN_TABLE` (e.g. 'unloading_gain_point' in (s·G²)⁻¹,
+        'wheel_acquisition_kp_y' in V/rad, 'scan_rate_rpm').
+        """
+        if name not in GAIN_TABLE:
+            raise ControllerError(f'unknown gain {name!r}; known gains: {", ".join(sorted(GAIN_TABLE))}')
+        lo, hi, unit = GAIN_TABLE[name]
+        v = check_gain(value, f'gain {name} ({unit})', lo, hi)
+        if name in _SCALAR_GAINS:
+            attr = _SCALAR_GAINS[name][0]
+            self.config = dataclasses.replace(
+                self.config, **{attr: rpm_to_rad_s(v) if name == 'scan_rate_rpm' else v})
+            return
+        set_name, rest = name[len('wheel_'):].split('_', 1)
+        param, axis = rest.rsplit('_', 1)
+        attr = _WHEEL_SETS[set_name]
+        gains: WheelLawGains = getattr(self.config, attr)
+        self.config = dataclasses.replace(
+            self.config, **{attr: gains.with_axis(_WHEEL_PARAMS[param][0], _AXES.index(axis), v)})
+
+    def set_law(self, slot: str, law: str) -> None:
+        """Select the magnetic law of a slot ('acquisition': bxh|bdot, 'unloading': bxh|lead|none)."""
+        if slot not in LAW_CHOICES:
+            raise ControllerError(f'unknown law slot {slot!r}; choose one of {tuple(LAW_CHOICES)}')
+        if law not in LAW_CHOICES[slot]:
+            raise ControllerError(f'{slot} law {law!r} unknown; choose one of {LAW_CHOICES[slot]}')
+        self.config = dataclasses.replace(self.config, **{f'{slot}_law': law})
+
+    def step(
+        self,
+        mode: str,
+        b_sensed_t: np.ndarray,
+        omega_rad_s: np.ndarray,
+        sun_body_unit: np.ndarray,
+        wheel_h_nms: np.ndarray,
+        q_body_to_eci: np.ndarray | None,
+        dt_s: float,
+    ) -> DpaOutput:
+        """Compute one control period (spec §7).
+
+        ``b_sensed_t``: TA field (T, body); ``omega_rad_s``: gyro rates; ``sun_body_unit``: sun
+        unit vector in body (zeros = absent); ``wheel_h_nms``: total wheel momentum (N·m·s,
+        body); ``q_body_to_eci``: attitude reference (x, y, z, w), needed in the cruise modes;
+        ``dt_s``: control period (s), the B-dot difference interval.
+        """
+        if mode not in MODES:
+            raise ControllerError(f'unknown mode {mode!r}; choose one of {MODES}')
+        c = self.config
+        b_sensed = as_vector3(b_sensed_t, 'b_sensed_t')
+        omega = as_vector3(omega_rad_s, 'omega_rad_s')
+        sun = as_vector3(sun_body_unit, 'sun_body_unit')
+        h_wheel = as_vector3(wheel_h_nms, 'wheel_h_nms')
+        dt = check_gain(dt_s, 'dt_s (s)', 1e-6, 1e4)
+        b = (compensate_coupling(b_sensed, c.coupling_delta_t_per_am2, self._m_prev_am2)
+             if c.coupling_compensation else b_sensed)
+
+        theta = np.zeros(3)
+        volts = np.zeros(3)
+        h_used = np.zeros(3)
+        m = np.zeros(3)
+        if mode == 'mode_1a':
+            if c.acquisition_law == 'bxh':
+                h_used = c.inertia_kg_m2 @ omega
+                m = bxh_moment(b, h_used, c.acquisition_gain_study)
+            elif self._b_prev_t is not None:
+                m = bdot_moment(b, self._b_prev_t, dt, c.bdot_gain_study)
+        elif mode != 'standby':
+            theta, volts = self._wheel_loop(mode, omega, sun, q_body_to_eci)
+            h_used = h_wheel
+            m = self._unloading_moment(mode, b, h_wheel, volts)
+        m_cmd = saturate(m, c.max_moment_am2)
+        self._b_prev_t = b
+        self._m_prev_am2 = m_cmd
+        return DpaOutput(m_cmd, volts, self._telemetry(mode, b, h_used, theta, m, m_cmd, volts))
+
+    def _wheel_loop(
+        self, mode: str, omega: np.ndarray, sun: np.ndarray, q_body_to_eci: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Attitude error (rad) and wheel volts for modes 1B, scan and point (seed 002 §4.2.2, §4.2.3)."""
+        c = self.config
+        if mode == 'mode_1b':
+            present = float(np.linalg.norm(sun)) >= _SUN_PRESENT_MIN_NORM
+            theta = pointing_error(sun) if present else np.zeros(3)
+            return theta, wheel_volts(theta, omega, c.wheel_gains_acquisition, c.v_sat_v)
+        if q_body_to_eci is None:
+            raise ControllerError(f'mode {mode} needs the attitude reference q_body_to_eci')
+        gains = c.wheel_gains_normal
+        if mode == 'celestial_point':
+            theta = inertial_hold_error(q_body_to_eci, c.target_q_body_to_eci)
+            return theta, wheel_volts(theta, omega, gains, c.v_sat_v)
+        qt = c.target_q_body_to_eci
+        scan_axis_eci = rotate_to_body(np.array([-qt[0], -qt[1], -qt[2], qt[3]]), np.array([0.0, 0.0, 1.0]))
+        theta = pointing_error(rotate_to_body(q_body_to_eci, scan_axis_eci))
+        volts = wheel_volts(theta, omega, gains, c.v_sat_v)
+        volts[2] = scan_yaw_volts(omega[2], c.scan_rate_rad_s, gains.k_p_v_per_rad[2], gains.k_r_s[2],
+                                  c.v_sat_v)
+        return theta, volts
+
+    def _unloading_moment(self, mode: str, b: np.ndarray, h_wheel: np.ndarray, volts: np.ndarray) -> np.ndarray:
+        """Unloading moment on the wheel momentum with the mode's gain (seed 002 §4.2.3.2, eq. 4-37)."""
+        c = self.config
+        gain = {'mode_1b': c.unloading_gain_mode_1b_study,
+                'celestial_scan': c.unloading_gain_scan_study,
+                'celestial_point': c.unloading_gain_point_study}[mode]
+        if c.unloading_law == 'none':
+            return np.zeros(3)
+        if c.unloading_law == 'lead':
+            eps = wheel_command_momentum_nms(volts, c.wheel_torque_gain_nm_per_v2, c.lead_time_s)
+            return lead_moment(b, h_wheel, eps, gain)
+        return bxh_moment(b, h_wheel, gain)
+
+    def _telemetry(
+        self, mode: str, b: np.ndarray, h_used: np.ndarray, theta: np.ndarray,
+        m_raw: np.ndarray, m_cmd: np.ndarray, volts: np.ndarray,
+    ) -> dict[str, str]:
+        """DPA telemetry as key/value strings, seed units in the key names (+ 0.0 turns −0 into 0)."""
+        c = self.config
+        out = {
+            'mode': mode,
+            'acquisition_law': c.acquisition_law,
+            'unloading_law': c.unloading_law,
+            'moment_saturated': 'true' if np.any(np.abs(m_raw) > c.max_moment_am2) else 'false',
+        }
+        b_g = tesla_to_gauss(b)
+        h_ftlbs = nms_to_ftlbs(h_used)
+        for i, axis in enumerate(_AXES):
+            out[f'control_field_{axis}_gauss'] = f'{b_g[i] + 0.0:.6g}'
+            out[f'control_momentum_{axis}_ftlbs'] = f'{h_ftlbs[i] + 0.0:.6g}'
+            out[f'attitude_error_{axis}_deg'] = f'{deg(theta[i]) + 0.0:.6g}'
+            out[f'moment_command_{axis}_am2'] = f'{m_cmd[i] + 0.0:.6g}'
+            out[f'wheel_volts_{axis}_v'] = f'{volts[i] + 0.0:.6g}'
+        return out

@@ -1,0 +1,102 @@
+"""Transfer assembly (TA): digitises the magnetometer and buffers telemetry (spec §5, §7; seed 002 §4.2.6–4.2.7).
+
+The magnetometer (Table 4-5) gives per axis 0…+5 V DC, 2.5 V at zero field, 2.5 V/G,
+±1 G range, 0.004 G resolution, ±0.1 % of full scale accuracy, and its bias voltage
+as a separate output. The TA converts each field voltage and the bias voltage with the
+same ADC and forms B = (V_field − V_bias)/2.5 V/G, so a drift of the bias reference is
+cancelled when it is common to both (and shows in telemetry when it is not).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from acds_common.units import GAUSS_T, tesla_to_gauss
+
+from acds_controller.magnetic_laws import ControllerError, as_vector3, check_gain
+
+#: Magnetometer output span, V (Table 4-5: 0 to +5 V DC).
+FULL_SCALE_V = 5.0
+#: Magnetometer scale factor, V/G (Table 4-5).
+SCALE_V_PER_GAUSS = 2.5
+#: Electromagnet moment per coil ampere, A·m²/A (Table 4-3: 2062 A·m² at 0.727 A).
+MOMENT_PER_AMP_AM2_PER_A = 2062.0 / 0.727
+
+_AXES = ('x', 'y', 'z')
+
+
+class TransferAssembly:
+    """Analog-to-digital interface between magnetometer/electromagnet drivers and the DPA (seed 002 §4.2.7).
+
+    ADC width: 10 bits by default. Over the 0…5 V span one count is 5/1024 V = 4.9 mV =
+    0.00195 G at 2.5 V/G, half the magnetometer's 0.004 G resolution. The field is a
+    difference of two converted voltages (field − bias), whose quantisation error is up
+    to ±1 count = ±0.002 G: with 10 bits this stays inside both the 0.004 G resolution
+    and the ±0.1 % full-scale accuracy (±5 mV = ±0.002 G), so the TA does not coarsen
+    the sensor. 9 bits (9.8 mV = 0.0039 G per count) would make the difference error as
+    large as the resolution itself; 8 bits would be coarser than the sensor.
+
+    Parameters: ``adc_bits`` (count, 8…24), ``full_scale_v`` (V, converter span from 0),
+    ``scale_v_per_gauss`` (V/G), ``moment_per_amp_am2_per_a`` (A·m²/A, turns a moment
+    command into the torquer current command for telemetry).
+    """
+
+    def __init__(
+        self,
+        adc_bits: int = 10,
+        full_scale_v: float = FULL_SCALE_V,
+        scale_v_per_gauss: float = SCALE_V_PER_GAUSS,
+        moment_per_amp_am2_per_a: float = MOMENT_PER_AMP_AM2_PER_A,
+    ) -> None:
+        if not isinstance(adc_bits, int) or not 8 <= adc_bits <= 24:
+            raise ControllerError(f'adc_bits = {adc_bits!r} must be an integer in [8, 24]')
+        self.adc_bits = adc_bits
+        self.full_scale_v = check_gain(full_scale_v, 'full_scale_v', 1e-3, 1e3)
+        self.scale_v_per_gauss = check_gain(scale_v_per_gauss, 'scale_v_per_gauss', 1e-6, 1e6)
+        self.moment_per_amp_am2_per_a = check_gain(
+            moment_per_amp_am2_per_a, 'moment_per_amp_am2_per_a', 1e-6, 1e9)
+        self.lsb_v = self.full_scale_v / (1 << adc_bits)
+
+    def digitise(self, volts: np.ndarray) -> np.ndarray:
+        """Quantise volts to the nearest ADC count (clipped to 0…2ⁿ−1) and return the count's voltage, V."""
+        v = as_vector3(volts, 'volts')
+        counts = np.clip(np.floor(v / self.lsb_v + 0.5), 0, (1 << self.adc_bits) - 1)
+        return counts * self.lsb_v
+
+    def sense(self, volts: np.ndarray, bias_volts: np.ndarray) -> np.ndarray:
+        """Sensed field in tesla (body axes) from per-axis field volts and bias reference volts (Table 4-5)."""
+        b_gauss = (self.digitise(volts) - self.digitise(as_vector3(bias_volts, 'bias_volts'))) \
+            / self.scale_v_per_gauss
+        return b_gauss * GAUSS_T
+
+    def telemetry(
+        self,
+        sensed_field_t: np.ndarray,
+        moment_command_am2: np.ndarray,
+        bias_volts: np.ndarray,
+        coil_current_a: np.ndarray,
+        excess_current_alarm: Sequence[bool],
+    ) -> dict[str, str]:
+        """Telemetry buffer of the TA as key/value strings (seed 002 §4.2.5–4.2.6; spec §7).
+
+        Sensed field (G), moment command (A·m²) and the torquer current command it means (A),
+        magnetometer bias voltage (V), coil current from the driver's e_ft (A, signed) and the
+        excess-coil-current alarm per axis ('true'/'false').
+        """
+        b_g = tesla_to_gauss(as_vector3(sensed_field_t, 'sensed_field_t'))
+        m = as_vector3(moment_command_am2, 'moment_command_am2')
+        bias = as_vector3(bias_volts, 'bias_volts')
+        coil = as_vector3(coil_current_a, 'coil_current_a')
+        alarms = list(excess_current_alarm)
+        if len(alarms) != 3:
+            raise ControllerError(f'excess_current_alarm must hold 3 flags (x, y, z), got {alarms!r}')
+        out: dict[str, str] = {}
+        for i, axis in enumerate(_AXES):
+            out[f'sensed_field_{axis}_gauss'] = f'{b_g[i]:.6g}'
+            out[f'moment_command_{axis}_am2'] = f'{m[i]:.6g}'
+            out[f'torquer_current_command_{axis}_a'] = f'{m[i] / self.moment_per_amp_am2_per_a:.6g}'
+            out[f'magnetometer_bias_{axis}_v'] = f'{bias[i]:.6g}'
+            out[f'coil_current_{axis}_a'] = f'{coil[i]:.6g}'
+            out[f'excess_coil_current_alarm_{axis}'] = 'true' if alarms[i] else 'false'
+        return out

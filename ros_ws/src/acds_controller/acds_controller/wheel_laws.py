@@ -1,0 +1,189 @@
+"""Reaction wheel control laws and attitude errors of the DPA (spec §7; seed 002 §4.2.2, §4.2.3, Table 4-2).
+
+Sign convention (explicit, used by every function here)
+-------------------------------------------------------
+* The attitude error θ_i is the body's rotation about body axis i *away from* the
+  reference, positive by the right-hand rule (the body is rotated by +θ_i beyond where
+  it should be). Rates ω_i are the gyro body rates.
+* The law ε_i = K_pi (θ_i^L + K_ri ω_i) (eq. 4-18…4-20) is sent to the wheel drive
+  unchanged: V_i = ε_i clipped to ±V_sat.
+* Square-law wheel: ḣ_i = k·V_i|V_i| along body axis i, and the body feels −ḣ_i (seed:
+  "torques equal and opposite to the motor torques are applied to the spacecraft body").
+  So a positive error or rate gives V > 0, ḣ > 0 and a negative body torque, which drives
+  θ and ω back to zero. No extra sign is needed as long as θ is defined as above.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from acds_common.units import rad, rpm_to_rad_s
+
+from acds_controller.magnetic_laws import ControllerError, as_vector3, check_gain
+
+#: Wheel controller saturation, V (seed 002 §4.2.3.1).
+V_SAT_V = 17.1
+#: Acquisition maneuver rate limit, rad/s (Table 4-2: 0.1 deg/s each axis).
+MANEUVER_RATE_LIMIT_RAD_S = rad(0.1)
+#: Baseline celestial scan rate about z, rad/s (seed 002 §4.3.2.1: 0.03 rpm; 0.1 rpm also studied).
+SCAN_RATE_RAD_S = rpm_to_rad_s(0.03)
+
+_TRIPLE = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class WheelLawGains:
+    """Per-axis (x roll, y pitch, z yaw) wheel controller gains (Table 4-2).
+
+    ``k_p_v_per_rad``: position gain K_p, V/rad. ``theta_limit_rad``: attitude-error limit
+    θ_limit, rad, or None for no limiter (normal mode). ``k_r_s``: rate gain K_r, s.
+    """
+
+    k_p_v_per_rad: _TRIPLE
+    theta_limit_rad: tuple[float | None, float | None, float | None]
+    k_r_s: _TRIPLE
+
+    def __post_init__(self) -> None:
+        for name in ('k_p_v_per_rad', 'theta_limit_rad', 'k_r_s'):
+            if len(getattr(self, name)) != 3:
+                raise ControllerError(f'WheelLawGains.{name} needs 3 values (x, y, z)')
+        for i in range(3):
+            check_gain(self.k_p_v_per_rad[i], f'k_p_v_per_rad[{i}] (V/rad)', 0.0, 1e8)
+            check_gain(self.k_r_s[i], f'k_r_s[{i}] (s)', 0.0, 1e5)
+            limit = self.theta_limit_rad[i]
+            if limit is not None:
+                check_gain(limit, f'theta_limit_rad[{i}] (rad)', 1e-9, math.pi)
+
+    def with_axis(self, param: str, axis: int, value: float | None) -> WheelLawGains:
+        """Copy with one axis of ``param`` ('k_p_v_per_rad', 'theta_limit_rad' or 'k_r_s') replaced."""
+        values = list(getattr(self, param))
+        values[axis] = value
+        return dataclasses.replace(self, **{param: tuple(values)})
+
+
+#: HEAO-A acquisition (Table 4-2).
+HEAO_A_ACQUISITION = WheelLawGains((865.0, 162.0, 162.0), (0.0196, 0.105, 0.105), (11.2, 60.0, 60.0))
+#: HEAO-B acquisition, pitch/yaw at the study's final values (§4.2.3.1: 97 V/rad, 0.075 rad, 100 s).
+HEAO_B_ACQUISITION = WheelLawGains((684.0, 97.0, 97.0), (0.025, 0.075, 0.075), (14.3, 100.0, 100.0))
+#: HEAO-B acquisition, Table 4-2 preliminary pitch/yaw values (300 V/rad, 0.057 rad, 32.6 s).
+HEAO_B_ACQUISITION_PRELIMINARY = WheelLawGains(
+    (684.0, 300.0, 300.0), (0.025, 0.057, 0.057), (14.3, 32.6, 32.6))
+#: Normal mode (celestial point and scan), no error limiter (Table 4-2).
+NORMAL_MODE = WheelLawGains((3.64e4, 2.16e5, 2.16e5), (None, None, None), (11.7, 5.65, 5.65))
+
+
+def design_gains(
+    theta_eps_rad: float, rate_limit_rad_s: float = MANEUVER_RATE_LIMIT_RAD_S, v_sat_v: float = V_SAT_V
+) -> tuple[float, float]:
+    """Deadbeat design relations (seed 002 eq. 4-24, 4-25): returns (K_p V/rad, K_r s).
+
+    K_p = V_sat/θ_ε. The rate gain is the switching-line slope K_r = θ_ε/ω^L (s); the seed
+    prints ω^L/θ_ε, but only θ_ε/ω^L has the unit s and reproduces Table 4-2
+    (0.0196 rad / 0.1°/s = 11.2 s, 0.105 rad / 0.1°/s = 60.2 s).
+    """
+    theta = check_gain(theta_eps_rad, 'theta_eps_rad', 1e-9, math.pi)
+    rate = check_gain(rate_limit_rad_s, 'rate_limit_rad_s', 1e-9, 1.0)
+    return v_sat_v / theta, theta / rate
+
+
+def wheel_volts(
+    theta_err_rad: np.ndarray, omega_rad_s: np.ndarray, gains: WheelLawGains, v_sat_v: float = V_SAT_V
+) -> np.ndarray:
+    """Wheel drive volts ε_i = K_pi (θ_i^L + K_ri ω_i), θ^L limited to ±θ_limit, clipped to ±V_sat.
+
+    Seed 002 eq. 4-18…4-20. ``theta_err_rad``: attitude error (rad, body, sign convention in
+    the module docstring); ``omega_rad_s``: gyro rates (rad/s); ``v_sat_v``: saturation (V).
+    Returns volts per body axis; positive volts drive the body torque negative.
+    """
+    theta = as_vector3(theta_err_rad, 'theta_err_rad')
+    omega = as_vector3(omega_rad_s, 'omega_rad_s')
+    v_sat = check_gain(v_sat_v, 'v_sat_v', 0.0, 1e3)
+    limit = np.array([np.inf if x is None else x for x in gains.theta_limit_rad])
+    theta_l = np.clip(theta, -limit, limit)
+    eps = np.asarray(gains.k_p_v_per_rad) * (theta_l + np.asarray(gains.k_r_s) * omega)
+    return np.clip(eps, -v_sat, v_sat)
+
+
+def scan_yaw_volts(
+    omega_z: float, omega_z0: float, k_pz: float, k_rz: float, v_sat_v: float = V_SAT_V
+) -> float:
+    """Celestial scan yaw law ε_z = K_pz K_rz (ω_z − ω_z0), clipped to ±V_sat (seed 002 eq. 4-26).
+
+    ``omega_z``: gyro z rate, ``omega_z0``: desired scan rate (rad/s; 0.03 rpm baseline);
+    ``k_pz`` V/rad, ``k_rz`` s. Spinning faster than ω_z0 gives V > 0, a negative body torque.
+    """
+    wz = check_gain(omega_z, 'omega_z (rad/s)', -10.0, 10.0)
+    wz0 = check_gain(omega_z0, 'omega_z0 (rad/s)', -10.0, 10.0)
+    gain = check_gain(k_pz, 'k_pz (V/rad)', 0.0, 1e8) * check_gain(k_rz, 'k_rz (s)', 0.0, 1e5)
+    v_sat = check_gain(v_sat_v, 'v_sat_v', 0.0, 1e3)
+    return float(np.clip(gain * (wz - wz0), -v_sat, v_sat))
+
+
+def pointing_error(target_body_unit: np.ndarray) -> np.ndarray:
+    """Error (rad, body) of the body z axis from a target direction given in body axes.
+
+    Used for sun acquisition (target = sun sensor vector) and for the scan axis hold.
+    The error is the rotation angle acos(s_z) about the axis s × ẑ / |s × ẑ|: for a small
+    tilt it is (s_y, −s_x, 0), i.e. roll error = B23 and pitch error = −B13 as in the
+    study's plots (§4.3.1). Its z component is zero: rotation about the target line is not
+    controlled (B12 free), only its rate is nulled by the K_r·ω_z term. A target exactly
+    behind (s = −ẑ) gives π about body x.
+    """
+    s = as_vector3(target_body_unit, 'target_body_unit')
+    norm = float(np.linalg.norm(s))
+    if norm < 1e-9:
+        raise ControllerError('target_body_unit is the zero vector: no direction to point at')
+    s = s / norm
+    axis = np.array([s[1], -s[0], 0.0])
+    sin_angle = float(np.linalg.norm(axis))
+    angle = math.atan2(sin_angle, s[2])
+    if sin_angle < 1e-12:
+        return np.array([angle, 0.0, 0.0])
+    return axis / sin_angle * angle
+
+
+def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
+    """Hamilton product q1 ⊗ q2 of (x, y, z, w) quaternions, so that R(q1 ⊗ q2) = R(q1) R(q2)."""
+    x1, y1, z1, w1 = q1
+    x2, y2, z2, w2 = q2
+    return np.array([
+        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+    ])
+
+
+def as_unit_quaternion(q: object, name: str) -> np.ndarray:
+    """Return ``q`` as a finite unit (x, y, z, w) quaternion or raise :class:`ControllerError`."""
+    qa = np.asarray(q, dtype=float)
+    if qa.shape != (4,) or not np.all(np.isfinite(qa)):
+        raise ControllerError(f'{name} must be a finite (x, y, z, w) quaternion, got {q!r}')
+    norm = float(np.linalg.norm(qa))
+    if abs(norm - 1.0) > 1e-3:
+        raise ControllerError(f'{name} must be a unit quaternion, |q| = {norm:.6g}')
+    return qa / norm
+
+
+def rotate_to_body(q_body_to_eci: np.ndarray, v_eci: np.ndarray) -> np.ndarray:
+    """Express an ECI vector in body axes: R(q)ᵀ v, q body→ECI (x, y, z, w)."""
+    q = as_unit_quaternion(q_body_to_eci, 'q_body_to_eci')
+    v = as_vector3(v_eci, 'v_eci')
+    q_conj = np.array([-q[0], -q[1], -q[2], q[3]])
+    return quat_multiply(quat_multiply(q_conj, np.append(v, 0.0)), q)[:3]
+
+
+def inertial_hold_error(q_body_to_eci: np.ndarray, q_target_body_to_eci: np.ndarray) -> np.ndarray:
+    """Celestial point attitude error (rad, body): small-angle vector 2·sign(w)·vec(q_t* ⊗ q).
+
+    q_t* ⊗ q is the body attitude relative to the target frame; a body rotated by +φ about
+    its x axis beyond the target gives (φ, 0, 0), matching the wheel-law sign convention.
+    """
+    q = as_unit_quaternion(q_body_to_eci, 'q_body_to_eci')
+    qt = as_unit_quaternion(q_target_body_to_eci, 'q_target_body_to_eci')
+    q_rel = quat_multiply(np.array([-qt[0], -qt[1], -qt[2], qt[3]]), q)
+    sign = 1.0 if q_rel[3] >= 0.0 else -1.0
+    return 2.0 * sign * q_rel[:3]
