@@ -45,7 +45,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     """Run a scenario through the full process graph and print its summary."""
     from .launcher import GraphRun, LaunchError
     from .preflight import preflight
-    from .summary import dynamics_summary, truth_digest
+    from .summary import print_tables, run_summary
 
     scenario = load_scenario(args.scenario or DEFAULT_SCENARIO)
     preflight(scenario)
@@ -62,15 +62,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     try:
         with graph:
             result = graph.wait()
-            inertia = _inertia(scenario)
-            summary = {
-                'scenario': scenario.name,
-                'steps': result.steps,
-                'sim_minutes': result.steps * scenario.control_period_s / 60,
-                'wall_seconds': round(result.wall_seconds, 3),
-                **dynamics_summary(result.monitor, inertia),
-                'truth_digest': truth_digest(result.monitor),
-            }
+            summary = run_summary(result)
     except LaunchError as exc:
         print(f'[acds] run failed: {exc}', file=sys.stderr)
         return 1
@@ -78,14 +70,10 @@ def cmd_run(args: argparse.Namespace) -> int:
         print('\n[acds] interrupted: all nodes stopped', file=sys.stderr)
         return 130
     _print_summary(summary)
+    print_tables(summary)
     if args.summary_json:
         Path(args.summary_json).write_text(json.dumps(summary, indent=2) + '\n')
     return 0
-
-
-def _inertia(scenario):  # noqa: ANN001, ANN202
-    from dynamics.rigid_body_model import inertia_tensor
-    return inertia_tensor(*scenario.get('spacecraft', 'inertia')) * scenario.get('spacecraft', 'inertia_scale')
 
 
 def _print_summary(summary: dict) -> None:
@@ -96,6 +84,8 @@ def _print_summary(summary: dict) -> None:
             continue
         if isinstance(value, float):
             value = f'{value:.6g}'
+        elif isinstance(value, list) and value and isinstance(value[0], dict):
+            continue  # tables (transitions, passes) are printed by their summary module
         elif isinstance(value, list):
             value = ', '.join(f'{v:.6g}' if isinstance(v, float) else str(v) for v in value)
         print(f'  {key:28s} {value}')
@@ -163,7 +153,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--json', action='store_true', help='last line: one JSON object')
     p.add_argument('--steps', type=_positive_int, default=2000, help='steps per measurement (default 2000)')
     p.set_defaults(func=cmd_bench)
+    for module in _verb_modules():
+        module.register(sub)
     return parser
+
+
+def _verb_modules() -> list:
+    """Verb groups in ``acds_cli/verbs/`` (one module each, with ``register(subparsers)``)."""
+    import importlib
+    import pkgutil
+
+    from . import verbs
+    return [importlib.import_module(f'{verbs.__name__}.{m.name}') for m in sorted(pkgutil.iter_modules(verbs.__path__),
+                                                                                  key=lambda m: m.name)]
 
 
 def _positive_int(text: str) -> int:
@@ -175,7 +177,12 @@ def _positive_int(text: str) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """Parse the verb and run it; scenario errors are one line, exit 2."""
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args, extra = parser.parse_known_args(argv)
+    if getattr(args, 'passthrough', False):
+        args.tool_args = [*extra, *args.tool_args]
+    elif extra:
+        parser.error(f'unrecognized arguments: {" ".join(extra)}')
     try:
         return args.func(args)
     except ScenarioError as exc:

@@ -1,4 +1,10 @@
-"""Run summaries computed from what the run monitor received (seed units at this edge)."""
+"""Run summaries computed from what the run monitor received (seed units at this edge).
+
+``run_summary`` gathers the common part and asks every module in
+``acds_cli/summaries/`` to ``contribute(result, summary)`` its own keys (HEAO
+acquisition table, SSS perigee passes, ...); ``print_tables`` lets each
+module print its tables.
+"""
 
 from __future__ import annotations
 
@@ -11,6 +17,40 @@ from acds_common.units import nms_to_ftlbs, tesla_to_gauss
 from dynamics.rigid_body_model import quat_to_dcm
 
 from .monitor import RunMonitor
+
+
+def _summary_modules() -> list:
+    import importlib
+    import pkgutil
+
+    from . import summaries
+    return [importlib.import_module(f'{summaries.__name__}.{m.name}')
+            for m in sorted(pkgutil.iter_modules(summaries.__path__), key=lambda m: m.name)]
+
+
+def run_summary(result: Any) -> dict[str, Any]:
+    """The summary of a completed run (``result``: launcher RunResult)."""
+    from dynamics.rigid_body_model import inertia_tensor
+
+    sc = result.scenario
+    inertia = inertia_tensor(*sc.get('spacecraft', 'inertia')) * sc.get('spacecraft', 'inertia_scale')
+    summary: dict[str, Any] = {
+        'scenario': sc.name,
+        'steps': result.steps,
+        'sim_minutes': result.steps * sc.control_period_s / 60,
+        'wall_seconds': round(result.wall_seconds, 3),
+        **dynamics_summary(result.monitor, inertia),
+        'truth_digest': truth_digest(result.monitor),
+    }
+    for module in _summary_modules():
+        module.contribute(result, summary)
+    return summary
+
+
+def print_tables(summary: dict[str, Any]) -> None:
+    """Let each summary module print its tables."""
+    for module in _summary_modules():
+        module.print_tables(summary)
 
 
 def truth_digest(monitor: RunMonitor) -> str:

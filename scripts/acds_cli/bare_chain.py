@@ -1,0 +1,54 @@
+"""One process of the benchmark's bare rclpy ring: ``python -m acds_cli.bare_chain INDEX HOPS CYCLES``.
+
+Process i relays every message from ``ring_i`` to ``ring_{i+1}``; process 0
+starts the token once every link is matched, times ``CYCLES`` round trips and
+prints cycles/s as its last line; the relays leave after the last cycle. Same QoS and executor as the lockstep graph.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import rclpy
+from acds_common.lockstep import LOCKSTEP_QOS
+from rclpy.experimental import EventsExecutor
+from rclpy.node import Node
+from std_msgs.msg import Header
+
+
+def main() -> int:
+    """Relay (or, as process 0, drive and time) the token."""
+    index, hops, cycles = (int(x) for x in sys.argv[1:4])
+    rclpy.init()
+    node = Node(f'bare_chain_{index}')
+    pub = node.create_publisher(Header, f'ring_{(index + 1) % hops}', LOCKSTEP_QOS)
+    state = {'count': 0, 't0': 0.0}
+
+    def relay(msg: Header) -> None:
+        state['count'] += 1
+        if index == 0 and state['count'] == 1:
+            state['t0'] = time.perf_counter()
+        if index != 0 or state['count'] < cycles + 1:
+            pub.publish(msg)
+
+    node.create_subscription(Header, f'ring_{index}', relay, LOCKSTEP_QOS)
+    executor = EventsExecutor()
+    executor.add_node(node)
+    if index == 0:
+        while pub.get_subscription_count() == 0 or node.count_publishers(f'ring_{index}') == 0:
+            executor.spin_once(timeout_sec=0.05)
+        pub.publish(Header(frame_id='token'))
+        while state['count'] <= cycles:
+            executor.spin_once(timeout_sec=1.0)
+        print(f'{cycles / (time.perf_counter() - state["t0"]):.1f}', flush=True)
+    else:  # a relay passes the token cycles + 1 times, then leaves
+        while state['count'] <= cycles:
+            executor.spin_once(timeout_sec=1.0)
+        pub.wait_for_all_acked(rclpy.duration.Duration(seconds=5))
+    rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Verb groups of ``scripts/acds``: each module defines ``register(subparsers)``."""
