@@ -112,7 +112,7 @@ def node_parameters(scenario: Scenario, steps: int, rtf: float,
         else:
             params['use_sim_time'] = True
         params.update((overrides or {}).get(node, {}))
-        out[node] = params
+        out[node] = {k: v for k, v in params.items() if v != []}  # rcl cannot type an empty list: node default
     return out
 
 

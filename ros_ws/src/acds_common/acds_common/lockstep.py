@@ -39,6 +39,7 @@ from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock as ClockMsg
 from std_msgs.msg import String
@@ -163,7 +164,10 @@ class LockstepNode(Node):
               hi: float | None = None, choices: tuple[str, ...] | None = None) -> Any:
         """Declare a typed, described parameter and return its value, range-checked."""
         desc = ParameterDescriptor(description=description)
-        value = self.declare_parameter(name, default, desc).value
+        if isinstance(default, list) and not default:  # an empty list has no type of its own: strings
+            value = self.declare_parameter(name, Parameter.Type.STRING_ARRAY, desc).value or []
+        else:
+            value = self.declare_parameter(name, default, desc).value
         if isinstance(default, float) and isinstance(value, int):
             value = float(value)
         values = value if isinstance(value, (list, tuple)) else [value]

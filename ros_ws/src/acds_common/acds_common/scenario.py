@@ -64,6 +64,8 @@ LENGTH = {'nmi': u.NMI_M, 'km': 1e3, 'm': 1.0}
 RADIUS = {**LENGTH, 'earth_radii': u.EARTH_RADIUS_M}
 INERTIA = {'slug_ft2': u.SLUG_FT2_KG_M2, 'kg_m2': 1.0}
 MOMENTUM = {'ft_lb_s': u.FT_LB_S_NMS, 'nms': 1.0}
+FIELD = {'gauss': u.GAUSS_T, 't': 1.0}
+COUPLING = {'g_per_am2': u.GAUSS_T, 't_per_am2': 1.0}
 TIME = {'s': 1.0, 'min': 60.0}
 
 #: Every key a scenario may hold, by section ('' is the top level).
@@ -129,16 +131,108 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'initial_momentum': _q('initial wheel momentum, body axes', [0.0, 0.0, 0.0], 'nms', MOMENTUM,
                                length=3, lo=-1e3, hi=1e3),
     },
+    # ---- magnetics hardware (spec §5, §6) -------------------------------------------------------
+    'magnetometer': {
+        'active_unit': Field('str', 'active magnetometer assembly', 'A', choices=('A', 'B')),
+        'residual_field': _q('residual body-fixed field seen by the sensor (study: 1 % of max Earth field)',
+                             [0.0, 0.0, 0.0], 't', FIELD, length=3, lo=-1e-4, hi=1e-4),
+        'coupling_preset': Field('str', 'coupling Δ from the electromagnets: none, cruise (8.75e-6 G/(A·m²) '
+                                 'per axis), acquisition (5 % of max field at 2000 A·m² on the other axes), '
+                                 'custom (coupling matrix)', 'none',
+                                 choices=('none', 'cruise', 'acquisition', 'custom')),
+        'coupling': _q('custom coupling Δ, row-major 3×3 (sensor axis i, magnet j)', [0.0] * 9, 't_per_am2',
+                       COUPLING, length=9, lo=-1e-6, hi=1e-6),
+        'coupling_signs': Field('floats', 'acquisition preset: sign pattern, row-major 3×3 (±1)',
+                                [1.0] * 9, length=9, lo=-1.0, hi=1.0),
+        'noise_std': _q('seeded white noise per axis (0: off)', 0.0, 't', FIELD, lo=0.0, hi=1e-5),
+        'accuracy_error': Field('bool', 'apply a seeded ±0.1 %-of-full-scale unit error', False),
+        'fault': Field('str', 'fault injected at fault_time: none, bias_shift, stuck_axis, dead_unit', 'none',
+                       choices=('none', 'bias_shift', 'stuck_axis', 'dead_unit')),
+        'fault_unit': Field('str', 'assembly the fault hits', 'A', choices=('A', 'B')),
+        'fault_axis': Field('int', 'axis for stuck_axis/bias_shift (−1: all)', -1, lo=-1, hi=2),
+        'fault_value_v': Field('float', 'bias_shift size, V', 0.0, lo=-5.0, hi=5.0),
+        'fault_time': _q('when the fault appears', 0.0, 's', TIME, lo=0.0, hi=1e7),
+    },
+    'em_driver': {
+        'command_source': Field('str', 'node whose moment commands drive the coils', 'acds_controller',
+                                choices=('acds_controller', 'ascs_mode_manager')),
+        'drive_types': Field('strs', 'per-axis drive: bridge_switch (HEAO) or constant_level (SSS)',
+                             ['bridge_switch'] * 3, choices=('bridge_switch', 'constant_level'), length=3),
+        'coil_resistance_ohm': Field('floats', 'per-axis winding resistance (Table 4-3: 30.3 Ω)', [30.3] * 3,
+                                     length=3, lo=0.1, hi=1e4),
+        'coil_inductance_h': Field('floats', 'per-axis winding inductance (Table 4-3: 20.3 H)', [20.3] * 3,
+                                   length=3, lo=1e-6, hi=1e3),
+        'coil_moment_per_amp_am2': Field('floats', 'per-axis dipole per ampere (Table 4-3: 2062/0.727)',
+                                         [2062 / 0.727] * 3, length=3, lo=1e-3, hi=1e5),
+        'coil_max_moment_am2': Field('floats', 'per-axis saturation of the commanded dipole', [2062.0] * 3,
+                                     length=3, lo=1e-3, hi=1e5),
+        'supply_v': Field('float', 'power bus, V', 28.0, lo=1.0, hi=100.0),
+        'epsilon': Field('float', 'hysteresis half-band ε (fraction of I_c)', 0.01, lo=1e-4, hi=0.5),
+        'band_floor_a': Field('float', 'absolute floor of the band half-width (comparator offset), A', 4e-4,
+                              lo=0.0, hi=0.1),
+        'auto_switch_to_standby': Field('bool', 'switch an alarmed axis to its standby driver/winding', False),
+        'mismatch_tolerance_frac': Field('float', 'e_ft vs command mismatch alarm, fraction of full scale',
+                                         0.1, lo=0.001, hi=1.0),
+        'failure': Field('str', 'failure injected at failure_time', 'none',
+                         choices=('none', 'open_winding', 'stuck_on_bridge', 'dead_driver')),
+        'failure_axis': Field('int', 'axis of the injected failure', 0, lo=0, hi=2),
+        'failure_unit': Field('str', 'unit of the injected failure', 'A', choices=('A', 'B')),
+        'failure_time': _q('when the failure appears', 0.0, 's', TIME, lo=0.0, hi=1e7),
+    },
+    # ---- flight laws and modes (spec §7, §8) ----------------------------------------------------
+    'controller': {
+        'acquisition_law': Field('str', 'Mode 1A magnetic law', 'bxh', choices=('bxh', 'bdot')),
+        'unloading_law': Field('str', 'Mode 1B/cruise unloading law', 'bxh', choices=('bxh', 'lead', 'none')),
+        'acquisition_gain_per_s_g2': Field('float', 'B×H acquisition gain G, (s·G²)⁻¹', 0.05, lo=0.0, hi=10.0),
+        'bdot_gain_ft_lb_s_per_g2': Field('float', 'B-dot gain K_D, ft-lb-s/G²', 1.0, lo=0.0, hi=1e4),
+        'unloading_gain_mode_1b_per_s_g2': Field('float', 'unloading gain in Mode 1B', 0.05, lo=0.0, hi=10.0),
+        'unloading_gain_scan_per_s_g2': Field('float', 'unloading gain, celestial scan', 0.01, lo=0.0, hi=10.0),
+        'unloading_gain_point_per_s_g2': Field('float', 'unloading gain, celestial point', 0.02, lo=0.0, hi=10.0),
+        'max_moment_am2': Field('float', 'per-axis moment command saturation', 2000.0, lo=1.0, hi=1e5),
+        'coupling_compensation': Field('bool', 'subtract the known Δ·M from the sensed field', False),
+        'wheel_gains': Field('str', 'acquisition wheel-law gains (Table 4-2)', 'heao_b',
+                             choices=('heao_a', 'heao_b', 'heao_b_preliminary')),
+        'scan_rate': _q('celestial scan rate about z', 0.03 * 2 * math.pi / 60, 'rad_s', RATE, lo=0.0, hi=0.1),
+        'target_quaternion_xyzw': Field('floats', 'cruise target attitude q body→ECI', [0.0, 0.0, 0.0, 1.0],
+                                        length=4, lo=-1.0, hi=1.0),
+        'lead_time_s': Field('float', 'lead law: wheel command → momentum lead time, s', 500.0, lo=0.0, hi=1e5),
+        'adc_bits': Field('int', 'transfer assembly ADC width, bits', 10, lo=6, hi=24),
+    },
+    'modes': {
+        'system': Field('str', 'which mode logic runs: heao or sss', 'heao', choices=('heao', 'sss')),
+        'initial_mode': Field('str', 'mode at separation', 'mode_1a',
+                              choices=('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point')),
+        'rate_thresholds': _q('Mode 1A→1B body-rate thresholds |ω_x|, |ω_y|, |ω_z|',
+                              [0.573 * _DEG, 0.115 * _DEG, 0.115 * _DEG], 'rad_s', RATE, length=3, lo=0.0, hi=1.0),
+        'capture_cone': _q('acquisition capture: z within this angle of the sun', 10 * _DEG, 'rad', ANGLE,
+                           lo=0.0, hi=math.pi),
+        'capture_rate': _q('acquisition capture: every rate below this ("nulled")', 0.01 * _DEG, 'rad_s', RATE,
+                           lo=0.0, hi=0.1),
+        'cruise_target': Field('str', 'cruise mode after capture', 'celestial_point',
+                               choices=('celestial_scan', 'celestial_point')),
+        'auto_cruise': Field('bool', 'enter cruise automatically at capture (else by ground command)', False),
+        'stop_at_capture': Field('bool', 'end the run at acquisition capture', False),
+        'ground_commands': Field('strs', 'scheduled ground commands, "T_S: command"', []),
+    },
+    'sss': {
+        'polarity_level': _q('polarity-sensing level of the spin-plane magnetometer channel', 0.075 * u.GAUSS_T,
+                             't', FIELD, lo=0.0, hi=1e-4),
+        'hold_time_constant_s': Field('float', 'attitude/pass hold circuit RC time constant, s', 30.0,
+                                      lo=0.1, hi=1e4),
+        'mechanization': Field('str', 'spin-mode mechanization', 'one_channel_constant',
+                               choices=('two_channel_sine', 'two_channel_constant', 'one_channel_sine',
+                                        'one_channel_constant')),
+    },
 }
 
 #: Which scenario sections each node receives as parameters.
 NODE_SECTIONS: dict[str, tuple[str, ...]] = {
     'rigid_body': ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics'),
     'reaction_wheels': ('wheels',),
-    'magnetometer_sim': (),
-    'em_driver': (),
-    'acds_controller': ('spacecraft',),
-    'ascs_mode_manager': (),
+    'magnetometer_sim': ('magnetometer',),
+    'em_driver': ('em_driver',),
+    'acds_controller': ('spacecraft', 'controller', 'magnetometer', 'wheels'),
+    'ascs_mode_manager': ('modes', 'sss'),
 }
 
 #: Where shipped scenarios live (override with ACDS_SCENARIO_DIR).
@@ -285,6 +379,11 @@ def _check_value(where: str, f: Field, value: Any, factor: float) -> Any:
     if f.length is not None and len(value) != f.length:
         raise ScenarioError(f'{where}: expected {f.length} values, got {len(value)}')
     if f.kind == 'strs':
+        if not f.choices:
+            bad = [v for v in value if not isinstance(v, str)]
+            if bad:
+                raise ScenarioError(f'{where}: expected strings, got {bad[0]!r}')
+            return list(value)
         bad = [v for v in value if v not in f.choices]
         if bad:
             raise ScenarioError(f'{where}: unknown {", ".join(map(str, bad))} (known: {", ".join(f.choices)})')
