@@ -17,7 +17,7 @@ DEFAULT_SCENARIO = 'free_tumble_heao_b'
 
 
 class Progress:
-    """One progress line: sim time / total and the real-time factor (in place on a TTY, else every 10 %)."""
+    """One progress line: sim time / total and the real-time factor (in place on a TTY, else every 10 % or 5 s)."""
 
     def __init__(self, dt_s: float) -> None:
         self.dt_s = dt_s
@@ -30,7 +30,7 @@ class Progress:
         now = time.monotonic()
         if self.tty and now - self.last_print < 0.2 and k < total:
             return
-        if not self.tty and pct < self.last_pct + 10 and k < total:
+        if not self.tty and pct < self.last_pct + 10 and now - self.last_print < 5.0 and k < total:
             return
         self.last_print, self.last_pct = now, pct
         sim_min = k * self.dt_s / 60
@@ -55,12 +55,16 @@ def cmd_run(args: argparse.Namespace) -> int:
     run_dir = Path(args.run_dir or ROOT / 'runs' / f'{scenario.name}_{time.strftime("%Y%m%d_%H%M%S")}')
     quiet = args.quiet
     echo = (lambda line: None) if quiet else None
-    graph = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=Progress(scenario.control_period_s))
+    bag = None if args.no_record else Path(args.record) if args.record else run_dir / 'bag'
+    graph = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=Progress(scenario.control_period_s),
+                     record=bag)
     print(f'[acds] scenario {scenario.name}: {graph.steps} steps of {scenario.control_period_s} s '
           f'({graph.steps * scenario.control_period_s / 60:.1f} min sim), nodes {", ".join(scenario.get("", "nodes"))}; '
           f'run folder {run_dir}', file=sys.stderr, flush=True)
     try:
         with graph:
+            print(f'[acds] ROS domain {graph.lease.domain_id}' + (f'; recording into {bag}' if bag else ''),
+                  file=sys.stderr, flush=True)
             result = graph.wait()
             summary = run_summary(result)
     except LaunchError as exc:
@@ -73,6 +77,11 @@ def cmd_run(args: argparse.Namespace) -> int:
     print_tables(summary)
     if args.summary_json:
         Path(args.summary_json).write_text(json.dumps(summary, indent=2) + '\n')
+    if bag is not None:
+        from .bag.plots import make_plots
+        plots = make_plots(bag, bag.parent / 'plots')
+        print(f'[acds] bag {bag} (./scripts/acds info {bag}); {len(plots)} plots in {bag.parent / "plots"}',
+              file=sys.stderr)
     return 0
 
 
@@ -128,7 +137,8 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument('--steps', type=_positive_int, help='number of control steps (default: the scenario duration)')
     g.add_argument('--until-min', type=float, help='run until this sim time, minutes')
     p.add_argument('--summary-json', metavar='PATH', help='write the summary as one JSON object')
-    p.add_argument('--record', metavar='PATH', help='record the run into a rosbag2 bag')
+    p.add_argument('--record', metavar='PATH', help='record the run into this rosbag2 bag (default RUN_DIR/bag)')
+    p.add_argument('--no-record', action='store_true', help="don't record a bag (nor plot it)")
     p.add_argument('--rtf', type=float, default=0.0, help='pace at this real-time factor (default: as fast as possible)')
     p.add_argument('--run-dir', help='run folder (default runs/<scenario>_<time>)')
     p.add_argument('--quiet', action='store_true', help="don't forward the nodes' output")
@@ -175,8 +185,14 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _terminate(signum: int, _frame: object) -> None:
+    raise KeyboardInterrupt(f'signal {signum}')
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Parse the verb and run it; scenario errors are one line, exit 2."""
+    """Parse the verb and run it; scenario errors are one line, exit 2; SIGTERM stops like Ctrl-C."""
+    import signal
+    signal.signal(signal.SIGTERM, _terminate)
     parser = build_parser()
     args, extra = parser.parse_known_args(argv)
     if getattr(args, 'passthrough', False):
