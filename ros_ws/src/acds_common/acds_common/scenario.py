@@ -152,6 +152,8 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'fault_axis': Field('int', 'axis for stuck_axis/bias_shift (−1: all)', -1, lo=-1, hi=2),
         'fault_value_v': Field('float', 'bias_shift size, V', 0.0, lo=-5.0, hi=5.0),
         'fault_time': _q('when the fault appears', 0.0, 's', TIME, lo=0.0, hi=1e7),
+        'telemetry_every': Field('int', 'diagnostics telemetry every N steps (and at every event)', 10,
+                                 lo=1, hi=10**6),
     },
     'em_driver': {
         'command_source': Field('str', 'node whose moment commands drive the coils', 'acds_controller',
@@ -178,6 +180,12 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'failure_axis': Field('int', 'axis of the injected failure', 0, lo=0, hi=2),
         'failure_unit': Field('str', 'unit of the injected failure', 'A', choices=('A', 'B')),
         'failure_time': _q('when the failure appears', 0.0, 's', TIME, lo=0.0, hi=1e7),
+        'mismatch_settle': _q('how long the mismatch must persist before the alarm', 3.0, 's', TIME,
+                              lo=0.0, hi=1e4),
+        'bench_command': _q('fixed moment command applied when the command source is not in the graph',
+                            [0.0, 0.0, 0.0], 'am2', {'am2': 1.0}, length=3, lo=-1e5, hi=1e5),
+        'telemetry_every': Field('int', 'diagnostics telemetry every N steps (and at every event)', 10,
+                                 lo=1, hi=10**6),
     },
     # ---- flight laws and modes (spec §7, §8) ----------------------------------------------------
     'controller': {
@@ -196,7 +204,9 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'target_quaternion_xyzw': Field('floats', 'cruise target attitude q body→ECI', [0.0, 0.0, 0.0, 1.0],
                                         length=4, lo=-1.0, hi=1.0),
         'lead_time_s': Field('float', 'lead law: wheel command → momentum lead time, s', 500.0, lo=0.0, hi=1e5),
-        'adc_bits': Field('int', 'transfer assembly ADC width, bits', 10, lo=6, hi=24),
+        'adc_bits': Field('int', 'transfer assembly ADC width, bits', 10, lo=8, hi=24),
+        'telemetry_every': Field('int', 'DPA/TA telemetry on diagnostics every N steps (and at every event)',
+                                 20, lo=1, hi=10**6),
     },
     'modes': {
         'system': Field('str', 'which mode logic runs: heao or sss', 'heao', choices=('heao', 'sss')),
@@ -222,6 +232,13 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'mechanization': Field('str', 'spin-mode mechanization', 'one_channel_constant',
                                choices=('two_channel_sine', 'two_channel_constant', 'one_channel_sine',
                                         'one_channel_constant')),
+        'hold_release_fraction': Field('float', 'hold circuit releases when its capacitor voltage falls below '
+                                       'this fraction (hold time = RC·ln(1/fraction))', 0.5, lo=0.01, hi=0.99),
+        'magnetometer_scale_v_per_g': Field('float', 'scale of the spin-plane magnetometer channel (body y) '
+                                            'read against its bias reference, V/G (Table 4-5: 2.5)', 2.5,
+                                            lo=0.01, hi=100.0),
+        'bus_v': Field('float', 'main bus feeding the coils (seed 001: 28 V); sets the commanded dipoles',
+                       28.0, lo=1.0, hi=100.0),
     },
 }
 
@@ -332,7 +349,9 @@ def _read_yaml(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:
                     del merged[old]
                 merged[sub] = v
             base[key] = merged
-        else:
+        else:  # top level: a key given in another unit (duration_min vs duration_orbits) replaces the base's
+            for old in [o for o in base if not isinstance(base[o], dict) and _stem('', o) == _stem('', key)]:
+                del base[old]
             base[key] = value
     return base
 

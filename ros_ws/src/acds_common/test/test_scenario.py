@@ -90,3 +90,9 @@ def test_every_shipped_scenario_loads():
     assert 'free_tumble_heao_b' in names
     for name in names:
         assert load_scenario(name).name == name
+
+
+def test_extends_replaces_a_top_level_duration_given_in_another_unit(tmp_path):
+    write(tmp_path, BASE.replace('duration_s: 10', 'duration_orbits: 3'), 'base.yaml')
+    sc = load_scenario(write(tmp_path, f'extends: {tmp_path / "base.yaml"}\nname: c\nduration_min: 2\n', 'c.yaml'))
+    assert sc.duration_s() == pytest.approx(120.0)
