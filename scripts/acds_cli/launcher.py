@@ -68,6 +68,7 @@ class RunResult:
     wall_seconds: float
     exit_codes: dict[str, int]
     monitor: RunMonitor
+    bag: Path | None = None
 
 
 class DomainLease:
@@ -121,7 +122,8 @@ class GraphRun:
 
     def __init__(self, scenario: Scenario, run_dir: Path, *, steps: int | None = None, rtf: float = 0.0,
                  echo: Callable[[str], None] | None = None, progress: Callable[[int, int, float], None] | None = None,
-                 overrides: dict[str, dict[str, Any]] | None = None):
+                 overrides: dict[str, dict[str, Any]] | None = None,
+                 record: Path | None = None, record_storage: str = 'mcap'):
         self.scenario = scenario
         self.run_dir = Path(run_dir)
         self.steps = steps if steps is not None else scenario.total_steps()
@@ -129,6 +131,10 @@ class GraphRun:
         self.echo = echo or (lambda line: print(line, file=sys.stderr, flush=True))
         self.progress = progress
         self.overrides = overrides
+        #: Record every topic into this rosbag2 bag (written by the run monitor, in lockstep).
+        self.record = Path(record) if record is not None else None
+        self.record_storage = record_storage
+        self.bag_writer: Any = None
         self.processes: dict[str, NodeProcess] = {}
         self.lease: DomainLease | None = None
         self.monitor: RunMonitor | None = None
@@ -160,8 +166,16 @@ class GraphRun:
 
     def start(self) -> None:
         """Lease a domain, write the parameters, start the monitor and every node."""
+        if self.record is not None:
+            from .bag.writer import BagError, check_target
+            try:
+                check_target(self.record, self.record_storage)
+            except BagError as exc:
+                raise LaunchError(str(exc)) from None
         self.run_dir.mkdir(parents=True, exist_ok=True)
         self.lease = DomainLease()
+        (self.run_dir / 'domain_id').write_text(f'{self.lease.domain_id}\n')
+        (self.run_dir / 'scenario.yaml').write_text(yaml.safe_dump(self.scenario.raw, sort_keys=False))
         env = self.env()
         os.environ['FASTRTPS_DEFAULT_PROFILES_FILE'] = env['FASTRTPS_DEFAULT_PROFILES_FILE']
         os.environ.setdefault('ROS_LOG_DIR', env['ROS_LOG_DIR'])
@@ -170,7 +184,20 @@ class GraphRun:
         params_file = self.run_dir / 'params.yaml'
         params_file.write_text(yaml.dump(
             {f'/acds/{n}': {'ros__parameters': p} for n, p in params.items()}, Dumper=_NoAliasDumper, sort_keys=True))
-        self.monitor = RunMonitor(self.lease.domain_id, on_clock=self._on_clock)
+        record = None
+        if self.record is not None:
+            from .bag.writer import BagError, BagWriter, RecordingSink, run_info
+            try:
+                self.bag_writer = BagWriter(self.record, self.record_storage,
+                                            run_info(self.scenario, self.steps, params, self.lease.domain_id))
+            except BagError as exc:
+                self.lease.close()
+                self.lease = None
+                raise LaunchError(str(exc)) from None
+
+            def record(node: Any) -> Any:
+                return RecordingSink(self.bag_writer, node)
+        self.monitor = RunMonitor(self.lease.domain_id, on_clock=self._on_clock, record=record)
         self._t0 = time.monotonic()
         for name in params:
             exe = VENV_BIN / name
@@ -199,6 +226,8 @@ class GraphRun:
         """Wait until the time owner completes; raise LaunchError naming any node that dies first."""
         owner = self.processes[TIME_OWNER]
         while True:
+            if self.bag_writer is not None and self.bag_writer.error:
+                raise LaunchError(self.bag_writer.error)
             for proc in self.processes.values():
                 code = proc.popen.poll()
                 if code is None:
@@ -225,16 +254,42 @@ class GraphRun:
     def _complete(self) -> RunResult:
         assert self.monitor is not None
         wall = time.monotonic() - self._t0
-        last_ns = round(self.steps * self.scenario.control_period_s * 1e9)
-        if not self.monitor.wait_for(lambda: bool(self.monitor.clock_ns) and self.monitor.clock_ns[-1] >= last_ns,
-                                     timeout_s=10.0):
+        dt_ns = round(self.scenario.control_period_s * 1e9)
+        last_ns = self.steps * dt_ns
+
+        def complete() -> bool:
+            if not self.monitor.clock_ns:
+                return False
+            stop_ns = last_ns if self.monitor.clock_ns[-1] >= last_ns else self._run_complete_ns()
+            return stop_ns is not None and self.monitor.clock_ns[-1] >= stop_ns
+
+        if not self.monitor.wait_for(complete, timeout_s=10.0):
             raise LaunchError(f'run monitor did not receive the last /clock step {self.steps}')
+        steps = min(self.steps, self.monitor.clock_ns[-1] // dt_ns)
         codes = self._stop_children()
         bad = {n: c for n, c in codes.items() if c != 0}
         if bad:
             name = next(iter(bad))
             raise LaunchError(self._death_report(self.processes[name], bad[name]))
-        return RunResult(self.scenario, self.steps, wall, codes, self.monitor)
+        return RunResult(self.scenario, steps, wall, codes, self.monitor, self.record)
+
+    def _run_complete_ns(self) -> int | None:
+        """Stamp of the latest ``mode`` message if it asks to end the run early (``run_complete: true``).
+
+        The time owner then stops after that step (e.g. at acquisition capture), before ``steps``.
+        """
+        from acds_common import topics
+        from diagnostic_msgs.msg import DiagnosticArray
+        from rclpy.serialization import deserialize_message
+
+        assert self.monitor is not None
+        raw = self.monitor.snapshot_last(topics.MODE)
+        if raw is None:
+            return None
+        msg = deserialize_message(raw, DiagnosticArray)
+        if any(kv.key == 'run_complete' and kv.value == 'true' for st in msg.status for kv in st.values):
+            return msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
+        return None
 
     def _stop_children(self, grace_s: float = 10.0) -> dict[str, int]:
         for proc in self.processes.values():
@@ -273,7 +328,7 @@ class GraphRun:
             if proc.popen.stdout is not None:
                 proc.popen.stdout.close()
         if self.monitor is not None:
-            self.monitor.close()
+            self.monitor.close()  # also closes the bag, if recording
             self.monitor = None
         if self.lease is not None:
             self.lease.close()

@@ -38,7 +38,8 @@ def message_class(type_name: str) -> type:
 class RunMonitor:
     """Observe one graph (one ROS domain) from inside the launcher process."""
 
-    def __init__(self, domain_id: int, on_clock: Callable[[int], None] | None = None) -> None:
+    def __init__(self, domain_id: int, on_clock: Callable[[int], None] | None = None,
+                 record: Callable[[Node], Callable[[str, bytes], None]] | None = None) -> None:
         self.context = Context()
         rclpy.init(context=self.context, domain_id=domain_id,
                    signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
@@ -47,6 +48,8 @@ class RunMonitor:
         self.clock_ns: list[int] = []
         self._lock = threading.Lock()
         self._on_clock = on_clock
+        #: Called with (absolute topic, raw CDR) for every message, before the /clock ack (a bag writer).
+        self.recorder = record(self.node) if record is not None else None
         for topic, type_name in topics.TYPES.items():
             if topic in _SKIP:
                 continue
@@ -70,6 +73,8 @@ class RunMonitor:
     def _on_raw(self, topic: str, data: bytes) -> None:
         with self._lock:
             self.received.setdefault(topic, []).append(data)
+        if self.recorder is not None:
+            self.recorder(topic, data)
         if topic == topics.CLOCK:
             t_ns = stamp_to_ns(deserialize_message(data, Clock).clock)
             self.clock_ns.append(t_ns)
@@ -83,6 +88,12 @@ class RunMonitor:
         """A copy of everything received so far, by absolute topic name."""
         with self._lock:
             return {t: list(v) for t, v in self.received.items()}
+
+    def snapshot_last(self, topic: str) -> bytes | None:
+        """The latest raw message of ``topic`` (relative or absolute name), None if none yet."""
+        with self._lock:
+            msgs = self.received.get(topics.resolve(topic))
+            return msgs[-1] if msgs else None
 
     def messages(self, topic: str) -> list[Any]:
         """Deserialized messages of ``topic`` (relative or absolute name)."""
@@ -105,5 +116,7 @@ class RunMonitor:
         """Stop spinning and release the ROS context."""
         self._stop.set()
         self._thread.join(timeout=5.0)
+        if self.recorder is not None and hasattr(self.recorder, 'close'):
+            self.recorder.close()  # the bag: index, custom data, metadata.yaml
         self.node.destroy_node()
         rclpy.try_shutdown(context=self.context)

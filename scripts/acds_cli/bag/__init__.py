@@ -1,0 +1,11 @@
+"""rosbag2 bags of ACDS runs, on top of ``rosbags``: writer, reader, player, replay-regression, plots, info.
+
+Bags are ordinary rosbag2 bags (metadata version 9, MCAP by default, sqlite3 on
+request) with message definitions and ``offered_qos_profiles`` per topic, so
+``rosbags``, the ``mcap`` package, Foxglove and ``ros2 bag`` open them.
+Timestamps are sim time: a message's ``header.stamp`` (``clock`` for
+``/clock``); messages without a stamp (``events``, ``ground/*``) take the
+latest ``/clock``. The run's scenario, the exact node parameters and who
+published each topic are stored in ``custom_data`` (``acds.*`` keys) and, from
+the moment recording starts, beside the storage file in ``acds_run.yaml``.
+"""

@@ -1,0 +1,141 @@
+"""``acds record``: join a running graph (its ROS domain) and record its topics until SIGINT/SIGTERM.
+
+A joining recorder is an observer outside the lockstep handshake: it gets the
+last 1000 messages of every topic when it joins (transient-local history) and
+keeps up as long as it is not more than 1000 steps behind; at the end it
+reports any steps it missed. ``acds run --record`` records inside the run
+monitor instead, in lockstep, and never misses a step.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+from pathlib import Path
+from typing import Any
+
+import rclpy
+import yaml
+from acds_common import topics
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+
+from ..monitor import message_class
+from .player import ros_env
+from .writer import SKIP, BagError, BagWriter, RecordingSink, cdr_stamp_ns, check_target, stamped
+
+COMMAND_TOPICS = {topics.resolve(topics.GROUND_COMMAND), topics.resolve(topics.GROUND_ACK)}
+
+
+def run_folder_info(run_dir: Path) -> tuple[int | None, dict[str, str]]:
+    """(domain id, run info) from a launcher run folder (``domain_id``, ``scenario.yaml``, ``params.yaml``)."""
+    run_dir = Path(run_dir)
+    if not (run_dir / 'domain_id').exists():
+        raise BagError(f'run folder {run_dir}: no domain_id file (is a graph running there?)')
+    domain = int((run_dir / 'domain_id').read_text().strip())
+    info: dict[str, str] = {'domain_id': str(domain)}
+    if (run_dir / 'scenario.yaml').exists():
+        text = (run_dir / 'scenario.yaml').read_text()
+        data = yaml.safe_load(text) or {}
+        info.update(scenario=text, scenario_name=str(data.get('name', '')),
+                    control_period_s=repr(float(data.get('control_period_s', 0.5))),
+                    nodes=','.join(data.get('nodes', [])))
+    if (run_dir / 'params.yaml').exists():
+        params = yaml.safe_load((run_dir / 'params.yaml').read_text()) or {}
+        per_node = {k.rsplit('/', 1)[-1]: v.get('ros__parameters', {}) for k, v in params.items()}
+        info['params'] = yaml.safe_dump(per_node, sort_keys=True)
+        steps = next((p.get('total_steps') for p in per_node.values() if 'total_steps' in p), None)
+        if steps is not None:
+            info['steps'] = str(steps)
+    return domain, info
+
+
+def record(path: Path | str, *, storage: str = 'mcap', select: list[str] | None = None,
+           domain_id: int | None = None, run_dir: Path | None = None, stop: threading.Event | None = None,
+           log: Any = None) -> BagWriter:
+    """Record until ``stop`` is set (SIGINT/SIGTERM when run from the CLI); return the closed writer."""
+    log = log or (lambda text: print(text, file=sys.stderr, flush=True))
+    path = Path(path)
+    check_target(path, storage)
+    info: dict[str, str] = {}
+    if run_dir is not None:
+        found, info = run_folder_info(run_dir)
+        domain_id = domain_id if domain_id is not None else found
+    if domain_id is None:
+        raise BagError('record: which graph? give --domain N or --run-dir RUN_FOLDER')
+    wanted = [topics.resolve(t) for t in select] if select else [topics.resolve(t) for t in topics.TYPES]
+    abs_types = {topics.resolve(t): ty for t, ty in topics.TYPES.items()}
+    unknown = [t for t in wanted if t not in abs_types]
+    if unknown:
+        raise BagError(f'record: unknown topic {", ".join(unknown)} (known: {", ".join(sorted(abs_types))})')
+    stop = stop or threading.Event()
+    ros_env(domain_id)
+    context = Context()
+    rclpy.init(context=context, domain_id=domain_id, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    node = Node('acds_recorder', namespace=topics.NAMESPACE, context=context)
+    writer = BagWriter(path, storage, info)
+    sink = RecordingSink(writer, node)
+    from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS
+    for topic in wanted:
+        if topic in SKIP:
+            continue
+        qos = COMMAND_QOS if topic in COMMAND_TOPICS else LOCKSTEP_QOS
+        node.create_subscription(message_class(abs_types[topic]), topic, lambda d, t=topic: sink(t, d), qos, raw=True)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    log(f'[record] recording domain {domain_id} into {path} ({storage}); stop with Ctrl-C or SIGTERM')
+    try:
+        while not stop.is_set() and context.ok() and not writer.error:
+            executor.spin_once(timeout_sec=0.05)
+    finally:
+        sink.close()
+        node.destroy_node()
+        rclpy.try_shutdown(context=context)
+    if writer.error:
+        raise BagError(writer.error)
+    return writer
+
+
+def gaps(bag_path: Path) -> dict[str, int]:
+    """Per stamped topic: steps missing between its first and last message (a recorder that fell behind)."""
+    from .reader import open_bag
+    bag = open_bag(bag_path)
+    dt = bag.control_period_ns
+    out = {}
+    if not dt:
+        return out
+    for topic, msgs in bag.raw.items():
+        if topic.endswith('/diagnostics') or not msgs or not stamped(bag.types[topic]):
+            continue
+        steps = sorted({cdr_stamp_ns(d) // dt for _, d in msgs})
+        missing = steps[-1] - steps[0] + 1 - len(steps)
+        if missing:
+            out[topic] = missing
+    return out
+
+
+def main_record(args: Any) -> int:
+    """CLI body of ``acds record``."""
+    stop = threading.Event()
+
+    def on_signal(_signum: int, _frame: Any) -> None:
+        stop.set()
+
+    signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGTERM, on_signal)
+    try:
+        writer = record(args.path, storage=args.storage, select=args.topics, domain_id=args.domain,
+                        run_dir=Path(args.run_dir) if args.run_dir else None, stop=stop)
+    except BagError as exc:
+        print(f'acds record: {exc}', file=sys.stderr)
+        return 2
+    total = sum(writer.counts.values())
+    print(f'[record] closed {writer.path}: {total} messages on {len(writer.counts)} topics', file=sys.stderr)
+    missing = gaps(writer.path)
+    for topic, n in missing.items():
+        print(f'[record] WARNING: {topic}: {n} steps missing (the recorder fell behind the history depth)',
+              file=sys.stderr)
+    print(writer.path)
+    return 0

@@ -1,0 +1,141 @@
+"""Bag verbs: record, play, compare, plot, info (rosbag2 bags on top of ``rosbags``)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import threading
+from typing import Any
+
+STORAGE_HELP = 'mcap (default) or sqlite3'
+
+
+def _record(args: argparse.Namespace) -> int:
+    from ..bag.recorder import main_record
+    return main_record(args)
+
+
+def _play(args: argparse.Namespace) -> int:
+    import signal
+
+    from ..bag.player import Player, parse_remaps
+    from ..bag.reader import open_bag
+    from ..bag.writer import BagError
+
+    stop = threading.Event()
+
+    def on_signal(_signum: int, _frame: Any) -> None:
+        stop.set()
+
+    signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGTERM, on_signal)
+    try:
+        bag = open_bag(args.bag)
+        player = Player(bag, domain_id=args.domain, select=args.topics, remap=parse_remaps(args.remap))
+    except BagError as exc:
+        print(f'acds play: {exc}', file=sys.stderr)
+        return 2
+    try:
+        if args.wait > 0 and not player.wait_for_subscribers(args.wait):
+            print(f'[play] no subscriber after {args.wait:g} s: playing anyway', file=sys.stderr)
+        pace = f'at {args.rate:g}x real time' if args.rate > 0 else 'as fast as possible'
+        print(f'[play] {bag.path} → domain {args.domain if args.domain is not None else "(ROS_DOMAIN_ID)"}: '
+              f'{len(player.topics)} topics {pace}', file=sys.stderr)
+        n = player.play(rate=args.rate, stop=stop)
+        print(f'[play] published {n} messages{" (stopped)" if stop.is_set() else ""}', file=sys.stderr)
+    finally:
+        player.close()
+    return 0
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from ..bag.compare import EXIT_DIFFERENT, EXIT_ERROR, EXIT_SAME, parse_sets, run_compare
+    from ..bag.writer import BagError
+
+    try:
+        result = run_compare(args.bag, args.node, tolerance=args.tolerance, scenario=args.scenario,
+                             sets=parse_sets(args.set))
+    except BagError as exc:
+        print(f'acds compare: {exc}', file=sys.stderr)
+        return EXIT_ERROR
+    print(result.report())
+    return EXIT_SAME if result.ok else EXIT_DIFFERENT
+
+
+def _plot(args: argparse.Namespace) -> int:
+    from ..bag.plots import make_plots
+    from ..bag.writer import BagError
+
+    try:
+        paths = make_plots(args.bag, args.out)
+    except BagError as exc:
+        print(f'acds plot: {exc}', file=sys.stderr)
+        return 2
+    for p in paths:
+        print(p)
+    if not paths:
+        print('[plot] no plottable topics in the bag', file=sys.stderr)
+    return 0
+
+
+def _info(args: argparse.Namespace) -> int:
+    from ..bag.info import bag_info
+    from ..bag.writer import BagError
+
+    try:
+        print(bag_info(args.bag, scenario=not args.no_scenario))
+    except BagError as exc:
+        print(f'acds info: {exc}', file=sys.stderr)
+        return 2
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the bag verbs."""
+    p = sub.add_parser('record', help='record a running graph into a rosbag2 bag (until Ctrl-C / SIGTERM)',
+                       description='Join a running graph (its ROS domain) and record its topics as raw CDR into '
+                                   'a rosbag2 bag (MCAP by default) until SIGINT/SIGTERM. Buffered messages are '
+                                   'flushed every second: a killed recorder loses at most the last second.')
+    p.add_argument('path', help='bag folder to create (must not exist)')
+    p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap', help=STORAGE_HELP)
+    p.add_argument('--topics', nargs='+', metavar='TOPIC', help='record only these topics (default: all)')
+    p.add_argument('--domain', type=int, help='ROS domain id of the graph (printed by acds run, in RUN/domain_id)')
+    p.add_argument('--run-dir', help='run folder of the graph: domain, scenario and parameters are read from it')
+    p.set_defaults(func=_record)
+
+    p = sub.add_parser('play', help="publish a bag's messages (raw, original types, /clock)",
+                       description="Publish a bag's messages with their original types and /clock, in sim-time "
+                                   'order, as fast as possible or at --rate times real time.')
+    p.add_argument('bag')
+    p.add_argument('--topics', nargs='+', metavar='TOPIC', help='play only these topics (/clock always)')
+    p.add_argument('--rate', type=float, default=0.0, help='sim time per wall time (default 0: as fast as possible)')
+    p.add_argument('--remap', nargs='+', metavar='FROM:=TO', help='publish topic FROM under the name TO')
+    p.add_argument('--domain', type=int, help='ROS domain id to publish on (default: ROS_DOMAIN_ID)')
+    p.add_argument('--wait', type=float, default=2.0, help='wait up to this many s for a subscriber (default 2)')
+    p.set_defaults(func=_play)
+
+    p = sub.add_parser('compare', help="replay-regression: one node against a bag's recorded inputs",
+                       description='Run NODE alone in its own ROS domain against the recorded inputs of BAG, in '
+                                   'lockstep, and compare its outputs with the recorded ones step by step. Exit 0 '
+                                   'when identical (or within --tolerance), 1 naming the first differing topic, '
+                                   'step and field, 2 on a set-up error.')
+    p.add_argument('bag')
+    p.add_argument('--node', required=True, help='node to re-run (e.g. reaction_wheels, acds_controller)')
+    p.add_argument('--tolerance', type=float, default=0.0, help='absolute float tolerance (default 0: identical)')
+    p.add_argument('--scenario', help="take the node's parameters from this scenario instead of the bag's")
+    p.add_argument('--set', nargs='+', metavar='PARAM:=VALUE', help='override node parameters (YAML values)')
+    p.set_defaults(func=_compare)
+
+    p = sub.add_parser('plot', help="PNGs of the study's figures from a bag",
+                       description='Direction cosines, body rates, wheel momenta, magnetic moments, field/momentum '
+                                   'angle, mode timeline (and SSS spin rate/torque) as PNGs, study units.')
+    p.add_argument('bag')
+    p.add_argument('--out', help='output folder (default: plots/ beside the bag)')
+    p.set_defaults(func=_plot)
+
+    p = sub.add_parser('info', help="a bag's topics, types, counts, sim-time span and scenario",
+                       description="Print a bag's topics, types, message counts, sim-time span and the scenario "
+                                   'it was recorded with.')
+    p.add_argument('bag')
+    p.add_argument('--no-scenario', action='store_true', help="don't print the scenario text")
+    p.set_defaults(func=_info)
