@@ -2,7 +2,9 @@
 
 Step k: publish truth(t_k) and ``/clock``; wait for the actuator outputs of step k
 (achieved dipole from em_driver, wheel momentum and torque from reaction_wheels;
-absent nodes mean zero), then integrate t_k → t_k+1.
+absent nodes mean zero) and the step's ``mode``, then integrate t_k → t_k+1. The run
+ends after step k when the total step count is reached or when the ``mode`` of step k
+carries ``run_complete: true`` (e.g. stop at acquisition capture).
 """
 
 from __future__ import annotations
@@ -13,12 +15,19 @@ import numpy as np
 from acds_common import topics
 from acds_common.lockstep import Input, LockstepNode, run_node
 from acds_common.messages import magnetic_field, vec, vector3_stamped
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu, MagneticField
 
 from dynamics.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
 from dynamics.rigid_body_model import RigidBodyModel, Truth, inertia_tensor
+
+
+def run_complete(mode: DiagnosticArray | None) -> bool:
+    """Whether the step's ``mode`` message asks to end the run (key ``run_complete`` = 'true')."""
+    return mode is not None and any(
+        kv.key == 'run_complete' and kv.value == 'true' for status in mode.status for kv in status.values)
 
 
 class RigidBodyNode(LockstepNode):
@@ -57,6 +66,7 @@ class RigidBodyNode(LockstepNode):
             Input('dipole', topics.DIPOLE_AVG, Vector3Stamped, 'em_driver'),
             Input('wheel_h', topics.WHEEL_MOMENTUM, Vector3Stamped, 'reaction_wheels'),
             Input('wheel_hdot', topics.WHEEL_TORQUE, Vector3Stamped, 'reaction_wheels'),
+            Input('mode', topics.MODE, DiagnosticArray, 'ascs_mode_manager'),
         ], self.integrate)
         self._wheel_h = np.zeros(3)
 
@@ -67,7 +77,7 @@ class RigidBodyNode(LockstepNode):
 
     def integrate(self, k: int, _t: float, inp: dict[str, Any]) -> None:
         """All actuator outputs of step k are in: integrate to t_k+1 and publish it."""
-        if k >= self.total_steps:
+        if k >= self.total_steps or run_complete(inp['mode']):
             self.finish()
             return
         h = vec(inp['wheel_h'])
