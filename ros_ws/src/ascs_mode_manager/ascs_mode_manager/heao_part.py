@@ -1,0 +1,172 @@
+"""HEAO part of the ascs_mode_manager node: Mode 1A → 1B → capture → cruise and ground commands (spec §8).
+
+Step k (inputs: gyro and sun sensor of step k from rigid_body):
+
+1. ground commands: the scheduled ones (``modes.ground_commands``, "T_S: text") whose
+   time has come (first step with t_k ≥ T_S), then the ones received on
+   ``ground/command`` since the previous step, in arrival order, are validated by the
+   core; each is answered on ``ground/ack`` ("accepted …" or "refused …: <reason>");
+   accepted mode transfers are applied in this step, commands for other nodes are
+   forwarded in this step's ``mode`` message (key ``command/<node>``);
+2. the on-board logic of :class:`~ascs_mode_manager.heao_modes.HeaoModeManager`;
+3. ``mode`` (DiagnosticArray, every step): status ``ascs_mode_manager`` with message =
+   mode and keys ``mode``, ``cause`` (this step's transition causes, '' if none),
+   ``captured``, ``run_complete`` ('true' from the capture step on when
+   ``modes.stop_at_capture``: the time owner then ends the run after this step), the
+   core's status keys, and the forwarded ``command/<node>`` keys;
+4. ``events`` (std_msgs/String): one line per transition, "t=<s> <from>-><to>: <cause>"
+   (capture: "t=<s> capture in mode_1b: <cause>"), also logged.
+
+A ground command received while step k is being computed is applied at step k+1 (the
+executor is single-threaded: a message that arrives before the handler of step k runs is
+applied at step k). Only the scheduled commands are tied to a sim time; they are the
+deterministic way to command a run.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from acds_common import topics
+from acds_common.lockstep import COMMAND_QOS, ConfigError, Input, LockstepNode
+from acds_common.messages import diagnostic
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Vector3Stamped
+from sensor_msgs.msg import Imu
+from std_msgs.msg import String
+
+from ascs_mode_manager.heao_modes import CRUISE_MODES, HeaoModeConfig, HeaoModeManager, Transition
+from ascs_mode_manager.spin_mechanizations import AscsError
+
+#: Name of the mode status (the controller and the em_driver look it up by this name).
+STATUS_NAME = 'ascs_mode_manager'
+
+
+def parse_scheduled(lines: list[str]) -> list[tuple[float, str]]:
+    """Scheduled ground commands "T_S: text" → [(T_S, text)] in time order (stable); ValueError if malformed."""
+    out = []
+    for line in lines:
+        head, sep, text = line.partition(':')
+        try:
+            t = float(head)
+        except ValueError:
+            t = math.nan
+        if not sep or not math.isfinite(t) or t < 0.0 or not text.strip():
+            raise ValueError(f'modes.ground_commands entry {line!r} is not "T_S: command" with T_S ≥ 0 s')
+        out.append((t, text.strip()))
+    return sorted(out, key=lambda x: x[0])
+
+
+def event_text(tr: Transition) -> str:
+    """The ``events`` line of a transition."""
+    if tr.kind == 'capture':
+        return f't={tr.t_s:.1f} capture in {tr.to_mode}: {tr.cause}'
+    return f't={tr.t_s:.1f} {tr.from_mode}->{tr.to_mode}: {tr.cause}'
+
+
+def build_core(m: dict[str, Any]) -> HeaoModeManager:
+    """The HEAO mode manager core from the scenario's ``modes`` section (SI values).
+
+    ``initial_mode`` mode_1b is Table 4-7 case 6 (wheels on from separation); a cruise mode
+    starts a normal-mode run (§4.3.2) in cruise, already captured (the acquisition is not
+    simulated).
+    """
+    from acds_controller.dpa import GAIN_LIMITS, LAW_CHOICES
+
+    initial = m['initial_mode']
+    core = HeaoModeManager(HeaoModeConfig(
+        rate_thresholds_rad_s=tuple(m['rate_thresholds']),
+        capture_cone_rad=m['capture_cone'], capture_rate_rad_s=m['capture_rate'],
+        cruise_target=m['cruise_target'], auto_cruise=m['auto_cruise'],
+        wheels_on_from_separation=initial == 'mode_1b',
+        initial_mode='standby' if initial == 'standby' else 'mode_1a',
+        gain_limits=GAIN_LIMITS, law_choices=LAW_CHOICES))
+    if initial in CRUISE_MODES:
+        core.mode = initial
+        core.captured = True
+    return core
+
+
+class HeaoPart:
+    """Adds the HEAO mode logic to the ascs_mode_manager node."""
+
+    def __init__(self, node: LockstepNode) -> None:
+        self.node = node
+        m = node.modes
+        try:
+            self.scheduled = parse_scheduled(m['ground_commands'])
+            self.core = build_core(m)
+        except (AscsError, ValueError) as exc:
+            raise ConfigError(f'ascs_mode_manager: {exc}') from None
+        self.stop_at_capture = m['stop_at_capture']
+        self.run_complete = False
+        self._next_scheduled = 0
+        self._received: list[str] = []
+        node.add_output('mode', DiagnosticArray, topics.MODE)
+        node.add_output('events', String, topics.EVENTS)
+        node.add_output('diagnostics', DiagnosticArray, topics.DIAGNOSTICS)
+        self.ack = node.create_publisher(String, topics.GROUND_ACK, COMMAND_QOS)
+        node.create_subscription(String, topics.GROUND_COMMAND, self._on_command, COMMAND_QOS)
+        node.add_stage('modes', [
+            Input('gyro', topics.GYRO, Imu, 'rigid_body'),
+            Input('sun', topics.SUN_SENSOR, Vector3Stamped, 'rigid_body'),
+        ], self.step)
+
+    def _on_command(self, msg: String) -> None:
+        self._received.append(msg.data)
+
+    def _commands(self, k: int, t: float) -> list[tuple[str, str]]:
+        """Validate the due commands; return the forwarded (node, text) pairs."""
+        due = []
+        while self._next_scheduled < len(self.scheduled) and self.scheduled[self._next_scheduled][0] <= t + 1e-9:
+            due.append(self.scheduled[self._next_scheduled][1])
+            self._next_scheduled += 1
+        due.extend(self._received)
+        self._received = []
+        forwarded = []
+        for text in due:
+            result = self.core.command(text, t)
+            if result.accepted:
+                answer = f'accepted t={t:.1f}: {result.command}: {result.reason}'
+                if result.route is not None:
+                    forwarded.append((result.route, result.command or text))
+            else:
+                answer = f'refused t={t:.1f}: {text}: {result.reason}'
+                self.node.publish('diagnostics', diagnostic(
+                    STATUS_NAME, {'command': text, 'reason': result.reason}, 'ground command refused',
+                    DiagnosticStatus.WARN), k)
+            self.node.get_logger().info(f'ground command {answer}')
+            self.ack.publish(String(data=answer))
+        return forwarded
+
+    def step(self, k: int, t: float, inp: dict[str, Any]) -> None:
+        """One step of the mode logic; publishes ``mode`` (always) and ``events`` (on transitions)."""
+        forwarded = self._commands(k, t)
+        transitions: list[Transition] = []
+        gyro, sun_msg = inp['gyro'], inp['sun']
+        omega = np.zeros(3) if gyro is None else np.array(
+            [gyro.angular_velocity.x, gyro.angular_velocity.y, gyro.angular_velocity.z])
+        sun = np.zeros(3) if sun_msg is None else np.array([sun_msg.vector.x, sun_msg.vector.y, sun_msg.vector.z])
+        if np.all(np.isfinite(omega)) and np.all(np.isfinite(sun)):
+            transitions = self.core.step(t, omega, sun, bool(np.linalg.norm(sun) > 0.0))
+        else:
+            message = f'non-finite gyro/sun input rejected at step {k}: mode logic held'
+            self.node.get_logger().warning(message)
+            self.node.publish('diagnostics', diagnostic(STATUS_NAME, {}, message, DiagnosticStatus.WARN), k)
+        for tr in transitions:
+            if tr.kind == 'capture' and self.stop_at_capture:
+                self.run_complete = True
+            text = event_text(tr)
+            self.node.get_logger().info(text)
+            self.node.publish('events', String(data=text), k)
+        values = {
+            'mode': self.core.mode,
+            'cause': '; '.join(tr.cause for tr in transitions),
+            **{key: v for key, v in self.core.status().items() if key != 'mode'},
+            'run_complete': 'true' if self.run_complete else 'false',
+        }
+        arr = diagnostic(STATUS_NAME, values, self.core.mode)
+        arr.status[0].values.extend(KeyValue(key=f'command/{route}', value=text) for route, text in forwarded)
+        self.node.publish('mode', arr, k)
