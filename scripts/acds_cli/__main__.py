@@ -13,7 +13,7 @@ from pathlib import Path
 from acds_common.scenario import ScenarioError, list_scenarios, load_scenario
 
 ROOT = Path(__file__).resolve().parents[2]
-DEFAULT_SCENARIO = 'free_tumble_heao_b'
+DEFAULT_SCENARIO = 'heao_b_acquisition'
 
 
 class Progress:
