@@ -395,6 +395,18 @@ class BridgeSwitchCoil:
                 transistor = False
             else:  # off at zero current: the diodes block, nothing happens
                 i_inf, target, transistor = 0.0, 0.0, False
+            if transistor and x == lo and recorder is None and 0.0 < lo < hi < self._i_on:
+                # Settled in the band at the turn-on edge: the waveform is exactly periodic until the
+                # period ends, so whole on/off cycles are added in closed form (all but the last).
+                n, cycle = self._whole_cycles(lo, hi, duration_s - t)
+                if n > 0:
+                    t_on, t_off, area_on, area_off = cycle
+                    t += n * (t_on + t_off)
+                    integral_i += n * s * (area_on + area_off)
+                    on_time += n * t_on
+                    drawn += n * supply * area_on
+                    returned += n * supply * area_off
+                    switches += 2 * n
             remaining = duration_s - t
             dt = remaining
             if i_inf != i:
@@ -423,6 +435,16 @@ class BridgeSwitchCoil:
         waveform = recorder.finish(duration_s, i, on) if recorder is not None else None
         return self._result(integral_i / duration_s, on_time / duration_s, switches, drawn, returned,
                             duration_s, waveform)
+
+    def _whole_cycles(self, lo: float, hi: float, remaining_s: float) -> tuple[int, tuple[float, float, float, float]]:
+        """Number of whole band cycles to skip (leaving one to integrate edge by edge) and one cycle's
+        (t_on, t_off, ∫|i| dt on, ∫|i| dt off), from the same exponentials as eq. 4-27."""
+        tau = self.coil.tau_s
+        t_on = tau * math.log((self._i_on - lo) / (self._i_on - hi))
+        t_off = tau * math.log((hi + self._i_off) / (lo + self._i_off))
+        area_on = self._i_on * t_on + (lo - self._i_on) * tau * (1.0 - math.exp(-t_on / tau))
+        area_off = -self._i_off * t_off + (hi + self._i_off) * tau * (1.0 - math.exp(-t_off / tau))
+        return int(remaining_s / (t_on + t_off)) - 1, (t_on, t_off, area_on, area_off)
 
     def _open_winding_result(self, active: bool, duration_s: float, recorder: _Recorder | None) -> PeriodResult:
         """Open winding: no current flows; the comparator sees zero current and holds the bridge on."""
