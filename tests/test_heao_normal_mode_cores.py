@@ -3,17 +3,13 @@ stays bounded; without it, the secular gravity-gradient momentum builds up until
 
 Two orbits at the graph's 0.5 s are ~22 000 lockstep steps per run, too slow for a graph
 test; this runs the SAME cores the nodes call, composed in the graph's step order
-(``tests/heao_core_loop.py``), from the shipped scenarios, with three justified changes
-for speed:
+(``tests/heao_core_loop.py``), from the shipped scenarios, with two justified changes
+for speed (the em_driver keeps the study's exact ±1 % band):
 
 * Δt = 2 s: the normal-mode wheel loop's rate gains are 5.65–11.7 s and the disturbances
   vary at orbital rate (91 min period); halving again to 4 s still gives the same momentum
   history to ~0.5 ft-lb-sec;
-* RK4 substeps 2 (the rotation over 2 s at normal-mode rates is < 0.01°);
-* em_driver hysteresis band ±5 % with a 10 mA floor instead of ±1 % / 0.4 mA: the band
-  sets only the coil-current ripple (thousands of switchings per second at unloading
-  currents in the exact bridge model otherwise); the study ignored the coil dynamics in
-  normal mode altogether ("the coil time constant is on the order of one second or less").
+* RK4 substeps 2 (the rotation over 2 s at normal-mode rates is < 0.01°).
 """
 
 from __future__ import annotations
@@ -36,8 +32,6 @@ DT_S = 2.0
 def _two_orbits(name: str) -> tuple[np.ndarray, np.ndarray, object]:
     sc = load_scenario(name)
     sc.values['dynamics']['substeps'] = 2
-    sc.values['em_driver']['epsilon'] = 0.05
-    sc.values['em_driver']['band_floor_a'] = 0.01
     steps = round(2 * sc.orbit_period_s() / DT_S)
     run = core_loop.run_cores(sc, steps, DT_S)
     return np.array(run.t_s), nms_to_ftlbs(np.array(run.wheel_h_nms)), run
