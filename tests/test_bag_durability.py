@@ -65,7 +65,7 @@ def _wait(predicate, what: str, timeout_s: float = 60.0) -> None:
 
 
 def _check_prefix(bag_path: Path, graph, at_least: int) -> int:
-    """Every recorded message equals the published one of its step, each topic contiguous; return the count."""
+    """Every recorded message equals the published one of its step, in step order; return the count."""
     bag = open_bag(bag_path)
     total = sum(len(v) for v in bag.raw.values())
     assert total >= at_least, f'{bag_path}: {total} messages, fewer than the {at_least} flushed before the kill'
@@ -79,7 +79,9 @@ def _check_prefix(bag_path: Path, graph, at_least: int) -> int:
             continue
         published = {cdr_stamp_ns(d) // dt: d for d in monitor[topic]}
         steps = [t // dt for t, _ in msgs]
-        assert steps == list(range(steps[0], steps[0] + len(steps))), f'{topic}: steps not contiguous'
+        # ordered by step; a recorder that JOINS a running graph may miss part of the transient-local
+        # history (it reports such gaps itself), so contiguity is not asserted here: durability is
+        assert steps == sorted(set(steps)), f'{topic}: steps out of order or repeated'
         for t, d in msgs:
             assert d == published[t // dt], f'{topic} step {t // dt}: differs from what was published'
     assert len(bag.raw[topics.CLOCK]) > 0

@@ -432,8 +432,8 @@ def run_node(name: str, factory: Callable[[], LockstepNode], args: list[str] | N
         if node.failure is not None:
             print(f'[{name}] LOCKSTEP FAILURE: {node.failure}', file=sys.stderr, flush=True)
             code = EXIT_LOCKSTEP
-        elif node.done:
-            node.flush()
+        else:  # completed, or stopped by SIGINT/SIGTERM: deliver what was published before leaving
+            node.flush(timeout_s=2.0 if stop['signal'] is not None else 5.0)
     except (ConfigError, ValueError) as exc:
         print(f'[{name}] CONFIGURATION ERROR: {exc}',
               file=sys.stderr, flush=True)
