@@ -25,14 +25,13 @@ deterministic way to command a run.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 from acds_common import topics
-from acds_common.lockstep import COMMAND_QOS, ConfigError, Input, LockstepNode
+from acds_common.lockstep import ConfigError, Input, LockstepNode
 from acds_common.messages import diagnostic
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Vector3Stamped
 from sensor_msgs.msg import Imu
 from std_msgs.msg import String
@@ -42,21 +41,6 @@ from ascs_mode_manager.spin_mechanizations import AscsError
 
 #: Name of the mode status (the controller and the em_driver look it up by this name).
 STATUS_NAME = 'ascs_mode_manager'
-
-
-def parse_scheduled(lines: list[str]) -> list[tuple[float, str]]:
-    """Scheduled ground commands "T_S: text" → [(T_S, text)] in time order (stable); ValueError if malformed."""
-    out = []
-    for line in lines:
-        head, sep, text = line.partition(':')
-        try:
-            t = float(head)
-        except ValueError:
-            t = math.nan
-        if not sep or not math.isfinite(t) or t < 0.0 or not text.strip():
-            raise ValueError(f'modes.ground_commands entry {line!r} is not "T_S: command" with T_S ≥ 0 s')
-        out.append((t, text.strip()))
-    return sorted(out, key=lambda x: x[0])
 
 
 def event_text(tr: Transition) -> str:
@@ -96,37 +80,20 @@ class HeaoPart:
         self.node = node
         m = node.modes
         try:
-            self.scheduled = parse_scheduled(m['ground_commands'])
             self.core = build_core(m)
         except (AscsError, ValueError) as exc:
             raise ConfigError(f'ascs_mode_manager: {exc}') from None
         self.stop_at_capture = m['stop_at_capture']
         self.run_complete = False
-        self._next_scheduled = 0
-        self._received: list[str] = []
-        node.add_output('mode', DiagnosticArray, topics.MODE)
-        node.add_output('events', String, topics.EVENTS)
-        node.add_output('diagnostics', DiagnosticArray, topics.DIAGNOSTICS)
-        self.ack = node.create_publisher(String, topics.GROUND_ACK, COMMAND_QOS)
-        node.create_subscription(String, topics.GROUND_COMMAND, self._on_command, COMMAND_QOS)
         node.add_stage('modes', [
             Input('gyro', topics.GYRO, Imu, 'rigid_body'),
             Input('sun', topics.SUN_SENSOR, Vector3Stamped, 'rigid_body'),
         ], self.step)
 
-    def _on_command(self, msg: String) -> None:
-        self._received.append(msg.data)
-
     def _commands(self, k: int, t: float) -> list[tuple[str, str]]:
         """Validate the due commands; return the forwarded (node, text) pairs."""
-        due = []
-        while self._next_scheduled < len(self.scheduled) and self.scheduled[self._next_scheduled][0] <= t + 1e-9:
-            due.append(self.scheduled[self._next_scheduled][1])
-            self._next_scheduled += 1
-        due.extend(self._received)
-        self._received = []
         forwarded = []
-        for text in due:
+        for text, _source in self.node.commands.due(t):
             result = self.core.command(text, t)
             if result.accepted:
                 answer = f'accepted t={t:.1f}: {result.command}: {result.reason}'
@@ -137,8 +104,7 @@ class HeaoPart:
                 self.node.publish('diagnostics', diagnostic(
                     STATUS_NAME, {'command': text, 'reason': result.reason}, 'ground command refused',
                     DiagnosticStatus.WARN), k)
-            self.node.get_logger().info(f'ground command {answer}')
-            self.ack.publish(String(data=answer))
+            self.node.acknowledge(answer, result.accepted)
         return forwarded
 
     def step(self, k: int, t: float, inp: dict[str, Any]) -> None:

@@ -48,12 +48,11 @@ detected on the y channel. The scenario must match: a coil on y for the two-chan
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 from acds_common import topics
-from acds_common.lockstep import COMMAND_QOS, ConfigError, Input
+from acds_common.lockstep import Input
 from acds_common.messages import diagnostic, vec, vector3_stamped
 from acds_common.units import GAUSS_T, tesla_to_gauss
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -67,22 +66,6 @@ NODE = 'ascs_mode_manager'
 #: Body axis of the spin-plane magnetometer channel (fixed by the core's wiring).
 CHANNEL_AXIS = 1
 DIAGNOSTIC_EVERY = 20
-
-
-def parse_schedule(entries: list[str]) -> list[tuple[float, str]]:
-    """``["T_S: command", ...]`` → [(T_S, command)] sorted by time (stable); ConfigError on a bad entry."""
-    out = []
-    for entry in entries:
-        head, sep, text = str(entry).partition(':')
-        try:
-            t_s = float(head)
-        except ValueError:
-            t_s = math.nan
-        if not sep or not math.isfinite(t_s) or t_s < 0.0 or not text.strip():
-            raise ConfigError(f'{NODE}: modes.ground_commands entry {entry!r} is not "T_S: command" '
-                              '(T_S seconds ≥ 0)')
-        out.append((t_s, text.strip()))
-    return sorted(out, key=lambda e: e[0])
 
 
 def mode_name(ascs: SssAscs, out: SssOutput) -> str:
@@ -118,24 +101,13 @@ class SssPart:
         self.ascs = SssAscs(SssAscsConfig(
             polarity_level_t=p['polarity_level'], hold_time_constant_s=p['hold_time_constant_s'],
             hold_release_fraction=p['hold_release_fraction'], spin_coil=self.mech.coil, bus_v=p['bus_v']))
-        self.schedule = parse_schedule(node.modes['ground_commands'])
-        self.pending: list[str] = []
         self.mode = 'sss_disabled'
         self.last_signal_t = 0.0
         node.add_output('moment', Vector3Stamped, topics.MOMENT_COMMAND)
-        node.add_output('mode', DiagnosticArray, topics.MODE)
-        node.add_output('events', String, topics.EVENTS)
-        node.add_output('diagnostics', DiagnosticArray, topics.DIAGNOSTICS)
-        self.ack_pub = node.create_publisher(String, topics.GROUND_ACK, COMMAND_QOS)
-        node.create_subscription(String, topics.GROUND_COMMAND, self.on_command, COMMAND_QOS)
         node.add_stage('sss', [
             Input('volts', topics.MAG_VOLTS, Vector3Stamped, 'magnetometer_sim'),
             Input('bias', topics.MAG_BIAS_VOLTS, Vector3Stamped, 'magnetometer_sim'),
         ], self.step)
-
-    def on_command(self, msg: String) -> None:
-        """A live ground command: queued, applied at the next step."""
-        self.pending.append(msg.data)
 
     def sensed_field_t(self, k: int, inp: dict[str, Any]) -> np.ndarray:
         """Bias-referenced field of the three axes, T; a non-finite or absent reading reads as zero."""
@@ -155,21 +127,12 @@ class SssPart:
         result = self.ascs.command(text, t_s)
         verdict = 'accepted' if result.accepted else 'refused'
         line = f't={t_s:.2f} {verdict} ({source}) {text!r}: {result.reason}'
-        self.ack_pub.publish(String(data=line))
-        if result.accepted:  # rclpy loggers fix one severity per call site: two call sites
-            self.node.get_logger().info(line)
-        else:
-            self.node.get_logger().warning(line)
+        self.node.acknowledge(line, result.accepted)
         return f'ground command {text!r}' if result.accepted else ''
 
     def step(self, k: int, t_s: float, inp: dict[str, Any]) -> None:
         """Step k: commands due, the core step, then mode, moment command, events and diagnostics."""
-        causes = []
-        while self.schedule and self.schedule[0][0] <= t_s + 1e-9:
-            causes.append(self.apply(self.schedule.pop(0)[1], t_s, 'scheduled'))
-        pending, self.pending = self.pending, []
-        for text in pending:
-            causes.append(self.apply(text, t_s, 'live'))
+        causes = [self.apply(text, t_s, source) for text, source in self.node.commands.due(t_s)]
         b_t = self.sensed_field_t(k, inp)
         self.last_signal_t = float(b_t[CHANNEL_AXIS])
         out = self.ascs.step(t_s, self.node.control_period_s, b_t)

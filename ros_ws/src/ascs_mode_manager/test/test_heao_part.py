@@ -1,22 +1,10 @@
-"""Tests of the HEAO part's pure helpers: scheduled commands, event lines, the core from a scenario."""
+"""Tests of the HEAO part's pure helpers: event lines, the core from a scenario."""
 
 from __future__ import annotations
 
-import pytest
 from acds_common.scenario import load_scenario
 from ascs_mode_manager.heao_modes import Transition
-from ascs_mode_manager.heao_part import build_core, event_text, parse_scheduled
-
-
-def test_scheduled_commands_parse_and_sort_stably():
-    got = parse_scheduled(['20: mode celestial_point', '5.5: gain unloading_gain_point 0.03', '5.5:law unloading lead'])
-    assert got == [(5.5, 'gain unloading_gain_point 0.03'), (5.5, 'law unloading lead'), (20.0, 'mode celestial_point')]
-
-
-@pytest.mark.parametrize('bad', ['mode celestial_point', 'x: mode standby', '-1: mode standby', '3:', 'nan: mode 1a'])
-def test_malformed_scheduled_command_is_rejected_naming_it(bad):
-    with pytest.raises(ValueError, match='T_S: command'):
-        parse_scheduled([bad])
+from ascs_mode_manager.heao_part import build_core, event_text
 
 
 def test_event_lines():

@@ -1,4 +1,4 @@
-"""Tests of the SSS part's pure helpers: the ground-command schedule and the published mode names."""
+"""Tests of the SSS part's pure helpers: the published mode names and dipole commands."""
 
 from __future__ import annotations
 
@@ -6,24 +6,10 @@ import math
 
 import numpy as np
 import pytest
-from acds_common.lockstep import ConfigError
 from acds_common.units import GAUSS_T, rpm_to_rad_s
 from ascs_mode_manager.spin_mechanizations import MECHANIZATIONS
 from ascs_mode_manager.sss_ascs import SssAscs, SssAscsConfig
-from ascs_mode_manager.sss_part import dipole_command, mode_name, parse_schedule
-
-
-def test_schedule_parses_and_sorts_by_time() -> None:
-    assert parse_schedule(['10: sss despin', '0: sss enable', '0.5:sss mode spin']) == [
-        (0.0, 'sss enable'), (0.5, 'sss mode spin'), (10.0, 'sss despin')]
-    assert parse_schedule([]) == []
-
-
-@pytest.mark.parametrize('entry', ['sss enable', 'x: sss enable', '-1: sss enable', '5:', 'nan: sss enable',
-                                   'inf: sss enable'])
-def test_schedule_rejects_malformed_entries_naming_them(entry: str) -> None:
-    with pytest.raises(ConfigError, match='ground_commands entry'):
-        parse_schedule([entry])
+from ascs_mode_manager.sss_part import dipole_command, mode_name
 
 
 def _b(amplitude_g: float, t: float) -> np.ndarray:

@@ -1,0 +1,29 @@
+"""Ground-command intake: the schedule parses and sorts; commands come out at a defined step."""
+
+from __future__ import annotations
+
+import pytest
+from ascs_mode_manager.ground_commands import GroundCommandQueue, parse_schedule
+from ascs_mode_manager.spin_mechanizations import AscsError
+
+
+def test_schedule_parses_and_sorts_stably():
+    got = parse_schedule(['20: mode celestial_point', '5.5: gain unloading_gain_point 0.03', '5.5:law unloading lead'])
+    assert got == [(5.5, 'gain unloading_gain_point 0.03'), (5.5, 'law unloading lead'), (20.0, 'mode celestial_point')]
+    assert parse_schedule([]) == []
+
+
+@pytest.mark.parametrize('bad', ['mode celestial_point', 'x: mode standby', '-1: mode standby', '3:', 'nan: mode 1a',
+                                 'inf: sss enable'])
+def test_malformed_entry_is_rejected_naming_it(bad):
+    with pytest.raises(AscsError, match='ground_commands entry .* is not "T_S: command"'):
+        parse_schedule([bad])
+
+
+def test_commands_are_due_at_the_first_step_at_or_after_their_time_live_ones_at_the_next_step():
+    queue = GroundCommandQueue(['1.0: sss enable', '0: sss mode spin'])
+    assert queue.due(0.0) == [('sss mode spin', 'scheduled')]
+    queue.receive('sss despin')  # arrives between the steps at t = 0 and t = 0.5
+    assert queue.due(0.5) == [('sss despin', 'live')]
+    assert queue.due(1.0) == [('sss enable', 'scheduled')]
+    assert queue.due(1.5) == []
