@@ -26,33 +26,46 @@ def _recorder(run_dir: Path, bag: Path, storage: str, log: Path) -> subprocess.P
                             stderr=subprocess.PIPE, text=True)
 
 
-def _flushed_messages(bag: Path, storage: str) -> int:
-    """Messages a reader can already see on disk (complete MCAP chunks / committed sqlite rows)."""
+def _flushed(bag: Path, storage: str) -> dict[str, int]:
+    """Messages per topic a reader can already see on disk (complete MCAP chunks / committed sqlite rows)."""
     if storage == 'mcap':
-        from mcap.records import Message
+        from mcap.records import Channel, Message
         from mcap.stream_reader import StreamReader
         files = list(bag.glob('*.mcap'))
         if not files:
-            return 0
-        n = 0
+            return {}
+        names: dict[int, str] = {}
+        counts: dict[str, int] = {}
         with files[0].open('rb') as fh:
             try:
                 for rec in StreamReader(fh).records:
-                    n += isinstance(rec, Message)
+                    if isinstance(rec, Channel):
+                        names[rec.id] = rec.topic
+                    elif isinstance(rec, Message):
+                        counts[names[rec.channel_id]] = counts.get(names[rec.channel_id], 0) + 1
             except Exception:  # noqa: BLE001 (the chunk being written is incomplete)
                 pass
-        return n
+        return counts
     files = list(bag.glob('*.db3'))
     if not files:
-        return 0
+        return {}
     try:
         db = sqlite3.connect(f'file:{files[0]}?mode=ro', uri=True)
         try:
-            return db.execute('SELECT count(*) FROM messages').fetchone()[0]
+            rows = db.execute('SELECT topics.name, count(*) FROM messages JOIN topics ON messages.topic_id = topics.id '
+                              'GROUP BY topics.name').fetchall()
+            return dict(rows)
         finally:
             db.close()
     except sqlite3.Error:
-        return 0
+        return {}
+
+
+def _recording_everything(bag: Path, storage: str, at_least: int) -> bool:
+    """The joining recorder has matched every topic of the graph (discovery of a late joiner can
+    take seconds per endpoint) and flushed at least ``at_least`` messages."""
+    counts = _flushed(bag, storage)
+    return len(counts) >= 10 and sum(counts.values()) >= at_least
 
 
 def _wait(predicate, what: str, timeout_s: float = 60.0) -> None:
@@ -95,15 +108,15 @@ def test_sigkill_recorder_leaves_a_bag_up_to_the_last_flush(launch_graph, tmp_pa
         wait_for_messages(graph, topics.CLOCK, 5)
         rec = _recorder(graph.run_dir, bag, storage, tmp_path / 'log')
         try:
-            _wait(lambda: _flushed_messages(bag, storage) >= 200, 'the recorder to flush 200 messages')
-            flushed = _flushed_messages(bag, storage)
+            _wait(lambda: _recording_everything(bag, storage, 200),
+                  'the recorder to flush 200 messages on every topic of the graph')
+            flushed = sum(_flushed(bag, storage).values())
             os.kill(rec.pid, signal.SIGKILL)
             rec.wait(timeout=30)
         finally:
             if rec.poll() is None:
                 rec.kill()
             rec.communicate()
-        graph.clean_shared_memory()
         assert unfinished(bag), 'a killed recorder cannot have written metadata.yaml'
         total = _check_prefix(bag, graph, flushed)
     assert not unfinished(bag) and (bag / 'metadata.yaml').exists()
@@ -116,7 +129,8 @@ def test_sigterm_closes_the_bag(launch_graph, tmp_path):
         wait_for_messages(graph, topics.CLOCK, 5)
         rec = _recorder(graph.run_dir, bag, 'mcap', tmp_path / 'log')
         try:
-            _wait(lambda: _flushed_messages(bag, 'mcap') >= 100, 'the recorder to flush 100 messages')
+            _wait(lambda: _recording_everything(bag, 'mcap', 100),
+                  'the recorder to flush 100 messages on every topic of the graph')
             rec.send_signal(signal.SIGTERM)
             out, err = rec.communicate(timeout=60)
         finally:

@@ -300,30 +300,18 @@ class GraphRun:
                     pass
         deadline = time.monotonic() + grace_s
         codes: dict[str, int] = {}
-        killed = False
         for name, proc in self.processes.items():
             try:
                 codes[name] = proc.popen.wait(timeout=max(0.1, deadline - time.monotonic()))
             except subprocess.TimeoutExpired:
                 os.killpg(proc.popen.pid, signal.SIGKILL)
                 codes[name] = proc.popen.wait()
-                killed = True
-        if killed:
-            self.clean_shared_memory()
         return codes
-
-    def clean_shared_memory(self) -> None:
-        """Remove Fast DDS shared-memory segments left by killed processes."""
-        fastdds = VENV_BIN / 'fastdds'
-        if fastdds.exists():
-            subprocess.run([str(fastdds), 'shm', 'clean'], capture_output=True, check=False, timeout=30)
 
     def stop(self) -> None:
         """Stop every child (SIGINT, then SIGKILL after a grace period) and release the domain."""
         if any(p.popen.poll() is None for p in self.processes.values()):
             self._stop_children()
-        if any((p.popen.returncode or 0) < 0 for p in self.processes.values()):
-            self.clean_shared_memory()
         for proc in self.processes.values():
             if proc.popen.stdout is not None:
                 proc.popen.stdout.close()
