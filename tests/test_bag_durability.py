@@ -84,8 +84,15 @@ def _check_prefix(bag_path: Path, graph, at_least: int) -> int:
     assert total >= at_least, f'{bag_path}: {total} messages, fewer than the {at_least} flushed before the kill'
     dt = bag.control_period_ns
     assert dt == 500_000_000
-    # the lockstep graph went on; once the monitor is past the bag's last step it holds all its messages
-    wait_for_messages(graph, topics.CLOCK, bag.span_ns()[1] // dt + 2)
+    # the lockstep graph went on; wait until the monitor holds, on every topic, the bag's last step
+    last = {t: max(ts for ts, _ in msgs) for t, msgs in bag.raw.items()
+            if stamped(ABS_TYPES[t]) and msgs and not t.endswith('/diagnostics')}
+
+    def caught_up() -> bool:
+        got = graph.monitor.snapshot()
+        return all(got.get(t) and cdr_stamp_ns(got[t][-1]) >= ns for t, ns in last.items())
+
+    assert graph.monitor.wait_for(caught_up, 60.0), 'the run monitor never reached the bag\'s last step'
     monitor = graph.monitor.snapshot()
     for topic, msgs in bag.raw.items():
         if topic.endswith('/diagnostics') or not stamped(ABS_TYPES[topic]):
