@@ -53,3 +53,23 @@ def diagnostic(node: str, values: dict[str, object], message: str = 'ok',
     status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
     arr.status = [status]
     return arr
+
+
+#: Name of the mode manager's status inside the ``mode`` DiagnosticArray.
+MODE_STATUS = 'ascs_mode_manager'
+
+
+def mode_status(msg: DiagnosticArray | None, node: str) -> tuple[str | None, list[str]]:
+    """(mode, commands forwarded to ``node`` in order) from the step's ``mode`` array; (None, []) if absent.
+
+    The mode manager forwards accepted ground commands for other nodes as ``command/<node>`` keys.
+    """
+    if msg is None:
+        return None, []
+    key = f'command/{node}'
+    for status in msg.status:
+        if status.name == MODE_STATUS:
+            values = [(kv.key, kv.value) for kv in status.values]
+            mode = next((v for k, v in values if k == 'mode'), status.message)
+            return mode, [v for k, v in values if k == key]
+    return None, []

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from acds_common import topics
 from acds_common.lockstep import Input, LockstepNode, run_node
-from acds_common.messages import diagnostic, vec, vector3_stamped
+from acds_common.messages import diagnostic, mode_status, vec, vector3_stamped
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from dynamics.rigid_body_model import inertia_tensor
 from geometry_msgs.msg import Vector3Stamped
@@ -42,8 +42,6 @@ WHEEL_GAIN_SETS = {'heao_a': HEAO_A_ACQUISITION, 'heao_b': HEAO_B_ACQUISITION,
 #: Excess-coil-current alarm: |I| above this multiple of the current of the maximum moment.
 EXCESS_CURRENT_FACTOR = 1.1
 #: Name of the mode manager's status and the key of commands forwarded to this node.
-MODE_STATUS = 'ascs_mode_manager'
-COMMAND_KEY = 'command/acds_controller'
 
 
 def coupling_matrix(mag: dict[str, Any]) -> np.ndarray:
@@ -75,18 +73,6 @@ def build_dpa(sc: dict[str, Any], c: dict[str, Any], mag: dict[str, Any]) -> tup
         target_q_body_to_eci=np.array(c['target_quaternion_xyzw']),
         lead_time_s=c['lead_time_s']))
     return ta, dpa
-
-
-def mode_status(msg: DiagnosticArray | None) -> tuple[str | None, list[str]]:
-    """(mode, forwarded commands for this node) from a ``mode`` DiagnosticArray (None if absent)."""
-    if msg is None:
-        return None, []
-    for status in msg.status:
-        if status.name == MODE_STATUS:
-            values = [(kv.key, kv.value) for kv in status.values]
-            mode = next((v for k, v in values if k == 'mode'), status.message)
-            return mode, [v for k, v in values if k == COMMAND_KEY]
-    return None, []
 
 
 def apply_command(dpa: Dpa, text: str) -> str:
@@ -145,7 +131,7 @@ class ControllerNode(LockstepNode):
 
     def step(self, k: int, _t: float, inp: dict[str, Any]) -> None:
         """One DPA control period."""
-        mode, commands = mode_status(inp['mode'])
+        mode, commands = mode_status(inp['mode'], self.get_name())
         for text in commands:
             try:
                 done = apply_command(self.dpa, text)

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from acds_common.messages import diagnostic
+from acds_common.messages import diagnostic, mode_status
 from acds_common.scenario import load_scenario
-from acds_controller.controller_node import apply_command, build_dpa, coupling_matrix, mode_status
+from acds_controller.controller_node import apply_command, build_dpa, coupling_matrix
 from acds_controller.magnetic_laws import ControllerError
 from diagnostic_msgs.msg import KeyValue
 
@@ -16,9 +16,9 @@ def test_mode_status_reads_mode_and_forwarded_commands():
     arr.status[0].values.extend([KeyValue(key='command/acds_controller', value='gain max_moment 1500'),
                                  KeyValue(key='command/em_driver', value='eea_select x B'),
                                  KeyValue(key='command/acds_controller', value='law unloading lead')])
-    assert mode_status(arr) == ('mode_1b', ['gain max_moment 1500', 'law unloading lead'])
-    assert mode_status(None) == (None, [])
-    assert mode_status(diagnostic('someone_else', {'mode': 'mode_1a'})) == (None, [])
+    assert mode_status(arr, 'acds_controller') == ('mode_1b', ['gain max_moment 1500', 'law unloading lead'])
+    assert mode_status(None, 'acds_controller') == (None, [])
+    assert mode_status(diagnostic('someone_else', {'mode': 'mode_1a'}), 'acds_controller') == (None, [])
 
 
 def test_forwarded_commands_change_the_dpa_and_bad_ones_raise():

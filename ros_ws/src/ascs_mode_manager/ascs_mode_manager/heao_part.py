@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 from acds_common import topics
 from acds_common.lockstep import ConfigError, Input, LockstepNode
-from acds_common.messages import diagnostic
+from acds_common.messages import MODE_STATUS, diagnostic
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Vector3Stamped
 from sensor_msgs.msg import Imu
@@ -38,9 +38,6 @@ from std_msgs.msg import String
 
 from ascs_mode_manager.heao_modes import CRUISE_MODES, HeaoModeConfig, HeaoModeManager, Transition
 from ascs_mode_manager.spin_mechanizations import AscsError
-
-#: Name of the mode status (the controller and the em_driver look it up by this name).
-STATUS_NAME = 'ascs_mode_manager'
 
 
 def event_text(tr: Transition) -> str:
@@ -102,7 +99,7 @@ class HeaoPart:
             else:
                 answer = f'refused t={t:.1f}: {text}: {result.reason}'
                 self.node.publish('diagnostics', diagnostic(
-                    STATUS_NAME, {'command': text, 'reason': result.reason}, 'ground command refused',
+                    MODE_STATUS, {'command': text, 'reason': result.reason}, 'ground command refused',
                     DiagnosticStatus.WARN), k)
             self.node.acknowledge(answer, result.accepted)
         return forwarded
@@ -120,7 +117,7 @@ class HeaoPart:
         else:
             message = f'non-finite gyro/sun input rejected at step {k}: mode logic held'
             self.node.get_logger().warning(message)
-            self.node.publish('diagnostics', diagnostic(STATUS_NAME, {}, message, DiagnosticStatus.WARN), k)
+            self.node.publish('diagnostics', diagnostic(MODE_STATUS, {}, message, DiagnosticStatus.WARN), k)
         for tr in transitions:
             if tr.kind == 'capture' and self.stop_at_capture:
                 self.run_complete = True
@@ -133,6 +130,6 @@ class HeaoPart:
             **{key: v for key, v in self.core.status().items() if key != 'mode'},
             'run_complete': 'true' if self.run_complete else 'false',
         }
-        arr = diagnostic(STATUS_NAME, values, self.core.mode)
+        arr = diagnostic(MODE_STATUS, values, self.core.mode)
         arr.status[0].values.extend(KeyValue(key=f'command/{route}', value=text) for route, text in forwarded)
         self.node.publish('mode', arr, k)

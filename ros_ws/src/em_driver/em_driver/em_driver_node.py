@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from acds_common import topics
 from acds_common.lockstep import ConfigError, Input, LockstepNode, run_node
-from acds_common.messages import diagnostic, vec, vector3_stamped
+from acds_common.messages import diagnostic, mode_status, vec, vector3_stamped
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Vector3Stamped
 
@@ -30,14 +30,6 @@ from em_driver.configuration import build_assembly, parse_command
 from em_driver.drive_assembly import AssemblyResult
 
 NODE = 'em_driver'
-
-
-def forwarded_commands(mode_msg: DiagnosticArray | None, node: str) -> list[str]:
-    """The ``command/<node>`` values of the mode manager's status, in order."""
-    if mode_msg is None or not mode_msg.status:
-        return []
-    key = f'command/{node}'
-    return [kv.value for kv in mode_msg.status[0].values if kv.key == key]
 
 
 class EmDriverNode(LockstepNode):
@@ -66,7 +58,7 @@ class EmDriverNode(LockstepNode):
         """Apply commands and failures due at step k, drive the coils for one control period."""
         events: list[str] = []
         rejected: list[str] = []
-        for text in forwarded_commands(inp['mode'], NODE):
+        for text in mode_status(inp['mode'], NODE)[1]:
             try:
                 events.append(parse_command(text).apply(self.assembly))
             except EmDriverError as exc:

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from acds_common import topics
 from acds_common.lockstep import ConfigError, Input, LockstepNode, run_node
-from acds_common.messages import diagnostic, field, magnetic_field, vec, vector3_stamped
+from acds_common.messages import diagnostic, field, magnetic_field, mode_status, vec, vector3_stamped
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Vector3Stamped
 from sensor_msgs.msg import MagneticField
@@ -29,14 +29,6 @@ from magnetometer_sim.fluxgate import MagnetometerError
 NODE = 'magnetometer_sim'
 #: Telemetered bias voltage further than this from 2.5 V raises a WARN (a shift reads as field).
 BIAS_WARN_V = 0.02
-
-
-def forwarded_commands(mode_msg: DiagnosticArray | None, node: str) -> list[str]:
-    """The ``command/<node>`` values of the mode manager's status, in order."""
-    if mode_msg is None or not mode_msg.status:
-        return []
-    key = f'command/{node}'
-    return [kv.value for kv in mode_msg.status[0].values if kv.key == key]
 
 
 class MagnetometerNode(LockstepNode):
@@ -66,7 +58,7 @@ class MagnetometerNode(LockstepNode):
         """Apply commands and faults due at step k, sample both units, publish the active one."""
         events: list[str] = []
         errors: list[str] = []
-        for text in forwarded_commands(inp['mode'], NODE):
+        for text in mode_status(inp['mode'], NODE)[1]:
             try:
                 events.append(parse_command(text).apply(self.mag))
             except MagnetometerError as exc:
