@@ -9,3 +9,16 @@ latest ``/clock``. The run's scenario, the exact node parameters and who
 published each topic are stored in ``custom_data`` (``acds.*`` keys) and, from
 the moment recording starts, beside the storage file in ``acds_run.yaml``.
 """
+
+from __future__ import annotations
+
+import signal
+import threading
+
+
+def stop_on_signals() -> threading.Event:
+    """An event set by SIGINT or SIGTERM (the recorder and the player stop cleanly on either)."""
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda _signum, _frame: stop.set())
+    return stop

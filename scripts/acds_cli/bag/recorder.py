@@ -9,7 +9,6 @@ monitor instead, in lockstep, and never misses a step.
 
 from __future__ import annotations
 
-import signal
 import sys
 import threading
 from pathlib import Path
@@ -23,6 +22,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
 from ..monitor import message_class
+from . import stop_on_signals
 from .player import ros_env
 from .writer import SKIP, BagError, BagWriter, RecordingSink, cdr_stamp_ns, check_target, stamped
 
@@ -118,13 +118,7 @@ def gaps(bag_path: Path) -> dict[str, int]:
 
 def main_record(args: Any) -> int:
     """CLI body of ``acds record``."""
-    stop = threading.Event()
-
-    def on_signal(_signum: int, _frame: Any) -> None:
-        stop.set()
-
-    signal.signal(signal.SIGINT, on_signal)
-    signal.signal(signal.SIGTERM, on_signal)
+    stop = stop_on_signals()
     try:
         writer = record(args.path, storage=args.storage, select=args.topics, domain_id=args.domain,
                         run_dir=Path(args.run_dir) if args.run_dir else None, stop=stop)

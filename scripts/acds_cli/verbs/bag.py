@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import threading
-from typing import Any
 
 STORAGE_HELP = 'mcap (default) or sqlite3'
 
@@ -16,19 +14,13 @@ def _record(args: argparse.Namespace) -> int:
 
 
 def _play(args: argparse.Namespace) -> int:
-    import signal
 
+    from ..bag import stop_on_signals
     from ..bag.player import Player, parse_remaps
     from ..bag.reader import open_bag
     from ..bag.writer import BagError
 
-    stop = threading.Event()
-
-    def on_signal(_signum: int, _frame: Any) -> None:
-        stop.set()
-
-    signal.signal(signal.SIGINT, on_signal)
-    signal.signal(signal.SIGTERM, on_signal)
+    stop = stop_on_signals()
     try:
         bag = open_bag(args.bag)
         player = Player(bag, domain_id=args.domain, select=args.topics, remap=parse_remaps(args.remap))
