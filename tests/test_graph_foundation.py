@@ -55,3 +55,11 @@ def test_hung_node_fails_the_run_naming_node_and_topic(launch_graph):
     text = str(err.value)
     assert 'node rigid_body died (exit code 3)' in text
     assert '/acds/wheels/momentum (from reaction_wheels' in text
+
+
+def test_unknown_node_parameter_is_one_precise_error(launch_graph):
+    with launch_graph('free_tumble_heao_b', steps=10,
+                      overrides={'reaction_wheels': {'wheels_layuot': 'four_cant20'}}) as graph:
+        with pytest.raises(LaunchError, match=r'node reaction_wheels died \(exit code 2\): '
+                                              r'.*CONFIGURATION ERROR: reaction_wheels: unknown parameter\(s\) wheels_layuot'):
+            graph.wait()
