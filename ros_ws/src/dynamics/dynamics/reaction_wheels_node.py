@@ -2,6 +2,7 @@
 
 Step k: take the drive volts of step k (zero without a controller), publish the
 wheel momentum h(t_k) and the rate ḣ over [t_k, t_k+1] that rigid_body applies.
+Non-finite volts are rejected with a WARN diagnostic (the last valid ones are held).
 A consumer that needs h(t_k) before it computes step k (the controller) reads
 these with lag 1 and forms h(t_k) = h(t_k−1) + ḣ·Δt exactly.
 """
@@ -14,7 +15,7 @@ import numpy as np
 from acds_common import topics
 from acds_common.lockstep import Input, LockstepNode, run_node
 from acds_common.messages import diagnostic, vec, vector3_stamped
-from diagnostic_msgs.msg import DiagnosticArray
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Vector3Stamped
 
 from dynamics.wheels_model import ReactionWheels, WheelsConfig
@@ -32,12 +33,19 @@ class ReactionWheelsNode(LockstepNode):
         self.add_output('momentum', Vector3Stamped, topics.WHEEL_MOMENTUM)
         self.add_output('torque', Vector3Stamped, topics.WHEEL_TORQUE)
         self.add_output('diagnostics', DiagnosticArray, topics.DIAGNOSTICS)
+        self._last_volts = np.zeros(3)
         self.add_stage('drive', [Input('volts', topics.WHEEL_VOLTS, Vector3Stamped, 'acds_controller')],
                        self.drive)
 
     def drive(self, k: int, _t: float, inp: dict[str, Any]) -> None:
         """Apply the step-k volts for one control period."""
         volts = vec(inp['volts'])
+        if not np.all(np.isfinite(volts)):
+            self.publish('diagnostics', diagnostic(
+                self.get_name(), {'rejected_volts': str(volts.tolist())},
+                f'non-finite drive volts rejected at step {k}; holding the last valid ones', DiagnosticStatus.WARN), k)
+            volts = self._last_volts
+        self._last_volts = volts
         h_start, hdot = self.wheels.step(volts, self.control_period_s)
         self.publish('momentum', vector3_stamped(h_start), k)
         self.publish('torque', vector3_stamped(hdot), k)

@@ -4,7 +4,8 @@ Step k: publish truth(t_k) and ``/clock``; wait for the actuator outputs of step
 (achieved dipole from em_driver, wheel momentum and torque from reaction_wheels;
 absent nodes mean zero) and the step's ``mode``, then integrate t_k → t_k+1. The run
 ends after step k when the total step count is reached or when the ``mode`` of step k
-carries ``run_complete: true`` (e.g. stop at acquisition capture).
+carries ``run_complete: true`` (e.g. stop at acquisition capture). A non-finite actuator
+input fails the run naming the topic and the step.
 """
 
 from __future__ import annotations
@@ -80,9 +81,13 @@ class RigidBodyNode(LockstepNode):
         if k >= self.total_steps or run_complete(inp['mode']):
             self.finish()
             return
-        h = vec(inp['wheel_h'])
-        hdot = vec(inp['wheel_hdot'])
-        self.model.advance(self.control_period_s, vec(inp['dipole']), h, hdot)
+        h, hdot, dipole = vec(inp['wheel_h']), vec(inp['wheel_hdot']), vec(inp['dipole'])
+        for topic, value in ((topics.WHEEL_MOMENTUM, h), (topics.WHEEL_TORQUE, hdot), (topics.DIPOLE_AVG, dipole)):
+            if not np.all(np.isfinite(value)):
+                self.fail(f'non-finite {self.resolve_topic_name(topic)} at step {k}: {value.tolist()}; '
+                          'the physics cannot go on')
+                return
+        self.model.advance(self.control_period_s, dipole, h, hdot)
         self._wheel_h = h + hdot * self.control_period_s
         self.publish_truth(k + 1, self.model.truth(self._wheel_h))
         self.publish_clock(k + 1)
