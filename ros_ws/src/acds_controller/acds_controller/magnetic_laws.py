@@ -21,6 +21,7 @@ the input checks every acds_controller core uses.
 from __future__ import annotations
 
 import numpy as np
+from acds_common import validation
 from acds_common.units import FT_LB_S_NMS, FTLB_PER_GAUSS_AM2, GAUSS_T
 
 #: Baseline per-axis electromagnet moment limit, A·m² (seed 002 §4.3.1; 1000 and 3000 also studied).
@@ -41,15 +42,7 @@ class ControllerError(ValueError):
 
 def as_vector3(x: object, name: str) -> np.ndarray:
     """Return ``x`` as a finite float (3,) array or raise :class:`ControllerError` naming ``name``."""
-    try:
-        v = np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ControllerError(f'{name} must be a 3-vector of numbers, got {x!r}') from exc
-    if v.shape != (3,):
-        raise ControllerError(f'{name} must be a 3-vector, got shape {v.shape}')
-    if not np.all(np.isfinite(v)):
-        raise ControllerError(f'{name} must be finite, got {v.tolist()}')
-    return v
+    return validation.finite_vector3(name, x, ControllerError)
 
 
 def as_matrix3(x: object, name: str) -> np.ndarray:

@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from acds_common import units
+from acds_common import units, validation
 
 #: Mean obliquity of the ecliptic, rad (spec §3).
 OBLIQUITY_RAD = math.radians(23.44)
@@ -46,12 +46,7 @@ def finite_float(name: str, value: float) -> float:
 
 def finite_vector3(name: str, value: object) -> np.ndarray:
     """Return ``value`` as a finite float 3-vector or raise DynamicsError naming ``name``."""
-    arr = np.asarray(value, dtype=float)
-    if arr.shape != (3,):
-        raise DynamicsError(f"{name} must be a 3-vector, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise DynamicsError(f"{name} must be finite, got {arr.tolist()}")
-    return arr
+    return validation.finite_vector3(name, value, DynamicsError)
 
 
 def rot_z(angle_rad: float) -> np.ndarray:

@@ -35,6 +35,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from acds_common import validation
 from acds_common.units import GAUSS_T
 
 __all__ = [
@@ -213,12 +214,7 @@ class FluxgateAssembly:
 
 
 def _check_vec3(name: str, value: np.ndarray | Sequence[float]) -> np.ndarray:
-    arr = np.asarray(value, dtype=float)
-    if arr.shape != (3,):
-        raise MagnetometerError(f'{name} must be a 3-vector, got shape {arr.shape}')
-    if not np.all(np.isfinite(arr)):
-        raise MagnetometerError(f'{name} must be finite, got {arr}')
-    return arr
+    return validation.finite_vector3(name, value, MagnetometerError)
 
 
 def coupling_cruise(gain_g_per_am2: float = 8.75e-6) -> np.ndarray:
