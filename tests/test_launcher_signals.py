@@ -1,4 +1,4 @@
-"""The launcher stops every node on SIGINT/SIGTERM; pacing at a real-time factor holds sim time back."""
+"""The launcher stops every node on SIGINT/SIGTERM/SIGHUP (exit 128 + signal); pacing holds sim time back."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ def node_processes(run_dir: Path) -> list[str]:
     return out.stdout.split()
 
 
-@pytest.mark.parametrize('sig', [signal.SIGTERM, signal.SIGINT])
+@pytest.mark.parametrize('sig', [signal.SIGTERM, signal.SIGINT, signal.SIGHUP])
 def test_signal_stops_every_node(tmp_path, sig):
     run_dir = tmp_path / 'run'
     proc = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'run', 'free_tumble_heao_b', '--steps', '1000000',
@@ -35,7 +35,7 @@ def test_signal_stops_every_node(tmp_path, sig):
     assert len(node_processes(run_dir)) == 2
     proc.send_signal(sig)
     rest, _ = proc.communicate(timeout=60)
-    assert proc.returncode == 130
+    assert proc.returncode == 128 + sig  # 143 SIGTERM, 130 SIGINT, 129 SIGHUP
     assert node_processes(run_dir) == []
 
 

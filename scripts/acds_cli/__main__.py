@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -70,9 +71,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     except LaunchError as exc:
         print(f'[acds] run failed: {exc}', file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print('\n[acds] interrupted: all nodes stopped', file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        signum = getattr(exc, 'signum', signal.SIGINT)
+        print(f'\n[acds] stopped by {signal.Signals(signum).name}: all nodes stopped', file=sys.stderr)
+        return 128 + signum
     _print_summary(summary)
     print_tables(summary)
     if args.summary_json:
@@ -185,14 +187,26 @@ def _positive_int(text: str) -> int:
     return value
 
 
+class Stopped(KeyboardInterrupt):
+    """SIGTERM or SIGHUP (a closed terminal), raised in the main thread and handled like Ctrl-C."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(f'signal {signum}')
+        self.signum = signum
+
+
 def _terminate(signum: int, _frame: object) -> None:
-    raise KeyboardInterrupt(f'signal {signum}')
+    raise Stopped(signum)
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Parse the verb and run it; scenario errors are one line, exit 2; SIGTERM stops like Ctrl-C."""
-    import signal
+    """Parse the verb and run it; scenario errors are one line, exit 2.
+
+    SIGTERM and SIGHUP stop like Ctrl-C; a stopped verb exits 128 + the signal number
+    (130 SIGINT, 143 SIGTERM, 129 SIGHUP), the shell convention.
+    """
     signal.signal(signal.SIGTERM, _terminate)
+    signal.signal(signal.SIGHUP, _terminate)
     parser = build_parser()
     args, extra = parser.parse_known_args(argv)
     if getattr(args, 'passthrough', False):
@@ -204,6 +218,10 @@ def main(argv: list[str] | None = None) -> int:
     except ScenarioError as exc:
         print(f'acds: scenario error: {exc}', file=sys.stderr)
         return 2
+    except KeyboardInterrupt as exc:
+        signum = getattr(exc, 'signum', signal.SIGINT)
+        print(f'\n[acds] stopped by {signal.Signals(signum).name}', file=sys.stderr)
+        return 128 + signum
 
 
 if __name__ == '__main__':

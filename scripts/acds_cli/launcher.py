@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import IO, Any
 
 import yaml
-from acds_common.lockstep import MONITOR_NAME, TIME_OWNER
+from acds_common.lockstep import LAUNCHER_PID_ENV, MONITOR_NAME, TIME_OWNER
 from acds_common.scenario import Scenario
 
 from .monitor import RunMonitor
@@ -71,8 +71,27 @@ class RunResult:
     bag: Path | None = None
 
 
+def _die_with_parent() -> None:
+    """In a child between fork and exec: ask the kernel for SIGTERM when the launcher dies.
+
+    Linux ``prctl(PR_SET_PDEATHSIG, SIGTERM)``; survives the exec of the node's entry point.
+    The node's lockstep base also watches its parent pid (``ACDS_LAUNCHER_PID``), which covers
+    a launcher that died before this call ran.
+    """
+    import ctypes
+
+    pr_set_pdeathsig = 1
+    ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGTERM, 0, 0, 0)
+
+
 class DomainLease:
-    """An exclusive ROS_DOMAIN_ID for one run (file lock in /tmp, released on close)."""
+    """An exclusive ROS_DOMAIN_ID for one run: an ``flock`` on a file in /tmp.
+
+    The lock belongs to the open file, which every node process inherits
+    (:attr:`fd`, passed to the children): the domain stays leased until the launcher
+    *and* its last child have exited, so a run that lands on the domain next can never
+    meet an orphan of this one.
+    """
 
     def __init__(self) -> None:
         DOMAIN_LOCK_DIR.mkdir(parents=True, exist_ok=True)
@@ -86,12 +105,18 @@ class DomainLease:
                 fh.close()
                 continue
             self.domain_id, self._fh = domain, fh
+            os.set_inheritable(fh.fileno(), True)
             return
         raise LaunchError(f'no free ROS domain in {DOMAIN_RANGE.start}..{DOMAIN_RANGE.stop - 1}: '
                           f'too many runs at once (locks in {DOMAIN_LOCK_DIR})')
 
+    @property
+    def fd(self) -> int:
+        """The lock file's descriptor (children inherit it, and with it the lease)."""
+        return self._fh.fileno()
+
     def close(self) -> None:
-        """Release the domain."""
+        """Release this process's hold on the domain (children still holding it keep it leased)."""
         self._fh.close()
 
 
@@ -160,6 +185,7 @@ class GraphRun:
             RCUTILS_CONSOLE_OUTPUT_FORMAT='[{severity}] {message}',
             RCUTILS_COLORIZED_OUTPUT='0',
             PYTHONUNBUFFERED='1',
+            **{LAUNCHER_PID_ENV: str(os.getpid())},
         )
         env.pop('ROS_LOCALHOST_ONLY', None)
         return env
@@ -204,7 +230,8 @@ class GraphRun:
             popen = subprocess.Popen(
                 [str(exe), '--ros-args', '--params-file', str(params_file)],
                 stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                text=True, env=env, start_new_session=True)
+                text=True, env=env, start_new_session=True, pass_fds=(self.lease.fd,),
+                preexec_fn=_die_with_parent)
             proc = NodeProcess(name, popen)
             proc.reader = threading.Thread(target=self._forward, args=(proc, popen.stdout), daemon=True)
             proc.reader.start()

@@ -68,8 +68,13 @@ TIME_OWNER = 'rigid_body'
 #: Name of the launcher's observer node, and how many steps the time owner may run ahead of it.
 MONITOR_NAME = 'run_monitor'
 MONITOR_LAG = 50
-#: Exit codes of a node process.
-EXIT_OK, EXIT_CONFIG, EXIT_LOCKSTEP = 0, 2, 3
+#: Exit codes of a node process (EXIT_ORPHANED: the launcher that started it died).
+EXIT_OK, EXIT_CONFIG, EXIT_LOCKSTEP, EXIT_ORPHANED = 0, 2, 3, 4
+#: Environment variable the launcher sets to its own pid: a node whose parent is no longer
+#: that process (the launcher was killed, even by SIGKILL) stops within one watchdog tick.
+LAUNCHER_PID_ENV = 'ACDS_LAUNCHER_PID'
+#: Signals that stop a node cleanly (flush, exit 0): Ctrl-C, kill, a closed terminal.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
 class LockstepError(RuntimeError):
@@ -137,6 +142,7 @@ class LockstepNode(Node):
         self._outputs: dict[str, Any] = {}
         self._subscriptions_by_topic: dict[str, Any] = {}
         self._clock_step = -1
+        self._firing = False
         self._started = False
         self._ready_sent = False
         self._ready_from: set[str] = set()
@@ -144,6 +150,8 @@ class LockstepNode(Node):
         self._created = time.monotonic()
         self.failure: str | None = None
         self.done = False
+        self.orphaned = False
+        self.launcher_pid = int(os.environ.get(LAUNCHER_PID_ENV, '0') or 0)
         if self.time_owner:
             self.total_steps = self.param('total_steps', 1, 'number of control steps to run', lo=1, hi=10**9)
             self.real_time_factor = self.param(
@@ -299,6 +307,22 @@ class LockstepNode(Node):
         return True, buf[k - inp.lag]
 
     def _try_fire(self) -> None:
+        """Fire every stage whose inputs are complete, in order, until none can fire.
+
+        A loop, never recursion: a handler that announces the next step (the time owner's
+        ``publish_clock``) re-enters here; the nested call returns at once and the outer
+        loop picks the new step up, so a lone time owner runs any number of steps on a
+        bounded stack.
+        """
+        if self._firing:
+            return
+        self._firing = True
+        try:
+            self._fire_ready_stages()
+        finally:
+            self._firing = False
+
+    def _fire_ready_stages(self) -> None:
         progressed = True
         while progressed and self.failure is None and not self.done:
             progressed = False
@@ -335,8 +359,16 @@ class LockstepNode(Node):
                 missing.append(self.resolve_topic_name(topic))
         return missing
 
+    def check_parent(self) -> bool:
+        """Whether the launcher that started this node has died (sets :attr:`orphaned`)."""
+        if self.launcher_pid and os.getppid() != self.launcher_pid:
+            self.orphaned = True
+        return self.orphaned
+
     def _watchdog(self) -> None:
         now = time.monotonic()
+        if self.check_parent():
+            return
         if not self._started:
             self._check_ready(now)
             return
@@ -402,9 +434,9 @@ class LockstepNode(Node):
 def run_node(name: str, factory: Callable[[], LockstepNode], args: list[str] | None = None) -> int:
     """Entry-point body shared by every node: init, spin, report, shut down cleanly.
 
-    Returns the process exit code: 0 on completion or SIGINT/SIGTERM, 2 on a
-    configuration error, 3 on a lockstep failure. Errors are one line on
-    stderr, prefixed by the node name, without a traceback.
+    Returns the process exit code: 0 on completion or SIGINT/SIGTERM/SIGHUP, 2 on a
+    configuration error, 3 on a lockstep failure, 4 when the launcher that started it
+    died. Errors are one line on stderr, prefixed by the node name, without a traceback.
     """
     os.environ.setdefault('ROS_LOG_DIR', os.path.join(os.environ.get('TMPDIR', '/tmp'), 'acds_ros_log'))
     try:
@@ -417,8 +449,8 @@ def run_node(name: str, factory: Callable[[], LockstepNode], args: list[str] | N
     def on_signal(signum: int, _frame: Any) -> None:
         stop['signal'] = signum
 
-    signal.signal(signal.SIGINT, on_signal)
-    signal.signal(signal.SIGTERM, on_signal)
+    for sig in STOP_SIGNALS:
+        signal.signal(sig, on_signal)
     node: LockstepNode | None = None
     code = EXIT_OK
     try:
@@ -427,9 +459,13 @@ def run_node(name: str, factory: Callable[[], LockstepNode], args: list[str] | N
         from rclpy.experimental import EventsExecutor
         executor = EventsExecutor()
         executor.add_node(node)
-        while not node.done and node.failure is None and stop['signal'] is None:
+        while not node.done and node.failure is None and stop['signal'] is None and not node.orphaned:
             executor.spin_once(timeout_sec=0.1)
-        if node.failure is not None:
+        node.check_parent()  # a parent-death SIGTERM: nobody is left to flush to
+        if node.orphaned:
+            print(f'[{name}] STOPPED: its launcher (pid {node.launcher_pid}) died', file=sys.stderr, flush=True)
+            code = EXIT_ORPHANED
+        elif node.failure is not None:
             print(f'[{name}] LOCKSTEP FAILURE: {node.failure}', file=sys.stderr, flush=True)
             code = EXIT_LOCKSTEP
         else:  # completed, or stopped by SIGINT/SIGTERM: deliver what was published before leaving
