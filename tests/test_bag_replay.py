@@ -16,7 +16,7 @@ from acds_cli.bag.player import Player
 from acds_cli.bag.reader import open_bag
 from acds_cli.launcher import DomainLease, GraphRun
 from acds_common import topics
-from acds_common.lockstep import LOCKSTEP_QOS, stamp_to_ns
+from acds_common.lockstep import LOCKSTEP_QOS
 from acds_common.scenario import load_scenario
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.context import Context
@@ -25,6 +25,10 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def stamp_to_ns(stamp) -> int:
+    return stamp.sec * 10**9 + stamp.nanosec
 STEPS = 60
 
 
@@ -35,7 +39,7 @@ def recorded(tmp_path_factory) -> Path:
     bag = tmp / 'bag'
     sc = load_scenario('free_tumble_heao_b')
     sc.values['wheels']['initial_momentum'] = [1.0, -2.0, 0.5]  # a non-trivial recorded wheel state
-    with GraphRun(sc, tmp / 'run', steps=STEPS, echo=lambda _line: None, record=bag) as graph:
+    with GraphRun(sc, tmp / 'run', steps=STEPS, echo=lambda _line: None, record=bag, keep=True) as graph:
         graph.wait()
     return bag
 

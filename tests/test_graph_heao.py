@@ -11,8 +11,7 @@ from __future__ import annotations
 
 import time
 
-from acds_cli.summary import run_summary, stream_digests
-from acds_cli.testing import wait_for_messages
+from acds_cli.testing import stream_digests, wait_for_messages
 from acds_common import topics
 from acds_common.lockstep import COMMAND_QOS
 from acds_common.scenario import load_scenario
@@ -50,7 +49,7 @@ def test_short_acquisition_reaches_capture_and_is_deterministic(launch_graph):
             result = graph.wait()
             assert set(result.exit_codes) == NODES and set(result.exit_codes.values()) == {0}
             assert result.steps < sc.total_steps(), 'the run must end at capture, before the time limit'
-            summary = run_summary(result)
+            summary = result.summary
             digests.append({**stream_digests(result.monitor), topics.resolve(topics.DIAGNOSTICS): diagnostics_by_node(
                 result.monitor.messages(topics.DIAGNOSTICS))})
             events = [m.data for m in result.monitor.messages(topics.EVENTS)]

@@ -16,9 +16,12 @@ from typing import Any
 import numpy as np
 import pytest
 from acds_common import topics
-from acds_common.lockstep import stamp_to_ns
 from acds_common.scenario import load_scenario
 from acds_common.units import GAUSS_T
+
+
+def _stamp_ns(stamp) -> int:
+    return stamp.sec * 10**9 + stamp.nanosec
 
 STEPS = 60
 DT_S = 0.5
@@ -34,7 +37,7 @@ def _by_step(msgs: list[Any], name: str | None = None) -> dict[int, Any]:
     """Messages keyed by step (diagnostics: only the status named ``name``)."""
     out = {}
     for m in msgs:
-        k = round(stamp_to_ns(m.header.stamp) / (DT_S * 1e9))
+        k = round(_stamp_ns(m.header.stamp) / (DT_S * 1e9))
         if name is None:
             out[k] = m
         elif m.status and m.status[0].name == name:
@@ -67,7 +70,7 @@ def bench_run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
                fault='bias_shift', fault_unit='A', fault_axis=-1, fault_value_v=BIAS_SHIFT_V,
                fault_time=FAULT_STEP * DT_S)
     lines: list[str] = []
-    graph = GraphRun(sc, tmp_path_factory.mktemp('magnetics_bench'), steps=STEPS, echo=lines.append)
+    graph = GraphRun(sc, tmp_path_factory.mktemp('magnetics_bench'), steps=STEPS, echo=lines.append, keep=True)
     try:
         graph.start()
         result = graph.wait()

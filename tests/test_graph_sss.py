@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import time
 
-from acds_cli.summaries.sss import perigee_passes
 from acds_cli.testing import wait_for_messages
 from acds_common import topics
 from acds_common.lockstep import COMMAND_QOS
@@ -47,7 +46,7 @@ def test_one_perigee_pass_spins_up_with_one_turn_on_and_one_turn_off(launch_grap
     assert 'hold released' in off[0]
     assert 30 * 60 < t_off - t_on < 60 * 60, 'a perigee pass of SSS-A lasts tens of minutes'
 
-    passes, _ = perigee_passes(result)
+    passes = result.summary['perigee_passes']
     assert len(passes) == 1
     p = passes[0]
     assert p['mode'] == 'spin' and p['complete']

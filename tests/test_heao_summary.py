@@ -3,10 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
-from acds_cli.summaries.heao import acquisition_times, first_saturation_s, transitions, wheel_series
+from acds_cli.summaries.heao import acquisition_times, saturated, transitions
 from acds_cli.verbs.sweep import GROUPS, expand, table
-from geometry_msgs.msg import Vector3Stamped
 
 
 def _history(modes: list[tuple[float, str, bool]]) -> list[tuple[float, str, str, bool]]:
@@ -38,29 +36,11 @@ def test_transitions_list_mode_changes_and_capture():
     assert tr[0]['cause'] == 'cause 1'
 
 
-def test_first_saturation_is_the_first_step_at_capacity():
-    t = np.arange(5.0)
-    h = np.array([[0, 0, 0], [1, 0, 0], [2, -3.0, 0], [2, -3.0, 0], [0, 0, 0]], dtype=float)
+def test_saturation_is_any_axis_at_its_capacity():
     caps = np.array([5.0, 3.0, 4.0])
-    assert first_saturation_s(t, h, caps) == 2.0
-    assert first_saturation_s(t, h * 0.99, caps) is None
-    assert first_saturation_s(np.zeros(0), np.zeros((0, 3)), caps) is None
-
-
-def _v(t_s: float, xyz: tuple[float, float, float]) -> Vector3Stamped:
-    m = Vector3Stamped()
-    m.header.stamp.sec = int(t_s)
-    m.header.stamp.nanosec = int(round((t_s - int(t_s)) * 1e9))
-    m.vector.x, m.vector.y, m.vector.z = xyz
-    return m
-
-
-def test_wheel_series_appends_the_final_momentum():
-    h = [_v(0.0, (0, 0, 0)), _v(0.5, (1, 2, 3))]
-    hdot = [_v(0.0, (2, 4, 6)), _v(0.5, (2, 0, -2))]
-    t, series = wheel_series(h, hdot, 0.5)
-    assert t.tolist() == [0.0, 0.5, 1.0]
-    assert series[-1].tolist() == pytest.approx([2.0, 2.0, 2.0])
+    assert saturated(np.array([2.0, -3.0, 0.0]), caps)
+    assert not saturated(np.array([2.0, -3.0, 0.0]) * 0.99, caps)
+    assert saturated(np.array([0.0, 0.0, -4.0 * (1 - 1e-10)]), caps)  # relative tolerance 1e-9
 
 
 def test_sweep_groups_and_table():

@@ -46,7 +46,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     """Run a scenario through the full process graph and print its summary."""
     from .launcher import GraphRun, LaunchError
     from .preflight import preflight
-    from .summary import print_tables, run_summary
+    from .summary import print_tables
 
     scenario = load_scenario(args.scenario or DEFAULT_SCENARIO)
     preflight(scenario)
@@ -67,7 +67,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             print(f'[acds] ROS domain {graph.lease.domain_id}' + (f'; recording into {bag}' if bag else ''),
                   file=sys.stderr, flush=True)
             result = graph.wait()
-            summary = run_summary(result)
+            summary = result.summary
     except LaunchError as exc:
         print(f'[acds] run failed: {exc}', file=sys.stderr)
         return 1

@@ -25,10 +25,13 @@ from pathlib import Path
 from typing import IO, Any
 
 import yaml
-from acds_common.lockstep import LAUNCHER_PID_ENV, MONITOR_NAME, TIME_OWNER
+from acds_common.graph import TIME_OWNER, Graph, build_graph
+from acds_common.lockstep import LAUNCHER_PID_ENV
+from acds_common.parameters import node_parameters
 from acds_common.scenario import Scenario
 
 from .monitor import RunMonitor
+from .summary import RunObserver
 
 ROOT = Path(__file__).resolve().parents[2]
 VENV_BIN = Path(sys.executable).parent
@@ -61,14 +64,16 @@ class NodeProcess:
 
 @dataclass
 class RunResult:
-    """What a completed run leaves: exit codes, wall time, the monitor's data."""
+    """What a completed run leaves: its summary (computed while it ran), exit codes, wall time, the bag."""
 
     scenario: Scenario
     steps: int
     wall_seconds: float
-    exit_codes: dict[str, int]
-    monitor: RunMonitor
+    summary: dict[str, Any]
+    exit_codes: dict[str, int] = field(default_factory=dict)
     bag: Path | None = None
+    #: The run's monitor (its kept messages, when the run was started with ``keep=True``).
+    monitor: RunMonitor | None = None
 
 
 def _die_with_parent() -> None:
@@ -120,26 +125,11 @@ class DomainLease:
         self._fh.close()
 
 
-def node_parameters(scenario: Scenario, steps: int, rtf: float,
-                    overrides: dict[str, dict[str, Any]] | None = None) -> dict[str, dict[str, Any]]:
-    """Per-node ROS parameters: the common lockstep ones plus the node's scenario sections."""
-    nodes = list(scenario.get('', 'nodes'))
-    common = {
-        'control_period_s': scenario.control_period_s,
-        'graph_nodes': [*nodes, MONITOR_NAME],
-        'input_timeout_s': scenario.get('', 'input_timeout'),
-        'seed': scenario.get('', 'seed'),
-    }
-    out: dict[str, dict[str, Any]] = {}
-    for node in nodes:
-        params = {**common, **scenario.node_parameters(node)}
-        if node == TIME_OWNER:
-            params.update(total_steps=steps, real_time_factor=rtf)
-        else:
-            params['use_sim_time'] = True
-        params.update((overrides or {}).get(node, {}))
-        out[node] = {k: v for k, v in params.items() if v != []}  # rcl cannot type an empty list: node default
-    return out
+def per_step_topics(graph: Graph) -> set[str]:
+    """Absolute names of the graph's per-step topics (what a run's summary can join by step)."""
+    from acds_common import topics
+
+    return {topics.resolve(out.topic) for _spec, out in graph.outputs() if out.every_step}
 
 
 class GraphRun:
@@ -148,7 +138,7 @@ class GraphRun:
     def __init__(self, scenario: Scenario, run_dir: Path, *, steps: int | None = None, rtf: float = 0.0,
                  echo: Callable[[str], None] | None = None, progress: Callable[[int, int, float], None] | None = None,
                  overrides: dict[str, dict[str, Any]] | None = None,
-                 record: Path | None = None, record_storage: str = 'mcap'):
+                 record: Path | None = None, record_storage: str = 'mcap', keep: bool = False):
         self.scenario = scenario
         self.run_dir = Path(run_dir)
         self.steps = steps if steps is not None else scenario.total_steps()
@@ -160,6 +150,10 @@ class GraphRun:
         self.record = Path(record) if record is not None else None
         self.record_storage = record_storage
         self.bag_writer: Any = None
+        #: Keep every message in the run monitor (tests; a long run would grow without bound).
+        self.keep = keep
+        self.graph: Graph | None = None
+        self.observer: RunObserver | None = None
         self.processes: dict[str, NodeProcess] = {}
         self.lease: DomainLease | None = None
         self.monitor: RunMonitor | None = None
@@ -207,6 +201,8 @@ class GraphRun:
         os.environ.setdefault('ROS_LOG_DIR', env['ROS_LOG_DIR'])
         os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
         params = node_parameters(self.scenario, self.steps, self.rtf, self.overrides)
+        self.graph = build_graph(params)
+        self.observer = RunObserver(self.scenario, per_step_topics(self.graph))
         params_file = self.run_dir / 'params.yaml'
         params_file.write_text(yaml.dump(
             {f'/acds/{n}': {'ros__parameters': p} for n, p in params.items()}, Dumper=_NoAliasDumper, sort_keys=True))
@@ -223,7 +219,8 @@ class GraphRun:
 
             def record(node: Any) -> Any:
                 return RecordingSink(self.bag_writer, node)
-        self.monitor = RunMonitor(self.lease.domain_id, on_clock=self._on_clock, record=record)
+        self.monitor = RunMonitor(self.lease.domain_id, round(self.scenario.control_period_s * 1e9), self.graph,
+                                  on_clock=self._on_clock, record=record, observer=self.observer, keep=self.keep)
         self._t0 = time.monotonic()
         for name in params:
             exe = VENV_BIN / name
@@ -253,8 +250,7 @@ class GraphRun:
         """Wait until the time owner completes; raise LaunchError naming any node that dies first."""
         owner = self.processes[TIME_OWNER]
         while True:
-            if self.bag_writer is not None and self.bag_writer.error:
-                raise LaunchError(self.bag_writer.error)
+            self._check_health()
             for proc in self.processes.values():
                 code = proc.popen.poll()
                 if code is None:
@@ -267,6 +263,13 @@ class GraphRun:
             except subprocess.TimeoutExpired:
                 pass
 
+    def _check_health(self) -> None:
+        """Fail the run at once on a bag write error or on data from outside the graph."""
+        if self.bag_writer is not None and self.bag_writer.error:
+            raise LaunchError(self.bag_writer.error)
+        if self.monitor is not None and self.monitor.intrusion:
+            raise LaunchError(f'data from outside the graph: {self.monitor.intrusion}; the run is not valid')
+
     def _death_report(self, proc: NodeProcess, code: int) -> str:
         if proc.reader is not None:
             proc.reader.join(timeout=2.0)
@@ -276,47 +279,31 @@ class GraphRun:
         head = f'node {proc.name} died ({how})'
         if failure:
             head += f': {failure[-1]}'
+        blame = self.monitor.blame() if self.monitor is not None and code == 3 else None
+        if blame:
+            head = f'{blame} (the graph stopped waiting for it); ' + head
         return f'{head}\n  last lines of {proc.name}:\n{lines}'
 
     def _complete(self) -> RunResult:
-        assert self.monitor is not None
+        """The time owner finished: wait for every per-step topic's last step, stop the nodes, summarise."""
+        assert self.monitor is not None and self.observer is not None
         wall = time.monotonic() - self._t0
-        dt_ns = round(self.scenario.control_period_s * 1e9)
-        last_ns = self.steps * dt_ns
-
-        def complete() -> bool:
-            if not self.monitor.clock_ns:
-                return False
-            stop_ns = last_ns if self.monitor.clock_ns[-1] >= last_ns else self._run_complete_ns()
-            return stop_ns is not None and self.monitor.clock_ns[-1] >= stop_ns
-
-        if not self.monitor.wait_for(complete, timeout_s=10.0):
-            raise LaunchError(f'run monitor did not receive the last /clock step {self.steps}')
-        steps = min(self.steps, self.monitor.clock_ns[-1] // dt_ns)
+        mon = self.monitor
+        if not mon.wait_for(lambda: mon.clock_step >= 0, timeout_s=10.0):
+            raise LaunchError('run monitor received no /clock at all')
+        final = mon.clock_step
+        if not mon.wait_for(lambda: mon.complete_through(final), timeout_s=10.0):
+            late = {t: k for t, k in mon.last_steps().items() if k < final}
+            raise LaunchError(f'run monitor did not receive step {final} of ' +
+                              ', '.join(f'{t} (last step {k})' for t, k in sorted(late.items())))
         codes = self._stop_children()
         bad = {n: c for n, c in codes.items() if c != 0}
         if bad:
             name = next(iter(bad))
             raise LaunchError(self._death_report(self.processes[name], bad[name]))
-        return RunResult(self.scenario, steps, wall, codes, self.monitor, self.record)
-
-    def _run_complete_ns(self) -> int | None:
-        """Stamp of the latest ``mode`` message if it asks to end the run early (``run_complete: true``).
-
-        The time owner then stops after that step (e.g. at acquisition capture), before ``steps``.
-        """
-        from acds_common import topics
-        from diagnostic_msgs.msg import DiagnosticArray
-        from rclpy.serialization import deserialize_message
-
-        assert self.monitor is not None
-        raw = self.monitor.snapshot_last(topics.MODE)
-        if raw is None:
-            return None
-        msg = deserialize_message(raw, DiagnosticArray)
-        if any(kv.key == 'run_complete' and kv.value == 'true' for st in msg.status for kv in st.values):
-            return msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
-        return None
+        self._check_health()
+        summary = self.observer.summary(final, wall)
+        return RunResult(self.scenario, final, wall, summary, codes, self.record, mon)
 
     def _stop_children(self, grace_s: float = 10.0) -> dict[str, int]:
         for proc in self.processes.values():

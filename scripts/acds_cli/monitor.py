@@ -1,110 +1,216 @@
-"""The run monitor: an in-launcher rclpy node that observes the whole graph.
+"""The run monitor: an in-launcher rclpy node that observes the whole graph (spec §2).
 
-It subscribes to every ACDS topic as serialized CDR (``raw=True``), keeps the
-bytes per topic in arrival order, acknowledges each ``/clock`` step so the
-time owner never runs more than :data:`MONITOR_LAG` steps ahead of it (a
-declared lagged input of ``rigid_body``), and reports progress. It is part
-of the lockstep handshake as node ``run_monitor``.
+It subscribes, as serialized CDR (``raw=True``), to every output the graph declares
+(:mod:`acds_common.graph`) and to ``/clock``; it never deserializes what it only records.
+Each message goes to the recorder (a bag writer) and to the run's streaming summary
+(:class:`~acds_cli.summary.RunObserver`, which decodes only the topics it reads); nothing
+is kept in memory unless ``keep`` asks for it (tests), so a run's memory does not grow with
+its length. It acknowledges every :data:`~acds_common.graph.MONITOR_ACK_EVERY`-th ``/clock``
+step, so the time owner never runs more than :data:`~acds_common.graph.MONITOR_LAG` steps
+ahead of it (it is part of the lockstep handshake as node ``run_monitor``, and announces
+itself ready only once every per-step topic of the graph has a matched publisher, so no
+step of any topic can be missed).
+
+It also watches what no node can: a second message for a step already received on a
+per-step topic, or a publisher on a graph topic that the graph does not declare, is data
+from outside the graph: :attr:`RunMonitor.intrusion` names it and the launcher fails the run.
 """
 
 from __future__ import annotations
 
-import importlib
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 import rclpy
 from acds_common import topics
-from acds_common.lockstep import LOCKSTEP_QOS, MONITOR_NAME, ns_to_stamp, stamp_to_ns
+from acds_common.cdr import Codec, stamp_ns
+from acds_common.graph import MONITOR_ACK_EVERY, MONITOR_NAME, TIME_OWNER, Graph
+from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS, UNNAMED, UNNAMED_GRACE_S, message_class
 from rclpy.context import Context
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.serialization import deserialize_message
-from rosgraph_msgs.msg import Clock
-from std_msgs.msg import String
 
-#: Topics the monitor does not keep (handshake plumbing).
-_SKIP = {topics.READY, topics.MONITOR_ACK}
+#: Seconds between checks of who publishes on the graph's topics.
+PUBLISHER_CHECK_PERIOD_S = 1.0
 
 
-def message_class(type_name: str) -> type:
-    """'pkg/msg/Type' → the rclpy message class."""
-    pkg, _, name = type_name.split('/')
-    return getattr(importlib.import_module(f'{pkg}.msg'), name)
+@dataclass
+class TopicState:
+    """What the monitor knows of one topic: declared publishers, per-step or not, last step, count."""
+
+    name: str
+    msg_type: str
+    publishers: set[str]
+    every_step: bool
+    stamped: bool
+    last_step: int = -1
+    count: int = 0
+    kept: list[bytes] = field(default_factory=list)
 
 
 class RunMonitor:
     """Observe one graph (one ROS domain) from inside the launcher process."""
 
-    def __init__(self, domain_id: int, on_clock: Callable[[int], None] | None = None,
-                 record: Callable[[Node], Callable[[str, bytes], None]] | None = None) -> None:
+    def __init__(self, domain_id: int, dt_ns: int, graph: Graph, *, on_clock: Callable[[int], None] | None = None,
+                 record: Callable[[Node], Callable[[str, bytes], None]] | None = None,
+                 observer: Any = None, keep: bool = False) -> None:
         self.context = Context()
         rclpy.init(context=self.context, domain_id=domain_id,
                    signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
         self.node = Node(MONITOR_NAME, namespace=topics.NAMESPACE, context=self.context)
-        self.received: dict[str, list[bytes]] = {}
-        self.clock_ns: list[int] = []
-        self._lock = threading.Lock()
+        self.graph = graph
+        self.dt_ns = dt_ns
+        self.keep = keep
+        self.observer = observer
+        self.intrusion: str | None = None
         self._on_clock = on_clock
+        self._lock = threading.Lock()
+        self.clock_step = -1
+        self.topics: dict[str, TopicState] = {}
+        self._clock = TopicState(topics.CLOCK, topics.TYPES[topics.CLOCK], {TIME_OWNER}, True, True)
+        for spec, out in graph.outputs():
+            name = topics.resolve(out.topic)
+            state = self.topics.get(name)
+            if state is None:
+                state = self.topics[name] = TopicState(name, out.msg_type, set(), out.every_step,
+                                                       Codec(out.msg_type).stamped)
+            state.publishers.add(spec.name)
         #: Called with (absolute topic, raw CDR) for every message, before the /clock ack (a bag writer).
         self.recorder = record(self.node) if record is not None else None
-        for topic, type_name in topics.TYPES.items():
-            if topic in _SKIP:
-                continue
-            qos = LOCKSTEP_QOS if topic not in (topics.GROUND_COMMAND, topics.GROUND_ACK) else 10
-            name = topics.resolve(topic)
-            self.node.create_subscription(message_class(type_name), topic,
+        for name, state in self.topics.items():
+            qos = COMMAND_QOS if name == topics.resolve(topics.GROUND_ACK) else LOCKSTEP_QOS
+            self.node.create_subscription(message_class(state.msg_type), name,
                                           lambda data, t=name: self._on_raw(t, data), qos, raw=True)
-        self._ack = self.node.create_publisher(Clock, topics.MONITOR_ACK, LOCKSTEP_QOS)
-        self._ready = self.node.create_publisher(String, topics.READY, LOCKSTEP_QOS)
-        self._ready.publish(String(data=MONITOR_NAME))
-        self._executor = SingleThreadedExecutor(context=self.context)
+        self.node.create_subscription(message_class(topics.TYPES[topics.CLOCK]), topics.CLOCK, self._on_clock_raw,
+                                      LOCKSTEP_QOS, raw=True)
+        self._ack = self.node.create_publisher(message_class(topics.TYPES[topics.MONITOR_ACK]), topics.MONITOR_ACK,
+                                               LOCKSTEP_QOS)
+        self._ack_codec = Codec(topics.TYPES[topics.MONITOR_ACK])
+        self._ready = self.node.create_publisher(message_class(topics.TYPES[topics.READY]), topics.READY,
+                                                 LOCKSTEP_QOS)
+        self._ready_codec = Codec(topics.TYPES[topics.READY])
+        self.ready = False
+        self._unnamed_since: dict[str, float] = {}
+        self._last_check = 0.0
+        from rclpy.experimental import EventsExecutor
+        self._executor = EventsExecutor(context=self.context)
         self._executor.add_node(self.node)
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._spin, name='run_monitor', daemon=True)
         self._thread.start()
 
+    # ---- spinning -----------------------------------------------------------------------------------
     def _spin(self) -> None:
         while not self._stop.is_set() and self.context.ok():
             self._executor.spin_once(timeout_sec=0.05)
+            now = time.monotonic()
+            if not self.ready:
+                self._announce_when_matched()
+            elif now - self._last_check > PUBLISHER_CHECK_PERIOD_S:
+                self._last_check = now
+                self._check_publishers(now)
 
+    def _announce_when_matched(self) -> None:
+        per_step = [name for name, st in self.topics.items() if st.every_step]
+        if all(self.node.count_publishers(name) > 0 for name in per_step):
+            self._ready.publish(self._ready_codec.encode(0, MONITOR_NAME))
+            self.ready = True
+
+    def _check_publishers(self, now: float) -> None:
+        """Every graph topic may only have the publishers the graph declares for it."""
+        for name, st in self.topics.items():
+            names = [i.node_name for i in self.node.get_publishers_info_by_topic(name)]
+            if UNNAMED in names:
+                if now - self._unnamed_since.setdefault(name, now) < UNNAMED_GRACE_S:
+                    continue
+            else:
+                self._unnamed_since.pop(name, None)
+            strangers = sorted({n if n != UNNAMED else 'a publisher without a ROS node name'
+                                for n in names if n not in st.publishers})
+            if strangers:
+                self._intrude(f'{name} has a publisher the graph does not declare: {", ".join(strangers)} '
+                              f'(declared: {", ".join(sorted(st.publishers))})')
+                return
+
+    def _intrude(self, text: str) -> None:
+        if self.intrusion is None:
+            self.intrusion = text
+
+    # ---- callbacks -------------------------------------------------------------------------------------
     def _on_raw(self, topic: str, data: bytes) -> None:
+        st = self.topics[topic]
+        k = stamp_ns(data) // self.dt_ns if st.stamped else None
         with self._lock:
-            self.received.setdefault(topic, []).append(data)
+            if k is not None and st.every_step:
+                if k <= st.last_step and len(st.publishers) == 1:
+                    self._intrude(f'a second message for step {k} on {topic}: data from a publisher outside '
+                                  f'the graph (declared: {", ".join(sorted(st.publishers))})')
+                st.last_step = max(st.last_step, k)
+            st.count += 1
+            if self.keep:
+                st.kept.append(data)
         if self.recorder is not None:
             self.recorder(topic, data)
-        if topic == topics.CLOCK:
-            t_ns = stamp_to_ns(deserialize_message(data, Clock).clock)
-            self.clock_ns.append(t_ns)
-            ack = Clock()
-            ns_to_stamp(t_ns, ack.clock)
-            self._ack.publish(ack)
-            if self._on_clock is not None:
-                self._on_clock(t_ns)
+        if self.observer is not None:
+            self.observer.feed_raw(topic, data)
 
-    def snapshot(self) -> dict[str, list[bytes]]:
-        """A copy of everything received so far, by absolute topic name."""
+    def _on_clock_raw(self, data: bytes) -> None:
+        t_ns = stamp_ns(data)
+        k = t_ns // self.dt_ns
+        if self.recorder is not None:
+            self.recorder(topics.CLOCK, data)
         with self._lock:
-            return {t: list(v) for t, v in self.received.items()}
+            self.clock_step = max(self.clock_step, k)
+            self._clock.count += 1
+            if self.keep:
+                self._clock.kept.append(data)
+        if k % MONITOR_ACK_EVERY == 0:
+            self._ack.publish(self._ack_codec.encode(t_ns))
+        if self._on_clock is not None:
+            self._on_clock(t_ns)
 
-    def snapshot_last(self, topic: str) -> bytes | None:
-        """The latest raw message of ``topic`` (relative or absolute name), None if none yet."""
+    # ---- queries ----------------------------------------------------------------------------------------
+    def last_steps(self) -> dict[str, int]:
+        """Last step received on each per-step topic."""
         with self._lock:
-            msgs = self.received.get(topics.resolve(topic))
-            return msgs[-1] if msgs else None
+            return {name: st.last_step for name, st in self.topics.items() if st.every_step}
+
+    def complete_through(self, k: int) -> bool:
+        """Whether every per-step topic of the graph has arrived up to step ``k``."""
+        with self._lock:
+            return all(st.last_step >= k for st in self.topics.values() if st.every_step)
 
     def messages(self, topic: str) -> list[Any]:
-        """Deserialized messages of ``topic`` (relative or absolute name)."""
+        """Kept messages of ``topic`` (relative or absolute name) as rclpy objects (``keep=True`` only)."""
+        from rclpy.serialization import deserialize_message
+
         name = topics.resolve(topic)
-        cls = message_class(topics.TYPES[topic])
+        st = self._clock if name == topics.CLOCK else self.topics.get(name)
+        if st is None:
+            return []
+        if not self.keep:
+            raise RuntimeError('the run monitor keeps no messages (start the graph with keep=True)')
+        cls = message_class(st.msg_type)
         with self._lock:
-            raw = list(self.received.get(name, []))
+            raw = list(st.kept)
         return [deserialize_message(d, cls) for d in raw]
 
+    def snapshot(self) -> dict[str, list[bytes]]:
+        """A copy of the kept messages by absolute topic name (``keep=True`` only; topics with messages)."""
+        with self._lock:
+            return {name: list(st.kept) for name, st in (*self.topics.items(), (topics.CLOCK, self._clock))
+                    if st.kept}
+
+    def count(self, topic: str) -> int:
+        """Messages received on ``topic``."""
+        name = topics.resolve(topic)
+        st = self._clock if name == topics.CLOCK else self.topics.get(name)
+        return 0 if st is None else st.count
+
     def wait_for(self, predicate: Callable[[], bool], timeout_s: float) -> bool:
-        """Poll ``predicate`` (under the monitor's data) until true or the timeout passes."""
+        """Wait (on the monitor's stop event, polling the received data) until ``predicate`` is true."""
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
             if predicate():
@@ -112,8 +218,31 @@ class RunMonitor:
             self._stop.wait(0.02)
         return predicate()
 
+    def blame(self) -> str | None:
+        """The node whose outputs stopped while its inputs were there (a hung node), from what arrived.
+
+        For each node of the graph: the first step it has not published on all its per-step
+        outputs; the culprit is a node whose lag-0 inputs for that step have all arrived.
+        """
+        last = self.last_steps()
+        candidates = []
+        for name, spec in self.graph.nodes.items():
+            outs = [topics.resolve(o.topic) for o in spec.outputs if o.every_step]
+            if not outs:
+                continue
+            offset = max(o.stamp_offset for o in spec.outputs if o.every_step)
+            nxt = min(last.get(t, -1) for t in outs) + 1 - offset
+            inputs = [(topics.resolve(i.topic), i.lag) for s in spec.stages for i in s.inputs
+                      if i.source in self.graph.nodes]
+            if all(last.get(t, -1) >= nxt - lag for t, lag in inputs):
+                candidates.append((nxt, name))
+        if not candidates:
+            return None
+        k, name = min(candidates)
+        return f'{name} stopped at step {k}: its inputs for that step had arrived, its outputs did not'
+
     def close(self) -> None:
-        """Stop spinning and release the ROS context."""
+        """Stop spinning and release the ROS context (closes the bag, if recording)."""
         self._stop.set()
         self._thread.join(timeout=5.0)
         if self.recorder is not None and hasattr(self.recorder, 'close'):

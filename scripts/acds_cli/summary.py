@@ -1,22 +1,34 @@
-"""Run summaries computed from what the run monitor received (seed units at this edge).
+"""Run summaries, computed while the run goes (seed units at this edge), in bounded memory.
 
-``run_summary`` gathers the common part and asks every module in
-``acds_cli/summaries/`` to ``contribute(result, summary)`` its own keys (HEAO
-acquisition table, SSS perigee passes, ...); ``print_tables`` lets each
-module print its tables.
+A :class:`RunObserver` is fed every message of a run — serialized bytes by the run monitor
+(per-process graph) or values by the direct engine — decodes only the topics its summary
+modules read, joins them by step and hands complete steps, in step order, to each module in
+``acds_cli/summaries/`` (``Accumulator(scenario)`` with ``step(k, values)``, ``event(topic,
+value)`` and ``contribute(summary)``). It keeps only what the summaries keep (running peaks,
+change points), never the messages, so its memory does not grow with the run's length.
+``print_tables`` lets each module print its tables.
+
+The truth digest is SHA-256 over, for each truth topic in sorted order, its name and the
+SHA-256 of its serialized messages in step order: equal data ⇒ equal digest, in either engine.
 """
 
 from __future__ import annotations
 
 import hashlib
+import math
 from typing import Any
 
 import numpy as np
 from acds_common import topics
+from acds_common.cdr import Codec
+from acds_common.inertia import inertia_tensor
 from acds_common.units import nms_to_ftlbs, tesla_to_gauss
-from dynamics.rigid_body_model import quat_to_dcm
 
-from .monitor import RunMonitor
+#: Truth topics hashed into the run's truth digest.
+TRUTH = tuple(sorted(topics.resolve(t) for t in topics.TRUTH))
+#: Per-step topics the common (dynamics) summary reads.
+ODOMETRY, B_BODY, WHEEL_H = (topics.resolve(t) for t in (topics.TRUTH_ODOMETRY, topics.TRUTH_B_BODY,
+                                                          topics.WHEEL_MOMENTUM))
 
 
 def _summary_modules() -> list:
@@ -28,78 +40,156 @@ def _summary_modules() -> list:
             for m in sorted(pkgutil.iter_modules(summaries.__path__), key=lambda m: m.name)]
 
 
-def run_summary(result: Any) -> dict[str, Any]:
-    """The summary of a completed run (``result``: launcher RunResult)."""
-    from dynamics.rigid_body_model import inertia_tensor
+def _quat_rotate(q: tuple[float, float, float, float], v: np.ndarray) -> np.ndarray:
+    """v rotated by the unit quaternion q (x, y, z, w): body → ECI."""
+    x, y, z, w = q
+    r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                  [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                  [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    return r @ v
 
-    sc = result.scenario
-    inertia = inertia_tensor(*sc.get('spacecraft', 'inertia')) * sc.get('spacecraft', 'inertia_scale')
-    summary: dict[str, Any] = {
-        'scenario': sc.name,
-        'steps': result.steps,
-        'sim_minutes': result.steps * sc.control_period_s / 60,
-        'wall_seconds': round(result.wall_seconds, 3),
-        **dynamics_summary(result.monitor, inertia),
-        'truth_digest': truth_digest(result.monitor),
-    }
-    for module in _summary_modules():
-        module.contribute(result, summary)
-    return summary
+
+class DynamicsSummary:
+    """Momentum and energy drift, final rates and momentum, the |B| range seen (every run)."""
+
+    topics = (ODOMETRY, B_BODY, WHEEL_H)
+
+    def __init__(self, scenario: Any) -> None:
+        sc = scenario
+        self.inertia = inertia_tensor(*sc.get('spacecraft', 'inertia')) * sc.get('spacecraft', 'inertia_scale')
+        self.h0: float | None = None
+        self.e0: float | None = None
+        self.max_dh = 0.0
+        self.max_de = 0.0
+        self.final_rates = (0.0, 0.0, 0.0)
+        self.final_h = 0.0
+        self.b_min = math.inf
+        self.b_max = 0.0
+
+    def step(self, _k: int, values: dict[str, Any]) -> None:
+        """One step's truth."""
+        odom = values.get(ODOMETRY)
+        if odom is not None:
+            omega = np.array(odom.angular)
+            wheel = values.get(WHEEL_H)
+            h_body = self.inertia @ omega + (np.array(wheel) if wheel is not None else 0.0)
+            h = float(np.linalg.norm(_quat_rotate(odom.orientation, h_body)))
+            e = 0.5 * float(omega @ self.inertia @ omega)
+            if self.h0 is None:
+                self.h0, self.e0 = h, e
+            self.max_dh = max(self.max_dh, abs(h - self.h0))
+            self.max_de = max(self.max_de, abs(e - self.e0))
+            self.final_rates, self.final_h = odom.angular, h
+        b = values.get(B_BODY)
+        if b is not None:
+            g = float(tesla_to_gauss(np.linalg.norm(b[0])))
+            self.b_min, self.b_max = min(self.b_min, g), max(self.b_max, g)
+
+    def contribute(self, summary: dict[str, Any]) -> None:
+        """Add the dynamics keys."""
+        summary.update({
+            'momentum_drift_rel': self.max_dh / self.h0 if self.h0 else 0.0,
+            'energy_drift_rel': self.max_de / self.e0 if self.e0 else 0.0,
+            'final_rates_deg_s': [math.degrees(v) for v in self.final_rates],
+            'final_momentum_ftlbs': float(nms_to_ftlbs(self.final_h)),
+            'b_min_gauss': self.b_min if math.isfinite(self.b_min) else None,
+            'b_max_gauss': self.b_max,
+        })
+
+
+class RunObserver:
+    """The streaming summary of one run (module docstring)."""
+
+    def __init__(self, scenario: Any, per_step_topics: set[str]) -> None:
+        self.scenario = scenario
+        self.dt_ns = round(scenario.control_period_s * 1e9)
+        self.parts: list[Any] = [DynamicsSummary(scenario)]
+        self.parts += [m.Accumulator(scenario) for m in _summary_modules() if m.applies(scenario)]
+        wanted = {topics.resolve(t) for p in self.parts for t in p.topics}
+        self.per_step = sorted(wanted & per_step_topics)
+        self.events = {topics.resolve(t) for p in self.parts for t in getattr(p, 'event_topics', ())}
+        self.codecs = {t: Codec(topics.TYPES[topics.relative(t)]) for t in (*self.per_step, *self.events)}
+        self._pending: dict[int, dict[str, Any]] = {}
+        self._next = 0
+        self._digests = {t: hashlib.sha256() for t in TRUTH}
+        self.truth_messages = 0
+
+    # ---- feeding ------------------------------------------------------------------------------------
+    def feed_raw(self, topic: str, data: bytes) -> None:
+        """A serialized message of ``topic`` (absolute name), as the monitor receives it."""
+        digest = self._digests.get(topic)
+        if digest is not None:
+            digest.update(data)
+            self.truth_messages += 1
+        codec = self.codecs.get(topic)
+        if codec is not None:
+            t_ns, value = codec.decode(data)
+            self.feed_value(topic, t_ns // self.dt_ns, value)
+
+    def feed(self, topic: str, k: int, value: Any, data: bytes | None) -> None:
+        """A message as the direct engine produces it: its value and (for truth topics) its bytes."""
+        if data is not None and topic in self._digests:
+            self._digests[topic].update(data)
+            self.truth_messages += 1
+        if topic in self.codecs:
+            self.feed_value(topic, k, value)
+
+    def wants(self, topic: str) -> bool:
+        """Whether this observer reads ``topic`` (absolute) at all (the direct engine skips the rest)."""
+        return topic in self.codecs or topic in self._digests
+
+    def feed_value(self, topic: str, k: int, value: Any) -> None:
+        """A decoded value of step k."""
+        if topic in self.events:
+            for part in self.parts:
+                if hasattr(part, 'event'):
+                    part.event(topic, value)
+            return
+        self._pending.setdefault(k, {})[topic] = value
+        self._drain(final=False)
+
+    def _drain(self, final: bool) -> None:
+        while self._next in self._pending:
+            values = self._pending[self._next]
+            if not final and len(values) < len(self.per_step):
+                return
+            del self._pending[self._next]
+            for part in self.parts:
+                part.step(self._next, values)
+            self._next += 1
+        if final and self._pending:  # steps after a gap (never in a complete run): in order
+            self._next = min(self._pending)
+            self._drain(final=True)
+
+    # ---- result -------------------------------------------------------------------------------------
+    def truth_digest(self) -> str:
+        """The run's truth digest (module docstring)."""
+        h = hashlib.sha256()
+        for topic in TRUTH:
+            h.update(topic.encode())
+            h.update(self._digests[topic].hexdigest().encode())
+        return h.hexdigest()
+
+    def summary(self, steps: int, wall_seconds: float) -> dict[str, Any]:
+        """The run summary (every key, null where not applicable; never a non-finite number)."""
+        self._drain(final=True)
+        sc = self.scenario
+        summary: dict[str, Any] = {
+            'scenario': sc.name,
+            'steps': steps,
+            'sim_minutes': steps * sc.control_period_s / 60,
+            'wall_seconds': round(wall_seconds, 3),
+        }
+        for part in self.parts:
+            part.contribute(summary)
+        for module in _summary_modules():
+            module.null_keys(summary)
+        summary['truth_messages'] = self.truth_messages
+        summary['truth_digest'] = self.truth_digest()
+        return summary
 
 
 def print_tables(summary: dict[str, Any]) -> None:
     """Let each summary module print its tables."""
     for module in _summary_modules():
         module.print_tables(summary)
-
-
-def truth_digest(monitor: RunMonitor) -> str:
-    """SHA-256 over every truth message (serialized CDR), topic by topic in publish order."""
-    data = monitor.snapshot()
-    h = hashlib.sha256()
-    for topic in sorted(topics.resolve(t) for t in topics.TRUTH):
-        for raw in data.get(topic, []):
-            h.update(topic.encode())
-            h.update(raw)
-    return h.hexdigest()
-
-
-def stream_digests(monitor: RunMonitor) -> dict[str, str]:
-    """SHA-256 of each topic's message stream (for comparing two runs topic by topic)."""
-    out = {}
-    for topic, msgs in sorted(monitor.snapshot().items()):
-        h = hashlib.sha256()
-        for raw in msgs:
-            h.update(raw)
-        out[topic] = h.hexdigest()
-    return out
-
-
-def dynamics_summary(monitor: RunMonitor, inertia_kg_m2: np.ndarray) -> dict[str, Any]:
-    """Momentum and energy drift, final rates and the |B| range seen (issue: free-tumble summary)."""
-    odom = monitor.messages(topics.TRUTH_ODOMETRY)
-    wheel_msgs = monitor.messages(topics.WHEEL_MOMENTUM)
-    b = np.array([[m.magnetic_field.x, m.magnetic_field.y, m.magnetic_field.z]
-                  for m in monitor.messages(topics.TRUTH_B_BODY)])
-    h_wheel = {m.header.stamp.sec * 10**9 + m.header.stamp.nanosec: np.array([m.vector.x, m.vector.y, m.vector.z])
-               for m in wheel_msgs}
-    h_norm, energy = [], []
-    for m in odom:
-        o = m.pose.pose.orientation
-        w = m.twist.twist.angular
-        omega = np.array([w.x, w.y, w.z])
-        t_ns = m.header.stamp.sec * 10**9 + m.header.stamp.nanosec
-        h_body = inertia_kg_m2 @ omega + h_wheel.get(t_ns, np.zeros(3))
-        h_norm.append(np.linalg.norm(quat_to_dcm(np.array([o.x, o.y, o.z, o.w])) @ h_body))
-        energy.append(0.5 * omega @ inertia_kg_m2 @ omega)
-    final = odom[-1].twist.twist.angular
-    b_g = tesla_to_gauss(np.linalg.norm(b, axis=1))
-    return {
-        'momentum_drift_rel': float(max(abs(x - h_norm[0]) for x in h_norm) / h_norm[0]) if h_norm[0] else 0.0,
-        'energy_drift_rel': float(max(abs(x - energy[0]) for x in energy) / energy[0]) if energy[0] else 0.0,
-        'final_rates_deg_s': [float(np.degrees(v)) for v in (final.x, final.y, final.z)],
-        'final_momentum_ftlbs': float(nms_to_ftlbs(h_norm[-1])),
-        'b_min_gauss': float(b_g.min()),
-        'b_max_gauss': float(b_g.max()),
-        'truth_messages': sum(len(monitor.snapshot().get(topics.resolve(t), [])) for t in topics.TRUTH),
-    }

@@ -36,16 +36,30 @@ def wait_for_messages(graph: GraphRun, topic: str, count: int, timeout_s: float 
     monitor = graph.monitor
     assert monitor is not None
     name = topics.resolve(topic)
-    if not monitor.wait_for(lambda: len(monitor.received.get(name, [])) >= count, timeout_s):
+    if not monitor.wait_for(lambda: monitor.count(name) >= count, timeout_s):
         got = {t: len(v) for t, v in monitor.snapshot().items()}
         pytest.fail(f'waited {timeout_s:.0f} s for {count} messages on {name}; received per topic: {got}')
     return monitor.messages(topic)
+
+
+def stream_digests(monitor: Any) -> dict[str, str]:
+    """SHA-256 of each topic's kept message stream (for comparing two runs topic by topic)."""
+    import hashlib
+
+    out = {}
+    for topic, msgs in sorted(monitor.snapshot().items()):
+        h = hashlib.sha256()
+        for raw in msgs:
+            h.update(raw)
+        out[topic] = h.hexdigest()
+    return out
 
 
 @contextmanager
 def _launch(tmp_path: Path, scenario: str | Scenario, **kwargs: Any) -> Iterator[GraphRun]:
     sc = load_scenario(scenario) if isinstance(scenario, str) else scenario
     lines: list[str] = []
+    kwargs.setdefault('keep', True)  # tests read the messages back; their runs are short
     graph = GraphRun(sc, tmp_path / f'run_{sc.name}_{len(list(tmp_path.glob("run_*")))}',
                      echo=lines.append, **kwargs)
     graph.output = lines  # type: ignore[attr-defined]

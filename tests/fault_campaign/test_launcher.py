@@ -80,7 +80,7 @@ def test_sigkilled_launcher_takes_its_nodes_within_two_seconds(tmp_path):
 
 def test_lone_time_owner_runs_5000_steps_without_recursion(tmp_path):
     """rigid_body started by hand with its params file, no other node and no monitor."""
-    from acds_cli.launcher import node_parameters
+    from acds_common.parameters import node_parameters
     from acds_common.scenario import load_scenario
 
     sc = load_scenario('free_tumble_heao_b')

@@ -92,9 +92,8 @@ def parse_sets(items: list[str] | None) -> dict[str, Any]:
 def node_parameters(bag: Bag, node: str, scenario: str | None = None,
                     sets: dict[str, Any] | None = None) -> dict[str, Any]:
     """The node's ROS parameters for the replay: as recorded (or from ``scenario``), then ``sets``."""
+    from acds_common.parameters import node_parameters as graph_parameters
     from acds_common.scenario import load_scenario
-
-    from ..launcher import node_parameters as graph_parameters
 
     recorded = yaml.safe_load(bag.info.get('params', '') or '{}') or {}
     steps = int(bag.info.get('steps', '1') or 1)

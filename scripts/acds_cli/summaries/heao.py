@@ -26,23 +26,6 @@ _NULL_KEYS = ('time_magnetics_only_min', 'time_wheels_magnetics_min', 'acquisiti
               'wheel_saturation_time_min', 'mode_transitions')
 
 
-def _t_ns(msg: Any) -> int:
-    return msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
-
-
-def mode_history(mode_msgs: list[Any]) -> list[tuple[float, str, str, bool]]:
-    """[(t_s, mode, cause, captured)] per step from the ``mode`` messages."""
-    out = []
-    for msg in mode_msgs:
-        status = next((s for s in msg.status if s.name == 'ascs_mode_manager'), None)
-        if status is None:
-            continue
-        values = {kv.key: kv.value for kv in status.values}
-        out.append((_t_ns(msg) / 1e9, values.get('mode', status.message), values.get('cause', ''),
-                    values.get('captured') == 'true'))
-    return out
-
-
 def transitions(history: list[tuple[float, str, str, bool]]) -> list[dict[str, Any]]:
     """Mode changes and the acquisition capture as [{t_min, from, to, cause}] (capture: to = 'capture')."""
     out: list[dict[str, Any]] = []
@@ -72,64 +55,90 @@ def acquisition_times(history: list[tuple[float, str, str, bool]]) -> dict[str, 
     }
 
 
-def wheel_series(h_msgs: list[Any], hdot_msgs: list[Any], dt_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """(t_s, h N·m·s) per step, plus the final h(t_N) = h_{N−1} + ḣ_{N−1}·Δt."""
-    if not h_msgs:
-        return np.zeros(0), np.zeros((0, 3))
-    t = np.array([_t_ns(m) / 1e9 for m in h_msgs])
-    h = np.array([[m.vector.x, m.vector.y, m.vector.z] for m in h_msgs])
-    if hdot_msgs and _t_ns(hdot_msgs[-1]) == _t_ns(h_msgs[-1]):
-        last = hdot_msgs[-1].vector
-        h = np.vstack([h, h[-1] + np.array([last.x, last.y, last.z]) * dt_s])
-        t = np.append(t, t[-1] + dt_s)
-    return t, h
+def saturated(h_nms: np.ndarray, capacity_nms: np.ndarray) -> bool:
+    """Whether any body-axis |h_i| has reached its capacity (relative tolerance 1e-9)."""
+    return bool(np.any(np.abs(h_nms) >= np.asarray(capacity_nms) * (1.0 - 1e-9)))
 
 
-def first_saturation_s(t_s: np.ndarray, h_nms: np.ndarray, capacity_nms: np.ndarray) -> float | None:
-    """First time any |h_i| reaches capacity_i (relative tolerance 1e-9), None if never."""
-    if len(t_s) == 0:
-        return None
-    hit = np.any(np.abs(h_nms) >= np.asarray(capacity_nms) * (1.0 - 1e-9), axis=1)
-    idx = np.flatnonzero(hit)
-    return float(t_s[idx[0]]) if len(idx) else None
+def applies(scenario: Any) -> bool:
+    """The HEAO keys come from runs of the HEAO mode manager."""
+    return scenario.get('modes', 'system') == 'heao' and 'ascs_mode_manager' in scenario.get('', 'nodes')
 
 
-def contribute(result: Any, summary: dict[str, Any]) -> None:
-    """Add the HEAO keys when the graph ran the HEAO mode manager."""
-    from dynamics.wheels_model import ReactionWheels, WheelsConfig
+def null_keys(summary: dict[str, Any]) -> None:
+    """The summary's key set is the same for every run (null: not applicable)."""
+    for key in _NULL_KEYS:
+        summary.setdefault(key, None)
 
-    sc = result.scenario
-    if sc.get('modes', 'system') != 'heao' or 'ascs_mode_manager' not in sc.get('', 'nodes'):
-        for key in _NULL_KEYS:  # the summary's key set is the same for every run (null: not applicable)
-            summary.setdefault(key, None)
-        return
-    mon = result.monitor
-    dt = sc.control_period_s
-    history = mode_history(mon.messages(topics.MODE))
-    summary.update(acquisition_times(history))
-    t, h = wheel_series(mon.messages(topics.WHEEL_MOMENTUM), mon.messages(topics.WHEEL_TORQUE), dt)
-    if len(h):
-        h_ft = nms_to_ftlbs(h)
-        peak = np.max(np.abs(h_ft), axis=0)
-        summary['final_wheel_momentum_ftlbs'] = float(np.linalg.norm(h_ft[-1]))
-        summary['peak_wheel_momentum_ftlbs'] = {'x': float(peak[0]), 'y': float(peak[1]), 'z': float(peak[2]),
-                                                'rss': float(np.max(np.linalg.norm(h_ft, axis=1)))}
-        failed = sc.get('wheels', 'failed_wheel')
-        wheels = ReactionWheels(WheelsConfig(layout=sc.get('wheels', 'layout'),
-                                             failed_wheel=failed if failed >= 0 else None))
-        sat = first_saturation_s(t, h, wheels.capacity_per_axis_nms())
-        summary['wheel_saturation_time_min'] = None if sat is None else sat / 60
-    else:
-        summary.update(final_wheel_momentum_ftlbs=None, peak_wheel_momentum_ftlbs=None,
-                       wheel_saturation_time_min=None)
-    moments = mon.messages(topics.MOMENT_COMMAND)
-    if moments:
-        m = np.max(np.abs([[x.vector.x, x.vector.y, x.vector.z] for x in moments]), axis=0)
-        summary['peak_moment_am2'] = {'x': float(m[0]), 'y': float(m[1]), 'z': float(m[2])}
-    else:
-        summary['peak_moment_am2'] = None
-    summary['mode_transitions'] = transitions(history)
-    summary['final_mode'] = history[-1][1] if history else None
+
+class Accumulator:
+    """Streaming HEAO summary: mode change points, wheel momentum peaks and final value, moment peaks."""
+
+    topics = (topics.MODE, topics.WHEEL_MOMENTUM, topics.WHEEL_TORQUE, topics.MOMENT_COMMAND)
+
+    def __init__(self, scenario: Any) -> None:
+        from dynamics.wheels_model import ReactionWheels, WheelsConfig
+
+        self.dt_s = scenario.control_period_s
+        failed = scenario.get('wheels', 'failed_wheel')
+        self.capacity = ReactionWheels(WheelsConfig(layout=scenario.get('wheels', 'layout'),
+                                                    failed_wheel=failed if failed >= 0 else None)
+                                       ).capacity_per_axis_nms()
+        #: The mode history's change points: (t_s, mode, cause, captured), what the times need.
+        self.history: list[tuple[float, str, str, bool]] = []
+        self._last_state: tuple[str, bool] | None = None
+        self.peak_h = np.zeros(3)
+        self.peak_rss = 0.0
+        self.last_h: tuple[int, np.ndarray] | None = None
+        self.last_hdot: tuple[int, np.ndarray] | None = None
+        self.saturation_s: float | None = None
+        self.peak_m: np.ndarray | None = None
+
+    def _wheel(self, t_s: float, h: np.ndarray) -> None:
+        self.peak_h = np.maximum(self.peak_h, np.abs(h))
+        self.peak_rss = max(self.peak_rss, float(np.linalg.norm(h)))
+        if self.saturation_s is None and saturated(h, self.capacity):
+            self.saturation_s = t_s
+
+    def step(self, k: int, values: dict[str, Any]) -> None:
+        """One step: keep the mode history's change points and the running peaks."""
+        t = k * self.dt_s
+        mode = values.get(topics.resolve(topics.MODE))
+        status = next((st for st in mode or () if st.name == 'ascs_mode_manager'), None)
+        if status is not None:
+            kv = dict(status.values)
+            entry = (t, kv.get('mode', status.message), kv.get('cause', ''), kv.get('captured') == 'true')
+            if (entry[1], entry[3]) != self._last_state or entry[2]:
+                self.history.append(entry)
+                self._last_state = (entry[1], entry[3])
+        h = values.get(topics.resolve(topics.WHEEL_MOMENTUM))
+        if h is not None:
+            self.last_h = (k, np.array(h))
+            self._wheel(t, self.last_h[1])
+        hdot = values.get(topics.resolve(topics.WHEEL_TORQUE))
+        if hdot is not None:
+            self.last_hdot = (k, np.array(hdot))
+        m = values.get(topics.resolve(topics.MOMENT_COMMAND))
+        if m is not None:
+            self.peak_m = np.abs(m) if self.peak_m is None else np.maximum(self.peak_m, np.abs(m))
+
+    def contribute(self, summary: dict[str, Any]) -> None:
+        """Add the HEAO keys (Table 4-7 columns, peaks, transitions)."""
+        summary.update(acquisition_times(self.history))
+        if self.last_h is not None:
+            final = self.last_h[1]
+            if self.last_hdot is not None and self.last_hdot[0] == self.last_h[0]:  # h(t_N) = h_N−1 + ḣ·Δt
+                final = final + self.last_hdot[1] * self.dt_s
+                self._wheel((self.last_h[0] + 1) * self.dt_s, final)
+            peak = nms_to_ftlbs(self.peak_h)
+            summary['final_wheel_momentum_ftlbs'] = float(np.linalg.norm(nms_to_ftlbs(final)))
+            summary['peak_wheel_momentum_ftlbs'] = {'x': float(peak[0]), 'y': float(peak[1]), 'z': float(peak[2]),
+                                                    'rss': float(nms_to_ftlbs(self.peak_rss))}
+            summary['wheel_saturation_time_min'] = None if self.saturation_s is None else self.saturation_s / 60
+        summary['peak_moment_am2'] = None if self.peak_m is None else {
+            'x': float(self.peak_m[0]), 'y': float(self.peak_m[1]), 'z': float(self.peak_m[2])}
+        summary['mode_transitions'] = transitions(self.history)
+        summary['final_mode'] = self.history[-1][1] if self.history else None
 
 
 def _fmt(x: float | None, spec: str = '.1f') -> str:

@@ -23,89 +23,93 @@ from typing import Any
 
 import numpy as np
 from acds_common import topics
+from acds_common.inertia import inertia_tensor
 from ascs_mode_manager.sss_ascs import PassAccumulator
-from dynamics.rigid_body_model import inertia_tensor, quat_to_dcm
+from dynamics.rigid_body_model import quat_to_dcm
 
 KEYS = ('on_time_min', 'avg_torque_dyne_cm', 'peak_torque_dyne_cm', 'ripple_pct', 'spin_rate_change_rpm',
         'precession_deg', 'energy_j', 'mode')
 
 
-def _is_sss(result: Any) -> bool:
-    sc = result.scenario
-    return sc.get('modes', 'system') == 'sss' and 'ascs_mode_manager' in sc.get('', 'nodes')
+def applies(scenario: Any) -> bool:
+    """The per-pass report comes from runs of the SSS mode manager."""
+    return scenario.get('modes', 'system') == 'sss' and 'ascs_mode_manager' in scenario.get('', 'nodes')
 
 
-def _step(msg: Any, dt_ns: int) -> int:
-    stamp = msg.header.stamp
-    return round((stamp.sec * 10**9 + stamp.nanosec) / dt_ns)
-
-
-def _vec(msg: Any) -> np.ndarray:
-    return np.array([msg.vector.x, msg.vector.y, msg.vector.z])
+def null_keys(_summary: dict[str, Any]) -> None:
+    """No keys of this module appear outside SSS runs."""
 
 
 def _clean(value: Any) -> Any:
     return None if isinstance(value, float) and not math.isfinite(value) else value
 
 
-def perigee_passes(result: Any) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
-    """(passes, events) of an SSS run; each pass has :data:`KEYS` plus SI extras."""
-    sc, mon = result.scenario, result.monitor
-    dt_s = sc.control_period_s
-    dt_ns = round(dt_s * 1e9)
-    inertia = inertia_tensor(*sc.get('spacecraft', 'inertia')) * sc.get('spacecraft', 'inertia_scale')
-    pass_mode: dict[int, str] = {}
-    for msg in mon.messages(topics.MODE):
-        values = {kv.key: kv.value for kv in msg.status[0].values} if msg.status else {}
-        pass_mode[_step(msg, dt_ns)] = values.get('pass_mode', 'off')
-    torque = {_step(m, dt_ns): _vec(m) for m in mon.messages(topics.TRUTH_TORQUE_MAG)}
-    dipole = {_step(m, dt_ns): _vec(m) for m in mon.messages(topics.DIPOLE_AVG)}
-    per_amp = np.array(sc.get('em_driver', 'coil_moment_per_amp_am2'))
-    bus_v = sc.get('em_driver', 'supply_v')
-    state: dict[int, tuple[float, np.ndarray]] = {}
-    for m in mon.messages(topics.TRUTH_ODOMETRY):
-        o, w = m.pose.pose.orientation, m.twist.twist.angular
-        omega = np.array([w.x, w.y, w.z])
-        h_eci = quat_to_dcm(np.array([o.x, o.y, o.z, o.w])) @ (inertia @ omega)
-        state[_step(m, dt_ns)] = (float(omega[2]), h_eci)
-    acc = PassAccumulator()
-    last = max(state) if state else 0
-    open_at_end = False
-    for k in range(last):
-        if k not in pass_mode or k + 1 not in torque:
-            continue
-        power = bus_v * float(np.sum(np.abs(dipole.get(k, np.zeros(3)) / per_amp)))
-        rate, axis = state[k]
-        acc.add(k * dt_s, torque[k + 1], rate, axis, power, pass_mode[k])
-        open_at_end = pass_mode[k] != 'off'
-    if open_at_end and last in state:  # close with the state after the last torquing step
-        rate, axis = state[last]
-        acc.add(last * dt_s, np.zeros(3), rate, axis, 0.0, 'off')
-    passes = []
-    for i, rep in enumerate(acc.reports):
-        complete = not (open_at_end and i == len(acc.reports) - 1)
-        passes.append({**{k: _clean(rep[k]) for k in KEYS},
-                       'avg_torque_nm': rep['avg_torque_nm'], 'peak_torque_nm': rep['peak_torque_nm'],
-                       't_start_s': rep['t_start_s'], 't_end_s': rep['t_end_s'], 'complete': complete})
-    events = []
-    for msg in mon.messages(topics.EVENTS):
-        head = msg.data.split(' ', 2)
-        kind = head[1] if len(head) > 1 else ''
+MODE, TORQUE, DIPOLE, ODOMETRY, EVENTS = (topics.resolve(t) for t in (
+    topics.MODE, topics.TRUTH_TORQUE_MAG, topics.DIPOLE_AVG, topics.TRUTH_ODOMETRY, topics.EVENTS))
+
+
+class Accumulator:
+    """Streaming per-pass report: each step k is added once the torque of step k + 1 is in."""
+
+    topics = (MODE, TORQUE, DIPOLE, ODOMETRY)
+    event_topics = (EVENTS,)
+
+    def __init__(self, scenario: Any) -> None:
+        sc = scenario
+        self.dt_s = sc.control_period_s
+        self.inertia = inertia_tensor(*sc.get('spacecraft', 'inertia')) * sc.get('spacecraft', 'inertia_scale')
+        self.per_amp = np.array(sc.get('em_driver', 'coil_moment_per_amp_am2'))
+        self.bus_v = sc.get('em_driver', 'supply_v')
+        self.acc = PassAccumulator()
+        self._prev: tuple[int, str, float, float, np.ndarray] | None = None  # step k waiting for torque k+1
+        self._last_state: tuple[int, float, np.ndarray] | None = None
+        self.open_at_end = False
+        self.events: list[dict[str, Any]] = []
+
+    def step(self, k: int, values: dict[str, Any]) -> None:
+        """Step k's pass mode, dipole and state; closes step k − 1 with this step's torque."""
+        odom = values.get(ODOMETRY)
+        state = None
+        if odom is not None:
+            omega = np.array(odom.angular)
+            h_eci = quat_to_dcm(np.array(odom.orientation)) @ (self.inertia @ omega)
+            state = (float(omega[2]), h_eci)
+            self._last_state = (k, *state)
+        torque = values.get(TORQUE)
+        if self._prev is not None and torque is not None and self._prev[0] == k - 1:
+            _, mode, power, rate, axis = self._prev
+            self.acc.add((k - 1) * self.dt_s, np.array(torque), rate, axis, power, mode)
+            self.open_at_end = mode != 'off'
+        self._prev = None
+        mode_value = values.get(MODE)
+        if mode_value and state is not None:
+            pass_mode = dict(mode_value[0].values).get('pass_mode', 'off')
+            dipole = np.array(values.get(DIPOLE) or (0.0, 0.0, 0.0))
+            power = self.bus_v * float(np.sum(np.abs(dipole / self.per_amp)))
+            self._prev = (k, pass_mode, power, *state)
+
+    def event(self, _topic: str, text: str) -> None:
+        """An ``events`` line."""
+        head = text.split(' ', 2)
         try:
             t_s = float(head[0].removeprefix('t='))
         except ValueError:
             t_s = math.nan
-        events.append({'t_s': _clean(t_s), 'kind': kind, 'text': msg.data})
-    return passes, events
+        self.events.append({'t_s': _clean(t_s), 'kind': head[1] if len(head) > 1 else '', 'text': text})
 
-
-def contribute(result: Any, summary: dict[str, Any]) -> None:
-    """Add ``perigee_passes`` (and ``sss_events``) to the summary of an SSS run."""
-    if not _is_sss(result):
-        return
-    passes, events = perigee_passes(result)
-    summary['perigee_passes'] = passes
-    summary['sss_events'] = events
+    def contribute(self, summary: dict[str, Any]) -> None:
+        """Add ``perigee_passes`` and ``sss_events``."""
+        if self.open_at_end and self._last_state is not None:  # close with the state after the last torquing step
+            k, rate, axis = self._last_state
+            self.acc.add(k * self.dt_s, np.zeros(3), rate, axis, 0.0, 'off')
+        passes = []
+        for i, rep in enumerate(self.acc.reports):
+            complete = not (self.open_at_end and i == len(self.acc.reports) - 1)
+            passes.append({**{key: _clean(rep[key]) for key in KEYS},
+                           'avg_torque_nm': rep['avg_torque_nm'], 'peak_torque_nm': rep['peak_torque_nm'],
+                           't_start_s': rep['t_start_s'], 't_end_s': rep['t_end_s'], 'complete': complete})
+        summary['perigee_passes'] = passes
+        summary['sss_events'] = self.events
 
 
 def print_tables(summary: dict[str, Any]) -> None:

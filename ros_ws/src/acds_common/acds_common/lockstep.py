@@ -1,73 +1,73 @@
-"""The lockstep runtime every ACDS node plugs into (spec §2, "Time and determinism").
+"""The ROS host of a node's stepper: lockstep sim time over topics (spec §2, "Time and determinism").
 
-The time owner (``rigid_body``) publishes ``/clock`` and the truth of step k;
-every other node computes step k as soon as it holds all of its inputs for
-step k (or k−L on a declared feedback edge of lag L) and publishes its
-outputs stamped with t_k = k·Δt. The time owner integrates t_k → t_k+1 only
-after it holds every actuator output of step k. A node declares:
+Every ACDS node process is a :class:`LockstepNode` hosting its package's pure stepper
+(:mod:`acds_common.stepper`) with the ports the graph declares for it
+(:mod:`acds_common.graph`). The time owner (``rigid_body``) publishes the truth of step k
+and ``/clock``; every other node fires a stage for step k as soon as it holds each of the
+stage's inputs for its step (k − lag), in declared order, one step at a time, so a node is a
+deterministic function of its inputs whatever the arrival order. The time owner integrates
+t_k → t_k+1 only after it holds every actuator output of step k, and never runs more than
+:data:`~acds_common.graph.MONITOR_LAG` steps ahead of the run monitor's acknowledgements.
 
-* outputs: ``add_output(key, type, topic)``;
-* stages: ``add_stage(name, inputs, handler)``; a stage fires for step k when
-  ``/clock`` has reached k, every input is held for its step, and the
-  node's earlier stages have fired for k. Stages of one node run in declared
-  order, one step at a time, so a node is a deterministic function of its
-  inputs whatever the arrival order.
+Messages travel serialized (rclpy ``raw=True`` subscriptions, ``publish(bytes)``) and are
+converted by :mod:`acds_common.cdr`, so the bytes on the wire are exactly what the direct
+engine records. A node subscribes to ``/clock`` only when a stage has no lag-0 input from a
+present node (the arrival of a lag-0 input is itself the news that step k exists); nodes
+never read ROS time, so the launcher does not give them ``use_sim_time`` (it still works
+for a user who sets it).
 
-Inputs whose source node is not part of the graph (parameter
-``graph_nodes``) are absent: the handler gets ``None`` for them, as it does
-for a lagged input before step L. A stage blocked longer than
-``input_timeout_s`` (wall time) fails the node with a message naming the node,
-the step and every missing topic with its source.
-
-Step identity is exact: stamps are integer nanoseconds, k = t_ns / Δt_ns.
-Lockstep topics are reliable and transient-local with a deep history, so a
-subscriber that matches late still receives what was published before.
+Safety: inputs from nodes not in the graph (parameter ``graph_nodes``) are absent (``None``).
+A second message for a step already held or consumed means a publisher the graph does not
+declare is on the topic: the node fails naming the topic, the step and the publishers it
+sees — injected data is never used silently. A stage blocked longer than
+``input_timeout_s`` (wall time) fails naming the node, the step and every missing topic
+with its source. Step identity is exact: stamps are integer nanoseconds, k = t_ns / Δt_ns.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
 import signal
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import rclpy
-from rcl_interfaces.msg import ParameterDescriptor
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rosgraph_msgs.msg import Clock as ClockMsg
-from std_msgs.msg import String
 
 from acds_common import topics
-from acds_common.scenario import REQUIRED, SCHEMA
+from acds_common.cdr import Codec, stamp_ns
+from acds_common.graph import MONITOR_LAG, MONITOR_NAME, TIME_OWNER, Input, NodeSpec, Output, node_spec
+from acds_common.parameters import ConfigError, ParamSpec, node_param_specs, normalize
+from acds_common.stepper import StepError, Stepper
 
-#: QoS of every lockstep data topic: nothing is dropped between matched
-#: endpoints, late joiners get the history, and the history is deep enough
-#: for an observer (recorder) that runs a few hundred steps behind.
+#: QoS of every lockstep data topic: nothing is dropped between matched endpoints, late joiners
+#: get the history, and the history is deep enough for an observer (recorder) that runs up to
+#: MONITOR_LAG steps behind.
 LOCKSTEP_QOS = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
     history=HistoryPolicy.KEEP_LAST,
     depth=1000,
 )
-#: QoS of ground commands and acknowledgements (reliable, volatile).
+#: QoS of ground commands and acknowledgements: reliable, with a history deep enough that a burst
+#: of commands (or of their answers) is queued, never overwritten before delivery, and a publisher
+#: never blocks (every command gets an ack, spec §8; the mode manager refuses, with an ack, what
+#: exceeds its own queue: ``ascs_mode_manager.ground_commands.MAX_PENDING``).
 COMMAND_QOS = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.VOLATILE,
     history=HistoryPolicy.KEEP_LAST,
-    depth=100,
+    depth=10000,
 )
-#: Node name of the time owner.
-TIME_OWNER = 'rigid_body'
-#: Name of the launcher's observer node, and how many steps the time owner may run ahead of it.
-MONITOR_NAME = 'run_monitor'
-MONITOR_LAG = 50
 #: Exit codes of a node process (EXIT_ORPHANED: the launcher that started it died).
 EXIT_OK, EXIT_CONFIG, EXIT_LOCKSTEP, EXIT_ORPHANED = 0, 2, 3, 4
 #: Environment variable the launcher sets to its own pid: a node whose parent is no longer
@@ -75,186 +75,188 @@ EXIT_OK, EXIT_CONFIG, EXIT_LOCKSTEP, EXIT_ORPHANED = 0, 2, 3, 4
 LAUNCHER_PID_ENV = 'ACDS_LAUNCHER_PID'
 #: Signals that stop a node cleanly (flush, exit 0): Ctrl-C, kill, a closed terminal.
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+#: Seconds between checks that every input topic has only its declared publisher.
+INTRUDER_CHECK_PERIOD_S = 1.0
+#: What discovery reports for a publisher whose node name it has not learnt yet, and how long it may stay so.
+UNNAMED = '_NODE_NAME_UNKNOWN_'
+UNNAMED_GRACE_S = 5.0
+_PARAM_TYPES = {'float': Parameter.Type.DOUBLE, 'int': Parameter.Type.INTEGER, 'bool': Parameter.Type.BOOL,
+                'str': Parameter.Type.STRING, 'floats': Parameter.Type.DOUBLE_ARRAY,
+                'strs': Parameter.Type.STRING_ARRAY}
 
 
 class LockstepError(RuntimeError):
-    """A lockstep contract was broken (missing input past its timeout, bad stamp)."""
+    """A lockstep contract was broken (missing input past its timeout, bad stamp, an intruder)."""
 
 
-class ConfigError(ValueError):
-    """A node's parameters are wrong (unknown name, out of range, inconsistent)."""
+def message_class(type_name: str) -> type:
+    """'pkg/msg/Type' → the rclpy message class."""
+    pkg, _, name = type_name.split('/')
+    return getattr(importlib.import_module(f'{pkg}.msg'), name)
 
 
-@dataclass(frozen=True)
-class Input:
-    """A lockstep input: ``topic`` of ``msg_type`` from node ``source``, ``lag`` steps back."""
-
-    key: str
-    topic: str
-    msg_type: type
-    source: str
-    lag: int = 0
+def descriptor(spec: ParamSpec) -> ParameterDescriptor:
+    """A read-only ROS parameter descriptor carrying the spec's meaning, unit, range and choices."""
+    text = spec.description + (f' [{spec.unit}]' if spec.unit else '')
+    desc = ParameterDescriptor(description=text, read_only=True)
+    if spec.choices:
+        desc.additional_constraints = 'one of: ' + ', '.join(spec.choices)
+    if spec.lo is not None and spec.hi is not None and spec.kind in ('float', 'int'):
+        if spec.kind == 'float':
+            desc.floating_point_range = [FloatingPointRange(from_value=float(spec.lo), to_value=float(spec.hi))]
+        else:
+            desc.integer_range = [IntegerRange(from_value=int(spec.lo), to_value=int(spec.hi), step=1)]
+    elif spec.lo is not None or spec.hi is not None:
+        desc.additional_constraints = f'range [{spec.lo}, {spec.hi}] {spec.unit}'.strip()
+    return desc
 
 
 @dataclass
 class _Stage:
     name: str
-    inputs: list[Input]
-    handler: Callable[[int, float, dict[str, Any]], None]
+    inputs: tuple[Input, ...]
+    handler: Callable[[int, float, dict[str, Any]], dict[str, Any]]
+    paced_by_clock: bool
     next_step: int = 0
 
 
-def stamp_to_ns(stamp: Any) -> int:
-    """builtin_interfaces/Time → integer nanoseconds."""
-    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+@dataclass
+class _Port:
+    output: Output
+    codec: Codec
+    publisher: Any
+    stamp_offset: int = 0
+    sent: int = 0
 
 
-def ns_to_stamp(t_ns: int, stamp: Any) -> Any:
-    """Fill a builtin_interfaces/Time from integer nanoseconds."""
-    stamp.sec, stamp.nanosec = divmod(t_ns, 1_000_000_000)
-    return stamp
-
-
-def message_time_ns(msg: Any) -> int:
-    """Sim time of a lockstep message: ``header.stamp``, or ``clock`` for Clock."""
-    if isinstance(msg, ClockMsg):
-        return stamp_to_ns(msg.clock)
-    return stamp_to_ns(msg.header.stamp)
+@dataclass
+class _InputTopic:
+    topic: str
+    source: str
+    codec: Codec
+    buffer: dict[int, Any] = field(default_factory=dict)
+    consumed_below: int = 0
 
 
 class LockstepNode(Node):
-    """Base class of every ACDS node: parameters, outputs, stages, readiness, watchdog."""
+    """Hosts one node's stepper in the lockstep: parameters, ports, stages, readiness, watchdog."""
 
-    def __init__(self, node_name: str) -> None:
-        super().__init__(node_name, namespace=topics.NAMESPACE)
-        self.time_owner = node_name == TIME_OWNER
-        self.control_period_s = self.param(
-            'control_period_s', 0.5, 'lockstep control period Δt (the DPA cycle), s', lo=1e-4, hi=60.0)
-        self.dt_ns = round(self.control_period_s * 1e9)
-        self.graph_nodes: list[str] = self.param(
-            'graph_nodes', [node_name], 'names of the nodes present in this graph (inputs from others are absent)')
-        self.input_timeout_s = self.param(
-            'input_timeout_s', 30.0, 'wall seconds a stage may wait for an input before the run fails',
-            lo=0.1, hi=3600.0)
-        self.seed = self.param('seed', 1, 'scenario random seed (deterministic noise streams)', lo=0)
+    def __init__(self, stepper_cls: type[Stepper]) -> None:
+        name = stepper_cls.node
+        super().__init__(name, namespace=topics.NAMESPACE)
+        self.params = normalize(name, self._declare_parameters(node_param_specs(name)))
+        self.spec: NodeSpec = node_spec(name, self.params)
+        self.time_owner = name == TIME_OWNER
+        self.dt_ns = round(self.params['control_period_s'] * 1e9)
+        self.graph_nodes: list[str] = self.params['graph_nodes']
+        self.input_timeout_s: float = self.params['input_timeout_s']
+        self.stepper = stepper_cls(self.params, log=self._log)
+        self.failure: str | None = None
+        self.done = False
+        self.orphaned = False
+        self.launcher_pid = int(os.environ.get(LAUNCHER_PID_ENV, '0') or 0)
+        self._ports: dict[str, _Port] = {}
+        for out in self.spec.outputs:
+            qos = LOCKSTEP_QOS if out.lockstep else COMMAND_QOS
+            self._ports[out.key] = _Port(out, Codec(out.msg_type, out.frame_id, out.child_frame_id),
+                                         self.create_publisher(message_class(out.msg_type), out.topic, qos),
+                                         out.stamp_offset)
+        self._inputs: dict[str, _InputTopic] = {}
         self._stages: list[_Stage] = []
-        self._buffers: dict[str, dict[int, Any]] = {}
-        self._outputs: dict[str, Any] = {}
-        self._subscriptions_by_topic: dict[str, Any] = {}
+        for st in self.spec.stages:
+            present = [i for i in st.inputs if i.source in self.graph_nodes]
+            for inp in present:
+                self._add_input(inp.topic, inp.source)
+            paced = not any(i.lag == 0 for i in present)
+            self._stages.append(_Stage(st.name, st.inputs, getattr(self.stepper, st.name), paced))
         self._clock_step = -1
+        self._monitor_acked = -1
         self._firing = False
         self._started = False
         self._ready_sent = False
         self._ready_from: set[str] = set()
         self._last_progress = time.monotonic()
         self._created = time.monotonic()
-        self.failure: str | None = None
-        self.done = False
-        self.orphaned = False
-        self.launcher_pid = int(os.environ.get(LAUNCHER_PID_ENV, '0') or 0)
+        self._last_intruder_check = 0.0
+        self._unnamed_since: dict[str, float] = {}
+        self._max_lag = max((i.lag for s in self._stages for i in s.inputs), default=0)
         if self.time_owner:
-            self.total_steps = self.param('total_steps', 1, 'number of control steps to run', lo=1, hi=10**9)
-            self.real_time_factor = self.param(
-                'real_time_factor', 0.0, 'pace sim time at this multiple of wall time (0: as fast as possible)',
-                lo=0.0, hi=1e6)
-            self._clock_pub = self.create_publisher(ClockMsg, topics.CLOCK, LOCKSTEP_QOS)
+            self.total_steps: int = self.params['total_steps']
+            self.real_time_factor: float = self.params['real_time_factor']
+            self._clock_pub = self.create_publisher(message_class(topics.TYPES[topics.CLOCK]), topics.CLOCK,
+                                                    LOCKSTEP_QOS)
+            self._clock_codec = Codec(topics.TYPES[topics.CLOCK])
             self._pace_timer: Any = None
             self._wall_start = 0.0
-            self.create_subscription(String, topics.READY, self._on_ready, LOCKSTEP_QOS)
+            self._raw_sub(topics.READY, self._on_ready)
+            if MONITOR_NAME in self.graph_nodes:
+                self._raw_sub(topics.MONITOR_ACK, self._on_monitor_ack)
         else:
-            self._subscribe(topics.CLOCK, ClockMsg)
-            self._ready_pub = self.create_publisher(String, topics.READY, LOCKSTEP_QOS)
-        steady = Clock(clock_type=ClockType.STEADY_TIME)
-        self.create_timer(0.1, self._watchdog, clock=steady)
+            if any(s.paced_by_clock for s in self._stages):
+                self._raw_sub(topics.CLOCK, self._on_clock)
+            self._ready_pub = self.create_publisher(message_class(topics.TYPES[topics.READY]), topics.READY,
+                                                    LOCKSTEP_QOS)
+        if self.spec.ground_commands:
+            text = Codec(topics.TYPES[topics.GROUND_COMMAND])
+            self.create_subscription(message_class(topics.TYPES[topics.GROUND_COMMAND]), topics.GROUND_COMMAND,
+                                     lambda data: self.stepper.receive_command(text.decode(data)[1]),
+                                     COMMAND_QOS, raw=True)
+        self.create_timer(0.1, self._watchdog, clock=Clock(clock_type=ClockType.STEADY_TIME))
 
     # ---- declarations -------------------------------------------------------------------------
-    def param(self, name: str, default: Any, description: str, *, lo: float | None = None,
-              hi: float | None = None, choices: tuple[str, ...] | None = None) -> Any:
-        """Declare a typed, described parameter and return its value, range-checked."""
-        desc = ParameterDescriptor(description=description)
-        if isinstance(default, list) and not default:  # an empty list has no type of its own: strings
-            value = self.declare_parameter(name, Parameter.Type.STRING_ARRAY, desc).value or []
-        else:
-            value = self.declare_parameter(name, default, desc).value
-        if isinstance(default, float) and isinstance(value, int):
-            value = float(value)
-        values = value if isinstance(value, (list, tuple)) else [value]
-        for v in values:
-            if isinstance(v, (int, float)) and not isinstance(v, bool):
-                if v != v or v in (float('inf'), float('-inf')):
-                    raise ConfigError(f'{self.get_name()}: parameter {name} is not finite: {value}')
-                if lo is not None and v < lo or hi is not None and v > hi:
-                    raise ConfigError(f'{self.get_name()}: parameter {name}={value} outside [{lo}, {hi}]')
-        if choices is not None and value not in choices:
-            raise ConfigError(f'{self.get_name()}: parameter {name}={value!r} not one of {list(choices)}')
-        return list(value) if isinstance(value, (list, tuple)) else value
-
-    def section_params(self, section: str) -> dict[str, Any]:
-        """Declare every parameter of scenario ``section`` from the schema; return {field: SI value}."""
-        out = {}
-        for name, f in SCHEMA[section].items():
-            default = f.default
-            if default is REQUIRED:  # always supplied by the launcher; a typed placeholder
-                default = [0.0] * (f.length or 1) if f.kind == 'floats' else 0.0
-            lo, hi = (None, None) if f.kind in ('str', 'bool', 'strs') else (f.lo, f.hi)
-            out[name] = self.param(f.param_name(section, name), default, f'{f.doc} [{f.si or "-"}]',
-                                   lo=lo, hi=hi, choices=f.choices if f.kind == 'str' else None)
-        return out
-
-    def add_output(self, key: str, msg_type: type, topic: str) -> None:
-        """Declare a lockstep output; publish it with :meth:`publish`."""
-        self._outputs[key] = self.create_publisher(msg_type, topic, LOCKSTEP_QOS)
-
-    def add_stage(self, name: str, inputs: list[Input],
-                  handler: Callable[[int, float, dict[str, Any]], None]) -> None:
-        """Declare a stage: ``handler(k, t_s, inputs)`` runs once per step, in order.
-
-        The time owner's stages also wait for the run monitor's acknowledgement of
-        step k − MONITOR_LAG, so an observer (recorder) can never fall behind the
-        history the lockstep QoS keeps.
-        """
-        if self.time_owner:
-            inputs = [*inputs, Input('_monitor_ack', topics.MONITOR_ACK, ClockMsg, MONITOR_NAME, MONITOR_LAG)]
-        for inp in inputs:
-            if inp.source in self.graph_nodes:
-                self._subscribe(inp.topic, inp.msg_type)
-        self._stages.append(_Stage(name, inputs, handler))
-
-    def present(self, source: str) -> bool:
-        """Whether node ``source`` is part of this graph."""
-        return source in self.graph_nodes
-
-    def _subscribe(self, topic: str, msg_type: type) -> None:
-        if topic in self._subscriptions_by_topic:
-            return
-        self._subscriptions_by_topic[topic] = self.create_subscription(
-            msg_type, topic, lambda msg, t=topic: self._on_input(t, msg), LOCKSTEP_QOS)
-
-    def start(self) -> None:
-        """Finish construction: reject unknown parameters; call last in the subclass ``__init__``."""
-        declared = set(self._parameters)
-        unknown = sorted(set(self._parameter_overrides) - declared)
+    def _declare_parameters(self, specs: list[ParamSpec]) -> dict[str, Any]:
+        """Declare every parameter (typed, described, ranged, read-only); {name: value or None if not given}."""
+        given: dict[str, Any] = {}
+        for spec in specs:
+            desc = descriptor(spec)
+            if spec.required or spec.default == []:
+                param = self.declare_parameter(spec.name, _PARAM_TYPES[spec.kind], desc)
+            else:
+                param = self.declare_parameter(spec.name, spec.default, desc)
+            value = param.value
+            given[spec.name] = list(value) if isinstance(value, (list, tuple)) or hasattr(value, 'tolist') else value
+        unknown = sorted(set(self._parameter_overrides) - {s.name for s in specs} - {'use_sim_time'})
         if unknown:
             raise ConfigError(f'{self.get_name()}: unknown parameter(s) {", ".join(unknown)} '
-                              f'(declared: {", ".join(sorted(declared - {"use_sim_time"}))})')
+                              f'(declared: {", ".join(sorted(s.name for s in specs))})')
+        return given
 
-    # ---- time ------------------------------------------------------------------------------------
+    def _raw_sub(self, topic: str, callback: Callable[[bytes], None]) -> None:
+        self.create_subscription(message_class(topics.TYPES[topic]), topic, callback, LOCKSTEP_QOS, raw=True)
+
+    def _add_input(self, topic: str, source: str) -> None:
+        if topic in self._inputs:
+            return
+        self._inputs[topic] = _InputTopic(topic, source, Codec(topics.TYPES[topic]))
+        self._raw_sub(topic, lambda data, t=topic: self._on_input(t, data))
+
+    def _log(self, level: str, text: str) -> None:
+        logger = self.get_logger()  # rclpy ties a severity to each call site: one call per level
+        if level == 'error':
+            logger.error(text)
+        elif level == 'warn':
+            logger.warning(text)
+        else:
+            logger.info(text)
+
+    # ---- time --------------------------------------------------------------------------------------
     def step_time_s(self, k: int) -> float:
         """t_k in seconds."""
         return k * self.dt_ns / 1e9
 
-    def publish(self, key: str, msg: Any, k: int) -> None:
-        """Stamp ``msg`` with t_k and publish it on output ``key``."""
-        if hasattr(msg, 'header'):
-            ns_to_stamp(k * self.dt_ns, msg.header.stamp)
-        self._outputs[key].publish(msg)
+    def _publish(self, outputs: dict[str, Any], k: int, *, initial: bool = False) -> None:
+        """Publish a stage's outputs of step k (each stamped k + its offset; ``initial``: step 0 itself)."""
+        for key, value in outputs.items():
+            port = self._ports.get(key)
+            if port is None:
+                raise LockstepError(f'{self.get_name()}: stepper returned undeclared output {key!r}')
+            t_ns = (k + (0 if initial else port.stamp_offset)) * self.dt_ns
+            for item in (value if port.output.many else (value,)):
+                port.publisher.publish(port.codec.encode(t_ns, item))
+                port.sent += 1
 
-    def publish_clock(self, k: int) -> None:
-        """Time owner only: announce step k on ``/clock``; stages for k may then fire.
-
-        With ``real_time_factor`` > 0 the announcement waits (on a wall-clock timer, not a
-        sleep) until t_k / real_time_factor wall seconds after step 0.
-        """
+    def _publish_clock(self, k: int) -> None:
+        """Time owner only: announce step k on ``/clock`` (paced at ``real_time_factor``, on a timer)."""
         if k == 0:
             self._wall_start = time.monotonic()
         delay = self._wall_start + self.step_time_s(k) / self.real_time_factor - time.monotonic() \
@@ -269,52 +271,73 @@ class LockstepNode(Node):
             self._announce(k)
 
     def _announce(self, k: int) -> None:
-        msg = ClockMsg()
-        ns_to_stamp(k * self.dt_ns, msg.clock)
-        self._clock_pub.publish(msg)
+        self._clock_pub.publish(self._clock_codec.encode(k * self.dt_ns))
         self._clock_step = k
         self._last_progress = time.monotonic()
         self._try_fire()
 
-    def finish(self) -> None:
-        """Mark the run complete: the main loop flushes the outputs and exits 0."""
-        self.done = True
-
     # ---- callbacks -------------------------------------------------------------------------------
-    def _on_ready(self, msg: String) -> None:
-        self._ready_from.add(msg.data)
+    def _on_ready(self, data: bytes) -> None:
+        self._ready_from.add(Codec(topics.TYPES[topics.READY]).decode(data)[1])
 
-    def _on_input(self, topic: str, msg: Any) -> None:
-        t_ns = message_time_ns(msg)
+    def _on_monitor_ack(self, data: bytes) -> None:
+        self._monitor_acked = max(self._monitor_acked, stamp_ns(data) // self.dt_ns)
+        self._try_fire()
+
+    def _step_of(self, topic: str, t_ns: int) -> int | None:
         k, rem = divmod(t_ns, self.dt_ns)
         if rem:
-            self.fail(f'{topic} carries stamp {t_ns} ns, not a multiple of Δt={self.dt_ns} ns')
+            self.fail(f'{self.resolve_topic_name(topic)} carries stamp {t_ns} ns, not a multiple of '
+                      f'Δt={self.dt_ns} ns')
+            return None
+        return k
+
+    def _on_clock(self, data: bytes) -> None:
+        k = self._step_of(topics.CLOCK, stamp_ns(data))
+        if k is not None and k > self._clock_step:
+            self._clock_step = k
+            self._last_progress = time.monotonic()
+            self._try_fire()
+
+    def _on_input(self, topic: str, data: bytes) -> None:
+        entry = self._inputs[topic]
+        t_ns, value = entry.codec.decode(data)
+        k = self._step_of(topic, t_ns)
+        if k is None:
             return
-        if topic == topics.CLOCK:
-            if k > self._clock_step:
-                self._clock_step = k
-                self._last_progress = time.monotonic()
-        else:
-            self._buffers.setdefault(topic, {})[k] = msg
+        if k in entry.buffer or k < entry.consumed_below:
+            names = sorted({i.node_name for i in self.get_publishers_info_by_topic(self.resolve_topic_name(topic))})
+            self.fail(f'a second message for step {k} on {self.resolve_topic_name(topic)}: a publisher other '
+                      f'than {entry.source} injects data (publishers seen: {", ".join(names) or "none left"}); '
+                      'refusing to use it')
+            return
+        entry.buffer[k] = value
         self._try_fire()
 
     def _input_value(self, inp: Input, k: int) -> tuple[bool, Any]:
         if inp.source not in self.graph_nodes or k - inp.lag < 0:
             return True, None
-        buf = self._buffers.get(inp.topic, {})
+        buf = self._inputs[inp.topic].buffer
         if k - inp.lag not in buf:
             return False, None
         return True, buf[k - inp.lag]
 
+    def _ready_to_fire(self, i: int, stage: _Stage, k: int) -> bool:
+        if i > 0 and self._stages[i - 1].next_step <= k:
+            return False
+        if self.time_owner:
+            return k <= self._clock_step and (MONITOR_NAME not in self.graph_nodes
+                                              or self._monitor_acked >= k - MONITOR_LAG)
+        return not stage.paced_by_clock or k <= self._clock_step
+
     def _try_fire(self) -> None:
         """Fire every stage whose inputs are complete, in order, until none can fire.
 
-        A loop, never recursion: a handler that announces the next step (the time owner's
-        ``publish_clock``) re-enters here; the nested call returns at once and the outer
-        loop picks the new step up, so a lone time owner runs any number of steps on a
-        bounded stack.
+        A loop, never recursion: a handler that announces the next step (the time owner)
+        re-enters here; the nested call returns at once and the outer loop picks the new
+        step up, so a lone time owner runs any number of steps on a bounded stack.
         """
-        if self._firing:
+        if self._firing or not self._started:
             return
         self._firing = True
         try:
@@ -328,7 +351,7 @@ class LockstepNode(Node):
             progressed = False
             for i, stage in enumerate(self._stages):
                 k = stage.next_step
-                if k > self._clock_step or (i > 0 and self._stages[i - 1].next_step <= k):
+                if not self._ready_to_fire(i, stage, k):
                     continue
                 values: dict[str, Any] = {}
                 for inp in stage.inputs:
@@ -338,26 +361,66 @@ class LockstepNode(Node):
                 else:
                     stage.next_step += 1
                     self._last_progress = time.monotonic()
-                    stage.handler(k, self.step_time_s(k), values)
+                    self._run_stage(stage, k, values)
                     self._prune()
                     progressed = True
                     if self.done or self.failure:
                         return
 
+    def _run_stage(self, stage: _Stage, k: int, values: dict[str, Any]) -> None:
+        try:
+            outputs = stage.handler(k, self.step_time_s(k), values)
+        except StepError as exc:
+            self.fail(str(exc))
+            return
+        except Exception as exc:  # noqa: BLE001 (a bug in a core: fail loudly, never hang the graph)
+            import traceback
+            traceback.print_exc()
+            self.fail(f'stage {stage.name} raised {type(exc).__name__} at step {k}: {exc}')
+            return
+        self._publish(outputs, k)
+        if self.stepper.finished:
+            self.done = True
+        elif self.time_owner and stage is self._stages[-1]:
+            self._publish_clock(k + 1)
+
     def _prune(self) -> None:
-        oldest = min(s.next_step for s in self._stages) - max(
-            (i.lag for s in self._stages for i in s.inputs), default=0) - 1
-        for buf in self._buffers.values():
-            for k in [k for k in buf if k < oldest]:
-                del buf[k]
+        oldest = min(s.next_step for s in self._stages) - self._max_lag
+        for entry in self._inputs.values():
+            if oldest > entry.consumed_below:
+                for k in [k for k in entry.buffer if k < oldest]:
+                    del entry.buffer[k]
+                entry.consumed_below = oldest
 
     # ---- readiness and watchdog --------------------------------------------------------------------
     def _missing_publishers(self) -> list[str]:
-        missing = []
-        for topic in self._subscriptions_by_topic:
-            if self.count_publishers(topic) == 0:
-                missing.append(self.resolve_topic_name(topic))
-        return missing
+        return [self.resolve_topic_name(t) for t in self._inputs if self.count_publishers(t) == 0]
+
+    def _check_intruders(self, now: float) -> None:
+        """Every input topic must have exactly the publishers the graph declares (here: its source node).
+
+        Discovery can report a new publisher before its node's name (``_NODE_NAME_UNKNOWN_``):
+        such a publisher is given :data:`UNNAMED_GRACE_S` to be named before it counts as an intruder.
+        """
+        self._last_intruder_check = now
+        for entry in self._inputs.values():
+            topic = self.resolve_topic_name(entry.topic)
+            names = [i.node_name for i in self.get_publishers_info_by_topic(topic)]
+            unnamed = sum(1 for n in names if n == UNNAMED)
+            if unnamed:
+                first = self._unnamed_since.setdefault(topic, now)
+                if now - first < UNNAMED_GRACE_S:
+                    continue
+            else:
+                self._unnamed_since.pop(topic, None)
+            strangers = sorted({n if n != UNNAMED else 'a publisher without a ROS node name'
+                                for n in names if n != entry.source})
+            if names.count(entry.source) > 1:
+                strangers.append(f'a second node named {entry.source}')
+            if strangers:
+                self.fail(f'{topic} has a publisher the graph does not declare ({", ".join(strangers)}); '
+                          f'only {entry.source} may drive this input')
+                return
 
     def check_parent(self) -> bool:
         """Whether the launcher that started this node has died (sets :attr:`orphaned`)."""
@@ -374,38 +437,45 @@ class LockstepNode(Node):
             return
         if self.done or self.failure:
             return
+        if now - self._last_intruder_check > INTRUDER_CHECK_PERIOD_S:
+            self._check_intruders(now)
         waited = now - self._last_progress
-        blocked = [s for s in self._stages if s.next_step <= self._clock_step]
-        if blocked and waited > self.input_timeout_s:
-            stage = blocked[0]
+        if waited <= self.input_timeout_s:
+            return
+        for i, stage in enumerate(self._stages):
             k = stage.next_step
-            missing = [f'{self.resolve_topic_name(i.topic)} (from {i.source}, step {k - i.lag})'
-                       for i in stage.inputs if not self._input_value(i, k)[0]]
+            missing = [f'{self.resolve_topic_name(inp.topic)} (from {inp.source}, step {k - inp.lag})'
+                       for inp in stage.inputs if not self._input_value(inp, k)[0]]
+            if self.time_owner and k <= self._clock_step and self._monitor_acked < k - MONITOR_LAG \
+                    and MONITOR_NAME in self.graph_nodes:
+                missing.append(f'{self.resolve_topic_name(topics.MONITOR_ACK)} (from {MONITOR_NAME}, '
+                               f'step {k - MONITOR_LAG})')
             if missing:
-                self.fail(f'stage {stage.name} waited {waited:.1f} s for step {k} input(s): '
-                          + ', '.join(missing))
-        elif not blocked and not self.time_owner and waited > 2 * self.input_timeout_s:
-            self.fail(f'waited {waited:.1f} s for /clock step {self._clock_step + 1} from {TIME_OWNER}')
+                self.fail(f'stage {stage.name} waited {waited:.1f} s for step {k} input(s): ' + ', '.join(missing))
+                return
+            if not self.time_owner and stage.paced_by_clock and k > self._clock_step and i == 0:
+                self.fail(f'waited {waited:.1f} s for /clock step {k} from {TIME_OWNER}')
+                return
 
     def _check_ready(self, now: float) -> None:
         missing = self._missing_publishers()
+        absent: list[str] = []
         if self.time_owner:
             absent = sorted(set(self.graph_nodes) - self._ready_from - {self.get_name()})
             if not missing and not absent:
+                self._check_intruders(now)
                 self._started = True
                 self._last_progress = now
-                self.on_start()
+                self._publish(self.stepper.start(), 0, initial=True)
+                self._publish_clock(0)
                 return
         elif not missing:
-            if not self._ready_sent:
-                self._ready_pub.publish(String(data=self.get_name()))
-                self._ready_sent = True
-                self._started = True
-                self._last_progress = now
-                self._try_fire()
+            self._check_intruders(now)
+            self._ready_pub.publish(Codec(topics.TYPES[topics.READY]).encode(0, self.get_name()))
+            self._started = True
+            self._last_progress = now
+            self._try_fire()
             return
-        else:
-            absent = []
         if now - self._created > max(self.input_timeout_s, 20.0):
             parts = []
             if missing:
@@ -414,9 +484,6 @@ class LockstepNode(Node):
                 parts.append('nodes not ready: ' + ', '.join(absent))
             self.fail('graph never became ready: ' + '; '.join(parts))
 
-    def on_start(self) -> None:
-        """Time owner hook: every node is ready; publish step 0 (truth, then :meth:`publish_clock`)."""
-
     def fail(self, message: str) -> None:
         """Record a fatal lockstep failure; the main loop reports it and exits non-zero."""
         if self.failure is None:
@@ -424,20 +491,21 @@ class LockstepNode(Node):
 
     def flush(self, timeout_s: float = 5.0) -> None:
         """Wait until every output has been acknowledged by its readers."""
-        pubs = list(self._outputs.values())
+        pubs = [p.publisher for p in self._ports.values()]
         if self.time_owner:
             pubs.append(self._clock_pub)
         for pub in pubs:
             pub.wait_for_all_acked(rclpy.duration.Duration(seconds=timeout_s))
 
 
-def run_node(name: str, factory: Callable[[], LockstepNode], args: list[str] | None = None) -> int:
-    """Entry-point body shared by every node: init, spin, report, shut down cleanly.
+def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
+    """Entry-point body of every node: init, spin, report, shut down cleanly.
 
     Returns the process exit code: 0 on completion or SIGINT/SIGTERM/SIGHUP, 2 on a
     configuration error, 3 on a lockstep failure, 4 when the launcher that started it
     died. Errors are one line on stderr, prefixed by the node name, without a traceback.
     """
+    name = stepper_cls.node
     os.environ.setdefault('ROS_LOG_DIR', os.path.join(os.environ.get('TMPDIR', '/tmp'), 'acds_ros_log'))
     try:
         rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
@@ -454,8 +522,7 @@ def run_node(name: str, factory: Callable[[], LockstepNode], args: list[str] | N
     node: LockstepNode | None = None
     code = EXIT_OK
     try:
-        node = factory()
-        node.start()
+        node = LockstepNode(stepper_cls)
         from rclpy.experimental import EventsExecutor
         executor = EventsExecutor()
         executor.add_node(node)
@@ -468,11 +535,10 @@ def run_node(name: str, factory: Callable[[], LockstepNode], args: list[str] | N
         elif node.failure is not None:
             print(f'[{name}] LOCKSTEP FAILURE: {node.failure}', file=sys.stderr, flush=True)
             code = EXIT_LOCKSTEP
-        else:  # completed, or stopped by SIGINT/SIGTERM: deliver what was published before leaving
+        else:  # completed, or stopped by a signal: deliver what was published before leaving
             node.flush(timeout_s=2.0 if stop['signal'] is not None else 5.0)
     except (ConfigError, ValueError) as exc:
-        print(f'[{name}] CONFIGURATION ERROR: {exc}',
-              file=sys.stderr, flush=True)
+        print(f'[{name}] CONFIGURATION ERROR: {exc}', file=sys.stderr, flush=True)
         code = EXIT_CONFIG
     except (KeyboardInterrupt, ExternalShutdownException):
         code = EXIT_OK
@@ -483,4 +549,4 @@ def run_node(name: str, factory: Callable[[], LockstepNode], args: list[str] | N
     return code
 
 
-__all__ = ['COMMAND_QOS', 'LOCKSTEP_QOS', 'ConfigError', 'Input', 'LockstepError', 'LockstepNode', 'run_node']
+__all__ = ['COMMAND_QOS', 'LOCKSTEP_QOS', 'ConfigError', 'LockstepError', 'LockstepNode', 'message_class', 'run_node']

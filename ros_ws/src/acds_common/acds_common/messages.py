@@ -1,75 +1,72 @@
-"""numpy ↔ standard message conversions shared by the nodes (ROS plumbing only)."""
+"""Helpers on the values of the graph's standard messages (see :mod:`acds_common.cdr`; no rclpy).
+
+Steppers receive and return message *values*: 3-tuples for ``Vector3Stamped``, (field,
+covariance) for ``MagneticField``, tuples of :class:`~acds_common.cdr.Status` for
+``DiagnosticArray``. These helpers build and read them.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 
 import numpy as np
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Vector3Stamped
-from sensor_msgs.msg import MagneticField
 
+from acds_common.cdr import Status
 
-def vec(msg: Vector3Stamped | None, default: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
-    """Vector3Stamped → 3-vector (``default`` for an absent input)."""
-    if msg is None:
-        return np.array(default, dtype=float)
-    v = msg.vector
-    return np.array([v.x, v.y, v.z])
-
-
-def vector3_stamped(values: Iterable[float], frame_id: str = 'body') -> Vector3Stamped:
-    """3-vector → Vector3Stamped (stamp is set by the lockstep publish)."""
-    msg = Vector3Stamped()
-    msg.header.frame_id = frame_id
-    msg.vector.x, msg.vector.y, msg.vector.z = (float(x) for x in values)
-    return msg
-
-
-def field(msg: MagneticField | None) -> np.ndarray:
-    """MagneticField → 3-vector, tesla."""
-    if msg is None:
-        return np.zeros(3)
-    f = msg.magnetic_field
-    return np.array([f.x, f.y, f.z])
-
-
-def magnetic_field(b_t: Iterable[float], covariance: Iterable[float] | None = None,
-                   frame_id: str = 'body') -> MagneticField:
-    """3-vector (T) → MagneticField; covariance row-major 3×3 in T² (zeros = unknown)."""
-    msg = MagneticField()
-    msg.header.frame_id = frame_id
-    msg.magnetic_field.x, msg.magnetic_field.y, msg.magnetic_field.z = (float(x) for x in b_t)
-    if covariance is not None:
-        msg.magnetic_field_covariance = [float(c) for c in covariance]
-    return msg
-
-
-def diagnostic(node: str, values: dict[str, object], message: str = 'ok',
-               level: bytes = DiagnosticStatus.OK) -> DiagnosticArray:
-    """One DiagnosticStatus named after the node, with key/value telemetry."""
-    arr = DiagnosticArray()
-    status = DiagnosticStatus(level=level, name=node, message=message, hardware_id=node)
-    status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
-    arr.status = [status]
-    return arr
-
-
+#: DiagnosticStatus levels (diagnostic_msgs/DiagnosticStatus).
+OK, WARN, ERROR, STALE = 0, 1, 2, 3
 #: Name of the mode manager's status inside the ``mode`` DiagnosticArray.
 MODE_STATUS = 'ascs_mode_manager'
+_ZERO_COV = (0.0,) * 9
 
 
-def mode_status(msg: DiagnosticArray | None, node: str) -> tuple[str | None, list[str]]:
-    """(mode, commands forwarded to ``node`` in order) from the step's ``mode`` array; (None, []) if absent.
+def vec(value: Sequence[float] | None, default: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
+    """A Vector3Stamped value → 3-vector (``default`` for an absent input)."""
+    return np.array(default if value is None else value, dtype=float)
+
+
+def vector3(values: Iterable[float]) -> tuple[float, float, float]:
+    """A 3-vector → the Vector3Stamped value (plain floats)."""
+    x, y, z = (float(v) for v in values)
+    return x, y, z
+
+
+def field(value: tuple[Sequence[float], Sequence[float]] | None) -> np.ndarray:
+    """A MagneticField value → 3-vector, tesla (zeros for an absent input)."""
+    return np.zeros(3) if value is None else np.array(value[0], dtype=float)
+
+
+def magnetic_field(b_t: Iterable[float], covariance: Iterable[float] | None = None) -> tuple[tuple, tuple]:
+    """3-vector (T) and row-major 3×3 covariance (T², zeros = unknown) → the MagneticField value."""
+    cov = _ZERO_COV if covariance is None else tuple(float(c) for c in covariance)
+    return vector3(b_t), cov
+
+
+def diagnostic(node: str, values: dict[str, object], message: str = 'ok', level: int = OK) -> tuple[Status]:
+    """One DiagnosticStatus named after the node (hardware_id too), with key/value telemetry."""
+    return (Status(level, node, message, node, tuple((k, str(v)) for k, v in values.items())),)
+
+
+def mode_status(value: Sequence[Status] | None, node: str) -> tuple[str | None, list[str]]:
+    """(mode, commands forwarded to ``node`` in order) from the step's ``mode`` value; (None, []) if absent.
 
     The mode manager forwards accepted ground commands for other nodes as ``command/<node>`` keys.
     """
-    if msg is None:
+    if value is None:
         return None, []
     key = f'command/{node}'
-    for status in msg.status:
+    for status in value:
         if status.name == MODE_STATUS:
-            values = [(kv.key, kv.value) for kv in status.values]
-            mode = next((v for k, v in values if k == 'mode'), status.message)
-            return mode, [v for k, v in values if k == key]
+            mode = next((v for k, v in status.values if k == 'mode'), status.message)
+            return mode, [v for k, v in status.values if k == key]
     return None, []
+
+
+def status_value(value: Sequence[Status] | None, name: str, key: str) -> str | None:
+    """The value of ``key`` in status ``name`` of a DiagnosticArray value (None when absent)."""
+    for status in value or ():
+        if status.name == name:
+            for k, v in status.values:
+                if k == key:
+                    return v
+    return None

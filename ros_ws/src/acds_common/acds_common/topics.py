@@ -85,3 +85,9 @@ TRUTH = (TRUTH_ODOMETRY, TRUTH_B_BODY, TRUTH_SUN_COSINES, TRUTH_TORQUE_MAG, TRUT
 def resolve(topic: str) -> str:
     """Absolute topic name (``/acds/...``, or ``/clock``)."""
     return topic if topic.startswith('/') else f'{NAMESPACE}/{topic}'
+
+
+def relative(name: str) -> str:
+    """The key of :data:`TYPES` for an absolute or relative topic name (inverse of :func:`resolve`)."""
+    prefix = f'{NAMESPACE}/'
+    return name[len(prefix):] if name.startswith(prefix) else name

@@ -22,10 +22,10 @@ one gain label (K = .05) through the whole run, so 0.05 (s·G²)⁻¹ is the def
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from acds_common.dpa_commands import AXES, GAIN_TABLE, LAW_CHOICES, SCALAR_GAINS
 from acds_common.units import FT_LB_NM, deg, nms_to_ftlbs, rad_s_to_rpm, rpm_to_rad_s, tesla_to_gauss
 
 from acds_controller.magnetic_laws import (
@@ -61,11 +61,6 @@ from acds_controller.wheel_laws import (
 
 #: DPA modes, exactly as the mode manager names them.
 MODES = ('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point')
-#: Selectable magnetic laws per slot: acquisition (Mode 1A) and unloading (Mode 1B, cruise).
-LAW_CHOICES: dict[str, tuple[str, ...]] = {
-    'acquisition': ('bxh', 'bdot'),
-    'unloading': ('bxh', 'lead', 'none'),
-}
 #: Wheel torque gain k for ḣ = k·V|V|, N·m/V²: 0.117 ft-lb (Table 4-2 design torque) at V_sat.
 WHEEL_TORQUE_GAIN_NM_PER_V2 = 0.117 * FT_LB_NM / V_SAT_V**2
 #: Lead-law time constant, s: ≈ 1/(G_unld·B²) for G = 0.02 (s·G²)⁻¹ and |B| ≈ 0.3 G.
@@ -73,32 +68,19 @@ LEAD_TIME_S = 500.0
 #: A sun-sensor vector shorter than this means "sun absent" (the sensor sends zeros).
 _SUN_PRESENT_MIN_NORM = 0.5
 
-_AXES = ('x', 'y', 'z')
-_WHEEL_SETS = {'acquisition': 'wheel_gains_acquisition', 'normal': 'wheel_gains_normal'}
-_WHEEL_PARAMS = {
-    'kp': ('k_p_v_per_rad', 0.0, 1e8, 'V/rad'),
-    'kr': ('k_r_s', 0.0, 1e5, 's'),
-    'theta_limit': ('theta_limit_rad', 1e-9, math.pi, 'rad'),
+#: Ground-command gain sets and parameters → the DpaConfig / WheelLawGains fields they set.
+_WHEEL_SET_FIELDS = {'acquisition': 'wheel_gains_acquisition', 'normal': 'wheel_gains_normal'}
+_WHEEL_PARAM_FIELDS = {'kp': 'k_p_v_per_rad', 'kr': 'k_r_s', 'theta_limit': 'theta_limit_rad'}
+_SCALAR_GAIN_FIELDS = {
+    'acquisition_gain': 'acquisition_gain_study',
+    'bdot_gain': 'bdot_gain_study',
+    'unloading_gain_mode_1b': 'unloading_gain_mode_1b_study',
+    'unloading_gain_scan': 'unloading_gain_scan_study',
+    'unloading_gain_point': 'unloading_gain_point_study',
+    'max_moment': 'max_moment_am2',
+    'scan_rate_rpm': 'scan_rate_rad_s',
+    'lead_time': 'lead_time_s',
 }
-#: Scalar run-time gains: name → (DpaConfig field, low, high, unit). Ranges bracket the study's values.
-_SCALAR_GAINS: dict[str, tuple[str, float, float, str]] = {
-    'acquisition_gain': ('acquisition_gain_study', 0.0, 5.0, '(s·G²)⁻¹'),
-    'bdot_gain': ('bdot_gain_study', 0.0, 100.0, 'ft-lb-s/G²'),
-    'unloading_gain_mode_1b': ('unloading_gain_mode_1b_study', 0.0, 1.0, '(s·G²)⁻¹'),
-    'unloading_gain_scan': ('unloading_gain_scan_study', 0.0, 1.0, '(s·G²)⁻¹'),
-    'unloading_gain_point': ('unloading_gain_point_study', 0.0, 1.0, '(s·G²)⁻¹'),
-    'max_moment': ('max_moment_am2', 0.0, 5000.0, 'A·m²'),
-    'scan_rate_rpm': ('scan_rate_rad_s', -1.0, 1.0, 'rpm'),
-    'lead_time': ('lead_time_s', 0.0, 1e5, 's'),
-}
-#: Every gain accepted by :meth:`Dpa.set_gain`: name → (low, high, unit).
-GAIN_TABLE: dict[str, tuple[float, float, str]] = {
-    **{name: (lo, hi, unit) for name, (_, lo, hi, unit) in _SCALAR_GAINS.items()},
-    **{f'wheel_{s}_{p}_{a}': (lo, hi, unit)
-       for s in _WHEEL_SETS for p, (_, lo, hi, unit) in _WHEEL_PARAMS.items() for a in _AXES},
-}
-#: Gain name → (low, high), for validators outside this package (the mode manager).
-GAIN_LIMITS: dict[str, tuple[float, float]] = {name: (lo, hi) for name, (lo, hi, _) in GAIN_TABLE.items()}
 
 
 @dataclass(frozen=True)
@@ -148,8 +130,8 @@ class DpaConfig:
             law = getattr(self, f'{slot}_law')
             if law not in LAW_CHOICES[slot]:
                 raise ControllerError(f'{slot}_law {law!r} unknown; choose one of {LAW_CHOICES[slot]}')
-        for name, (attr, lo, hi, unit) in _SCALAR_GAINS.items():
-            value = getattr(self, attr)
+        for name, (lo, hi, unit) in SCALAR_GAINS.items():
+            value = getattr(self, _SCALAR_GAIN_FIELDS[name])
             if name == 'scan_rate_rpm':
                 value = rad_s_to_rpm(value)
             check_gain(value, f'{name} ({unit})', lo, hi)
@@ -184,17 +166,17 @@ class Dpa:
             raise ControllerError(f'unknown gain {name!r}; known gains: {", ".join(sorted(GAIN_TABLE))}')
         lo, hi, unit = GAIN_TABLE[name]
         v = check_gain(value, f'gain {name} ({unit})', lo, hi)
-        if name in _SCALAR_GAINS:
-            attr = _SCALAR_GAINS[name][0]
+        if name in _SCALAR_GAIN_FIELDS:
+            attr = _SCALAR_GAIN_FIELDS[name]
             self.config = dataclasses.replace(
                 self.config, **{attr: rpm_to_rad_s(v) if name == 'scan_rate_rpm' else v})
             return
         set_name, rest = name[len('wheel_'):].split('_', 1)
         param, axis = rest.rsplit('_', 1)
-        attr = _WHEEL_SETS[set_name]
+        attr = _WHEEL_SET_FIELDS[set_name]
         gains: WheelLawGains = getattr(self.config, attr)
         self.config = dataclasses.replace(
-            self.config, **{attr: gains.with_axis(_WHEEL_PARAMS[param][0], _AXES.index(axis), v)})
+            self.config, **{attr: gains.with_axis(_WHEEL_PARAM_FIELDS[param], AXES.index(axis), v)})
 
     def set_law(self, slot: str, law: str) -> None:
         """Select the magnetic law of a slot ('acquisition': bxh|bdot, 'unloading': bxh|lead|none)."""
@@ -301,7 +283,7 @@ class Dpa:
         }
         b_g = tesla_to_gauss(b)
         h_ftlbs = nms_to_ftlbs(h_used)
-        for i, axis in enumerate(_AXES):
+        for i, axis in enumerate(AXES):
             out[f'control_field_{axis}_gauss'] = f'{b_g[i] + 0.0:.6g}'
             out[f'control_momentum_{axis}_ftlbs'] = f'{h_ftlbs[i] + 0.0:.6g}'
             out[f'attitude_error_{axis}_deg'] = f'{deg(theta[i]) + 0.0:.6g}'

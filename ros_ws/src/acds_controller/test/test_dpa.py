@@ -6,8 +6,9 @@ import math
 
 import numpy as np
 import pytest
+from acds_common.dpa_commands import GAIN_LIMITS, GAIN_TABLE
 from acds_common.units import SLUG_FT2_KG_M2, rad, rpm_to_rad_s
-from acds_controller.dpa import GAIN_LIMITS, GAIN_TABLE, WHEEL_TORQUE_GAIN_NM_PER_V2, Dpa, DpaConfig
+from acds_controller.dpa import WHEEL_TORQUE_GAIN_NM_PER_V2, Dpa, DpaConfig
 from acds_controller.magnetic_laws import (
     ControllerError,
     bxh_gain_to_si,

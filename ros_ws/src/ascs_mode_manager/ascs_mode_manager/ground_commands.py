@@ -28,6 +28,10 @@ def parse_schedule(entries: list[str]) -> list[tuple[float, str]]:
     return sorted(out, key=lambda e: e[0])
 
 
+#: Live commands that may wait for the next step; more are refused at once (never dropped silently).
+MAX_PENDING = 5000
+
+
 class GroundCommandQueue:
     """Scheduled and live ground commands, handed out step by step."""
 
@@ -35,9 +39,12 @@ class GroundCommandQueue:
         self._scheduled = parse_schedule(schedule)
         self._live: list[str] = []
 
-    def receive(self, text: str) -> None:
-        """A live command: queued for the next step."""
+    def receive(self, text: str) -> bool:
+        """A live command: queued for the next step; False when the queue is full (the caller refuses it)."""
+        if len(self._live) >= MAX_PENDING:
+            return False
         self._live.append(text)
+        return True
 
     def due(self, t_s: float) -> list[tuple[str, str]]:
         """Commands to apply at the step at ``t_s``: (text, 'scheduled'|'live'), scheduled first."""

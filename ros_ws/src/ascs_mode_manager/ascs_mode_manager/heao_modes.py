@@ -75,7 +75,7 @@ class HeaoModeConfig:
     and gyros from separation, magnetics unloading the wheels).
     ``initial_mode``: mode at separation when not starting with the wheels ('mode_1a' or 'standby').
     ``gain_limits`` / ``law_choices``: the controller's gain ranges and law names (the node
-    passes ``acds_controller.dpa.GAIN_LIMITS`` / ``LAW_CHOICES``); when None only the syntax
+    passes ``acds_common.dpa_commands.GAIN_LIMITS`` / ``LAW_CHOICES``); when None only the syntax
     is checked here and the controller validates the rest.
     """
 

@@ -1,25 +1,24 @@
-"""HEAO part of the ascs_mode_manager node: Mode 1A → 1B → capture → cruise and ground commands (spec §8).
+"""HEAO part of the ascs_mode_manager stepper: Mode 1A → 1B → capture → cruise and ground commands (spec §8).
 
-Step k (inputs: gyro and sun sensor of step k from rigid_body):
+Stage ``heao`` of step k (inputs: gyro and sun sensor of step k from rigid_body):
 
 1. ground commands: the scheduled ones (``modes.ground_commands``, "T_S: text") whose
-   time has come (first step with t_k ≥ T_S), then the ones received on
+   time has come (first step with t_k ≥ T_S), then the live ones received on
    ``ground/command`` since the previous step, in arrival order, are validated by the
    core; each is answered on ``ground/ack`` ("accepted …" or "refused …: <reason>");
    accepted mode transfers are applied in this step, commands for other nodes are
-   forwarded in this step's ``mode`` message (key ``command/<node>``);
+   forwarded in this step's ``mode`` (key ``command/<node>``);
 2. the on-board logic of :class:`~ascs_mode_manager.heao_modes.HeaoModeManager`;
 3. ``mode`` (DiagnosticArray, every step): status ``ascs_mode_manager`` with message =
    mode and keys ``mode``, ``cause`` (this step's transition causes, '' if none),
    ``captured``, ``run_complete`` ('true' from the capture step on when
    ``modes.stop_at_capture``: the time owner then ends the run after this step), the
    core's status keys, and the forwarded ``command/<node>`` keys;
-4. ``events`` (std_msgs/String): one line per transition, "t=<s> <from>-><to>: <cause>"
-   (capture: "t=<s> capture in mode_1b: <cause>"), also logged.
+4. ``events``: one line per transition, "t=<s> <from>-><to>: <cause>" (capture:
+   "t=<s> capture in mode_1b: <cause>").
 
-A ground command received while step k is being computed is applied at step k+1 (the
-executor is single-threaded: a message that arrives before the handler of step k runs is
-applied at step k). Only the scheduled commands are tied to a sim time; they are the
+A live command received while step k is being computed is applied at step k+1 (the host
+is single-threaded). Only the scheduled commands are tied to a sim time: they are the
 deterministic way to command a run.
 """
 
@@ -28,16 +27,11 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from acds_common import topics
-from acds_common.lockstep import ConfigError, Input, LockstepNode
-from acds_common.messages import MODE_STATUS, diagnostic
-from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Vector3Stamped
-from sensor_msgs.msg import Imu
-from std_msgs.msg import String
+from acds_common.cdr import Status
+from acds_common.dpa_commands import GAIN_LIMITS, LAW_CHOICES
+from acds_common.messages import MODE_STATUS, OK, WARN, diagnostic, vec
 
 from ascs_mode_manager.heao_modes import CRUISE_MODES, HeaoModeConfig, HeaoModeManager, Transition
-from ascs_mode_manager.spin_mechanizations import AscsError
 
 
 def event_text(tr: Transition) -> str:
@@ -54,8 +48,6 @@ def build_core(m: dict[str, Any]) -> HeaoModeManager:
     starts a normal-mode run (§4.3.2) in cruise, already captured (the acquisition is not
     simulated).
     """
-    from acds_controller.dpa import GAIN_LIMITS, LAW_CHOICES
-
     initial = m['initial_mode']
     core = HeaoModeManager(HeaoModeConfig(
         rate_thresholds_rad_s=tuple(m['rate_thresholds']),
@@ -71,26 +63,19 @@ def build_core(m: dict[str, Any]) -> HeaoModeManager:
 
 
 class HeaoPart:
-    """Adds the HEAO mode logic to the ascs_mode_manager node."""
+    """The HEAO mode logic of the mode-manager stepper (module docstring)."""
 
-    def __init__(self, node: LockstepNode) -> None:
-        self.node = node
-        m = node.modes
-        try:
-            self.core = build_core(m)
-        except (AscsError, ValueError) as exc:
-            raise ConfigError(f'ascs_mode_manager: {exc}') from None
+    def __init__(self, host: Any) -> None:
+        self.host = host
+        m = host.modes
+        self.core = build_core(m)
         self.stop_at_capture = m['stop_at_capture']
         self.run_complete = False
-        node.add_stage('modes', [
-            Input('gyro', topics.GYRO, Imu, 'rigid_body'),
-            Input('sun', topics.SUN_SENSOR, Vector3Stamped, 'rigid_body'),
-        ], self.step)
 
-    def _commands(self, k: int, t: float) -> list[tuple[str, str]]:
+    def _commands(self, t: float, diagnostics: list[Status]) -> list[tuple[str, str]]:
         """Validate the due commands; return the forwarded (node, text) pairs."""
         forwarded = []
-        for text, _source in self.node.commands.due(t):
+        for text, _source in self.host.commands.due(t):
             result = self.core.command(text, t)
             if result.accepted:
                 answer = f'accepted t={t:.1f}: {result.command}: {result.reason}'
@@ -98,38 +83,41 @@ class HeaoPart:
                     forwarded.append((result.route, result.command or text))
             else:
                 answer = f'refused t={t:.1f}: {text}: {result.reason}'
-                self.node.publish('diagnostics', diagnostic(
-                    MODE_STATUS, {'command': text, 'reason': result.reason}, 'ground command refused',
-                    DiagnosticStatus.WARN), k)
-            self.node.acknowledge(answer, result.accepted)
+                diagnostics.extend(diagnostic(MODE_STATUS, {'command': text, 'reason': result.reason},
+                                              'ground command refused', WARN))
+            self.host.acknowledge(answer, result.accepted)
         return forwarded
 
-    def step(self, k: int, t: float, inp: dict[str, Any]) -> None:
-        """One step of the mode logic; publishes ``mode`` (always) and ``events`` (on transitions)."""
-        forwarded = self._commands(k, t)
+    def step(self, k: int, t: float, inp: dict[str, Any]) -> dict[str, Any]:
+        """One step of the mode logic: ``mode`` (always), ``events`` (on transitions), ``diagnostics``."""
+        diagnostics: list[Status] = []
+        forwarded = self._commands(t, diagnostics)
         transitions: list[Transition] = []
-        gyro, sun_msg = inp['gyro'], inp['sun']
-        omega = np.zeros(3) if gyro is None else np.array(
-            [gyro.angular_velocity.x, gyro.angular_velocity.y, gyro.angular_velocity.z])
-        sun = np.zeros(3) if sun_msg is None else np.array([sun_msg.vector.x, sun_msg.vector.y, sun_msg.vector.z])
+        omega = vec(None if inp['gyro'] is None else inp['gyro'][0])
+        sun = vec(inp['sun'])
         if np.all(np.isfinite(omega)) and np.all(np.isfinite(sun)):
             transitions = self.core.step(t, omega, sun, bool(np.linalg.norm(sun) > 0.0))
         else:
             message = f'non-finite gyro/sun input rejected at step {k}: mode logic held'
-            self.node.get_logger().warning(message)
-            self.node.publish('diagnostics', diagnostic(MODE_STATUS, {}, message, DiagnosticStatus.WARN), k)
+            self.host.log('warn', message)
+            diagnostics.extend(diagnostic(MODE_STATUS, {}, message, WARN))
+        events = []
         for tr in transitions:
             if tr.kind == 'capture' and self.stop_at_capture:
                 self.run_complete = True
             text = event_text(tr)
-            self.node.get_logger().info(text)
-            self.node.publish('events', String(data=text), k)
-        values = {
-            'mode': self.core.mode,
-            'cause': '; '.join(tr.cause for tr in transitions),
-            **{key: v for key, v in self.core.status().items() if key != 'mode'},
-            'run_complete': 'true' if self.run_complete else 'false',
-        }
-        arr = diagnostic(MODE_STATUS, values, self.core.mode)
-        arr.status[0].values.extend(KeyValue(key=f'command/{route}', value=text) for route, text in forwarded)
-        self.node.publish('mode', arr, k)
+            self.host.log('info', text)
+            events.append(text)
+        values = [
+            ('mode', self.core.mode),
+            ('cause', '; '.join(tr.cause for tr in transitions)),
+            *((key, str(v)) for key, v in self.core.status().items() if key != 'mode'),
+            ('run_complete', 'true' if self.run_complete else 'false'),
+            *((f'command/{route}', text) for route, text in forwarded),
+        ]
+        out: dict[str, Any] = {'mode': (Status(OK, MODE_STATUS, self.core.mode, MODE_STATUS, tuple(values)),)}
+        if events:
+            out['events'] = events
+        if diagnostics:
+            out['diagnostics'] = tuple(diagnostics)
+        return out

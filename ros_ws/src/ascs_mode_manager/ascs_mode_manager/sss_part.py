@@ -1,8 +1,8 @@
-"""SSS part of the ascs_mode_manager node: perigee automatic turn-on of the SSS ASCS (spec §8; seed 001).
+"""SSS part of the ascs_mode_manager stepper: perigee automatic turn-on of the SSS ASCS (spec §8; seed 001).
 
 Plumbing only: the logic is :class:`ascs_mode_manager.sss_ascs.SssAscs`.
 
-Input (one lockstep stage, ``sss``): ``magnetometer/volts`` and ``magnetometer/bias_volts`` of step k
+Input (stage ``sss``): ``magnetometer/volts`` and ``magnetometer/bias_volts`` of step k
 (lag 0). Of the triaxial fluxgate only body **y** is used: it is the ASCS's single spin-plane channel
 (the core's wiring: y magnetometer → spin coil along x, attitude coil along z, spin axis z). The channel
 is read as the flight hardware's polarity comparator sees it: the analog output referenced to the
@@ -51,13 +51,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from acds_common import topics
-from acds_common.lockstep import Input
-from acds_common.messages import diagnostic, vec, vector3_stamped
+from acds_common.cdr import Status
+from acds_common.messages import OK, WARN, diagnostic, vec, vector3
 from acds_common.units import GAUSS_T, tesla_to_gauss
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Vector3Stamped
-from std_msgs.msg import String
 
 from ascs_mode_manager.spin_mechanizations import MECHANIZATIONS, Mechanization, coil_moments
 from ascs_mode_manager.sss_ascs import SssAscs, SssAscsConfig, SssOutput
@@ -91,11 +87,11 @@ def dipole_command(mech: Mechanization, ascs: SssAscs, out: SssOutput, b_sensed_
 
 
 class SssPart:
-    """Adds the SSS ASCS stage, outputs and ground-command handling to the mode-manager node."""
+    """The SSS ASCS logic of the mode-manager stepper (module docstring)."""
 
-    def __init__(self, node: Any) -> None:
-        self.node = node
-        p = node.sss
+    def __init__(self, host: Any) -> None:
+        self.host = host
+        p = host.sss_params
         self.mech = MECHANIZATIONS[p['mechanization']]
         self.scale_v_per_t = p['magnetometer_scale_v_per_g'] / GAUSS_T
         self.ascs = SssAscs(SssAscsConfig(
@@ -103,22 +99,16 @@ class SssPart:
             hold_release_fraction=p['hold_release_fraction'], spin_coil=self.mech.coil, bus_v=p['bus_v']))
         self.mode = 'sss_disabled'
         self.last_signal_t = 0.0
-        node.add_output('moment', Vector3Stamped, topics.MOMENT_COMMAND)
-        node.add_stage('sss', [
-            Input('volts', topics.MAG_VOLTS, Vector3Stamped, 'magnetometer_sim'),
-            Input('bias', topics.MAG_BIAS_VOLTS, Vector3Stamped, 'magnetometer_sim'),
-        ], self.step)
 
-    def sensed_field_t(self, k: int, inp: dict[str, Any]) -> np.ndarray:
+    def sensed_field_t(self, k: int, inp: dict[str, Any], diagnostics: list[Status]) -> np.ndarray:
         """Bias-referenced field of the three axes, T; a non-finite or absent reading reads as zero."""
         if inp['volts'] is None or inp['bias'] is None:
             return np.zeros(3)
         volts, bias = vec(inp['volts']), vec(inp['bias'])
         if not (np.all(np.isfinite(volts)) and np.all(np.isfinite(bias))):
-            self.node.publish('diagnostics', diagnostic(NODE, {
-                'volts': volts.tolist(), 'bias_volts': bias.tolist(), 'step': k},
-                'rejected non-finite magnetometer input: comparator reads zero field',
-                DiagnosticStatus.WARN), k)
+            diagnostics.extend(diagnostic(NODE, {'volts': volts.tolist(), 'bias_volts': bias.tolist(), 'step': k},
+                                          'rejected non-finite magnetometer input: comparator reads zero field',
+                                          WARN))
             return np.zeros(3)
         return (volts - bias) / self.scale_v_per_t
 
@@ -126,34 +116,39 @@ class SssPart:
         """Apply one ground command; acknowledge it; return the cause text if it was accepted."""
         result = self.ascs.command(text, t_s)
         verdict = 'accepted' if result.accepted else 'refused'
-        line = f't={t_s:.2f} {verdict} ({source}) {text!r}: {result.reason}'
-        self.node.acknowledge(line, result.accepted)
+        self.host.acknowledge(f't={t_s:.2f} {verdict} ({source}) {text!r}: {result.reason}', result.accepted)
         return f'ground command {text!r}' if result.accepted else ''
 
-    def step(self, k: int, t_s: float, inp: dict[str, Any]) -> None:
+    def step(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Step k: commands due, the core step, then mode, moment command, events and diagnostics."""
-        causes = [self.apply(text, t_s, source) for text, source in self.node.commands.due(t_s)]
-        b_t = self.sensed_field_t(k, inp)
+        diagnostics: list[Status] = []
+        causes = [self.apply(text, t_s, source) for text, source in self.host.commands.due(t_s)]
+        b_t = self.sensed_field_t(k, inp, diagnostics)
         self.last_signal_t = float(b_t[CHANNEL_AXIS])
-        out = self.ascs.step(t_s, self.node.control_period_s, b_t)
+        out = self.ascs.step(t_s, self.host.control_period_s, b_t)
         name = mode_name(self.ascs, out)
         cause = ''
+        events = []
         for event in out.events:
             cause = event.detail
-            self.event(k, f't={event.t_s:.2f} {event.kind} {self.mode}->{name}: {event.detail}')
+            events.append(f't={event.t_s:.2f} {event.kind} {self.mode}->{name}: {event.detail}')
         if name != self.mode and not out.events:
             cause = '; '.join(c for c in causes if c) or 'on-board logic'
-            self.event(k, f't={t_s:.2f} mode {self.mode}->{name}: {cause}')
+            events.append(f't={t_s:.2f} mode {self.mode}->{name}: {cause}')
         self.mode = name
-        self.node.publish('moment', vector3_stamped(dipole_command(self.mech, self.ascs, out, b_t)), k)
-        self.node.publish('mode', self.mode_message(out, cause), k)
+        for text in events:
+            self.host.log('info', text)
+        result: dict[str, Any] = {
+            'moment': vector3(dipole_command(self.mech, self.ascs, out, b_t)),
+            'mode': self.mode_value(out, cause),
+        }
+        if events:
+            result['events'] = events
         if k % DIAGNOSTIC_EVERY == 0:
-            self.node.publish('diagnostics', diagnostic(NODE, self.telemetry(out)), k)
-
-    def event(self, k: int, text: str) -> None:
-        """Publish and log one event line."""
-        self.node.publish('events', String(data=text), k)
-        self.node.get_logger().info(text)
+            diagnostics.extend(diagnostic(NODE, self.telemetry(out)))
+        if diagnostics:
+            result['diagnostics'] = tuple(diagnostics)
+        return result
 
     def telemetry(self, out: SssOutput) -> dict[str, str]:
         """SSS telemetry key/values (strings)."""
@@ -169,11 +164,7 @@ class SssPart:
             'power_w': f'{out.power_w:.6g}',
         }
 
-    def mode_message(self, out: SssOutput, cause: str) -> DiagnosticArray:
-        """The step's ``mode`` DiagnosticArray (preamble contract)."""
-        arr = DiagnosticArray()
-        status = DiagnosticStatus(level=DiagnosticStatus.OK, name=NODE, message=self.mode, hardware_id=NODE)
+    def mode_value(self, out: SssOutput, cause: str) -> tuple[Status]:
+        """The step's ``mode`` DiagnosticArray value (module docstring)."""
         values = {'mode': self.mode, 'cause': cause, 'captured': 'false', **self.telemetry(out)}
-        status.values = [KeyValue(key=key, value=value) for key, value in values.items()]
-        arr.status = [status]
-        return arr
+        return (Status(OK, NODE, self.mode, NODE, tuple(values.items())),)

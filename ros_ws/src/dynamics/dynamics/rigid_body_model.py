@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from acds_common import units
+from acds_common.inertia import InertiaError, inertia_tensor
 
 from dynamics.environment import (
     DynamicsError,
@@ -41,32 +42,6 @@ HEAO_A_INERTIA_SLUG_FT2: dict[str, float] = {
 #: Table 4-1 (seed 002), HEAO-B moments and products of inertia, slug-ft².
 HEAO_B_INERTIA_SLUG_FT2: dict[str, float] = {
     "ixx": 1520.0, "iyy": 7970.0, "izz": 7920.0, "ixy": 47.0, "ixz": 359.0, "iyz": 4.0}
-
-
-def inertia_tensor(ixx: float, iyy: float, izz: float, ixy: float, ixz: float, iyz: float) -> np.ndarray:
-    """Inertia tensor from moments and products of inertia (any consistent unit; spec §3, Table 4-1).
-
-    Sign convention (the seed's Table 4-1 lists products without stating one): products of inertia
-    are the integrals I_xy = ∫ x y dm etc., so the tensor is
-    [[Ixx, −Ixy, −Ixz], [−Ixy, Iyy, −Iyz], [−Ixz, −Iyz, Izz]].
-    Raises DynamicsError unless the tensor is finite, positive definite and its principal moments
-    satisfy the triangle inequalities (a physical body).
-    """
-    vals = {"ixx": ixx, "iyy": iyy, "izz": izz, "ixy": ixy, "ixz": ixz, "iyz": iyz}
-    for name, v in vals.items():
-        finite_float(name, v)
-    tensor = np.array([[ixx, -ixy, -ixz], [-ixy, iyy, -iyz], [-ixz, -iyz, izz]], dtype=float)
-    principal = np.linalg.eigvalsh(tensor)
-    if principal[0] <= 0.0:
-        raise DynamicsError(
-            f"inertia tensor is not positive definite (principal moments {principal.tolist()}): "
-            "check the products of inertia and their sign convention")
-    tol = 1e-9 * principal[2]
-    if principal[0] + principal[1] < principal[2] - tol:
-        raise DynamicsError(
-            f"principal moments {principal.tolist()} violate the triangle inequality I1 + I2 >= I3: "
-            "no physical body has this inertia")
-    return tensor
 
 
 def heao_inertia_kg_m2(table: dict[str, float]) -> np.ndarray:
@@ -205,8 +180,11 @@ class RigidBodyModel:
         if inertia.shape != (3, 3) or not np.allclose(inertia, inertia.T, rtol=0.0, atol=1e-12 * abs(
                 inertia).max()):
             raise DynamicsError("inertia_kg_m2 must be a symmetric 3x3 matrix (use inertia_tensor)")
-        inertia_tensor(inertia[0, 0], inertia[1, 1], inertia[2, 2], -inertia[0, 1], -inertia[0, 2],
-                       -inertia[1, 2])
+        try:
+            inertia_tensor(inertia[0, 0], inertia[1, 1], inertia[2, 2], -inertia[0, 1], -inertia[0, 2],
+                           -inertia[1, 2])
+        except InertiaError as exc:
+            raise DynamicsError(str(exc)) from None
         if int(substeps) != substeps or substeps < 1:
             raise DynamicsError(f"substeps must be a positive integer, got {substeps!r}")
         q0 = np.asarray(q0_body_to_eci, dtype=float)

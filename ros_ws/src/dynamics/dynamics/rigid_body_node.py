@@ -1,123 +1,16 @@
-"""rigid_body node: the time owner; integrates the spacecraft and publishes the truth (spec §2, §3).
+"""rigid_body node: the time owner: rigid body, orbit and environment (spec §2).
 
-Step k: publish truth(t_k) and ``/clock``; wait for the actuator outputs of step k
-(achieved dipole from em_driver, wheel momentum and torque from reaction_wheels;
-absent nodes mean zero) and the step's ``mode``, then integrate t_k → t_k+1. The run
-ends after step k when the total step count is reached or when the ``mode`` of step k
-carries ``run_complete: true`` (e.g. stop at acquisition capture). A non-finite actuator
-input fails the run naming the topic and the step.
+ROS plumbing only: :class:`acds_common.lockstep.LockstepNode` hosts the pure stepper
+:class:`dynamics.rigid_body_step.RigidBodyStep` with the ports :mod:`acds_common.graph` declares for this node.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from acds_common.lockstep import run_node
 
-import numpy as np
-from acds_common import topics
-from acds_common.lockstep import Input, LockstepNode, run_node
-from acds_common.messages import magnetic_field, vec, vector3_stamped
-from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import Vector3Stamped
-from nav_msgs.msg import Odometry
-from sensor_msgs.msg import Imu, MagneticField
-
-from dynamics.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
-from dynamics.rigid_body_model import RigidBodyModel, Truth, inertia_tensor
-
-
-def run_complete(mode: DiagnosticArray | None) -> bool:
-    """Whether the step's ``mode`` message asks to end the run (key ``run_complete`` = 'true')."""
-    return mode is not None and any(
-        kv.key == 'run_complete' and kv.value == 'true' for status in mode.status for kv in status.values)
-
-
-class RigidBodyNode(LockstepNode):
-    """Spacecraft rigid body in its orbit and environment; owner of sim time."""
-
-    def __init__(self) -> None:
-        super().__init__('rigid_body')
-        sc = self.section_params('spacecraft')
-        orbit = self.section_params('orbit')
-        earth = self.section_params('earth')
-        sun = self.section_params('sun')
-        dyn = self.section_params('dynamics')
-        inertia = inertia_tensor(*sc['inertia']) * sc['inertia_scale']
-        self.model = RigidBodyModel(
-            inertia,
-            Orbit(OrbitConfig(
-                kind=orbit['kind'], inclination_rad=orbit['inclination'], raan_rad=orbit['raan'],
-                altitude_m=orbit['altitude'], arg_latitude0_rad=orbit['arg_latitude0'],
-                perigee_altitude_m=orbit['perigee_altitude'], apogee_radius_m=orbit['apogee_radius'],
-                arg_perigee_rad=orbit['arg_perigee'], mean_anomaly0_rad=orbit['mean_anomaly0'])),
-            TiltedDipoleField(EarthFieldConfig(
-                dipole_moment_am2=earth['dipole_moment'], tilt_rad=earth['dipole_tilt'],
-                dipole_longitude_rad=earth['dipole_longitude'], greenwich_angle0_rad=earth['greenwich_angle0'])),
-            Sun(SunConfig(right_ascension_rad=sun['right_ascension'], declination_rad=sun['declination'],
-                          eclipse=sun['eclipse'])),
-            gravity_gradient=dyn['gravity_gradient'], substeps=dyn['substeps'],
-            q0_body_to_eci=sc['initial_quaternion_xyzw'], omega0_body_rad_s=sc['initial_rates'])
-        for key, msg_type, topic in (
-                ('odometry', Odometry, topics.TRUTH_ODOMETRY), ('b_body', MagneticField, topics.TRUTH_B_BODY),
-                ('sun_cosines', Vector3Stamped, topics.TRUTH_SUN_COSINES),
-                ('torque_mag', Vector3Stamped, topics.TRUTH_TORQUE_MAG),
-                ('torque_gg', Vector3Stamped, topics.TRUTH_TORQUE_GG),
-                ('gyro', Imu, topics.GYRO), ('sun_sensor', Vector3Stamped, topics.SUN_SENSOR)):
-            self.add_output(key, msg_type, topic)
-        self.add_stage('integrate', [
-            Input('dipole', topics.DIPOLE_AVG, Vector3Stamped, 'em_driver'),
-            Input('wheel_h', topics.WHEEL_MOMENTUM, Vector3Stamped, 'reaction_wheels'),
-            Input('wheel_hdot', topics.WHEEL_TORQUE, Vector3Stamped, 'reaction_wheels'),
-            Input('mode', topics.MODE, DiagnosticArray, 'ascs_mode_manager'),
-        ], self.integrate)
-        self._wheel_h = np.zeros(3)
-
-    def on_start(self) -> None:
-        """Publish the truth of step 0 and start the clock."""
-        self.publish_truth(0, self.model.truth(self._wheel_h))
-        self.publish_clock(0)
-
-    def integrate(self, k: int, _t: float, inp: dict[str, Any]) -> None:
-        """All actuator outputs of step k are in: integrate to t_k+1 and publish it."""
-        if k >= self.total_steps or run_complete(inp['mode']):
-            self.finish()
-            return
-        h, hdot, dipole = vec(inp['wheel_h']), vec(inp['wheel_hdot']), vec(inp['dipole'])
-        for topic, value in ((topics.WHEEL_MOMENTUM, h), (topics.WHEEL_TORQUE, hdot), (topics.DIPOLE_AVG, dipole)):
-            if not np.all(np.isfinite(value)):
-                self.fail(f'non-finite {self.resolve_topic_name(topic)} at step {k}: {value.tolist()}; '
-                          'the physics cannot go on')
-                return
-        self.model.advance(self.control_period_s, dipole, h, hdot)
-        self._wheel_h = h + hdot * self.control_period_s
-        self.publish_truth(k + 1, self.model.truth(self._wheel_h))
-        self.publish_clock(k + 1)
-
-    def publish_truth(self, k: int, truth: Truth) -> None:
-        """Truth and ideal sensors of step k (spec §3 "Sensors in the study are ideal")."""
-        odom = Odometry()
-        odom.header.frame_id, odom.child_frame_id = 'eci', 'body'
-        p, q = odom.pose.pose.position, odom.pose.pose.orientation
-        p.x, p.y, p.z = (float(x) for x in truth.r_eci_m)
-        q.x, q.y, q.z, q.w = (float(x) for x in truth.q_body_to_eci)
-        lin, ang = odom.twist.twist.linear, odom.twist.twist.angular
-        lin.x, lin.y, lin.z = (float(x) for x in truth.v_eci_m_s)
-        ang.x, ang.y, ang.z = (float(x) for x in truth.omega_body_rad_s)
-        self.publish('odometry', odom, k)
-        self.publish('b_body', magnetic_field(truth.b_body_t), k)
-        self.publish('sun_cosines', vector3_stamped(truth.sun_direction_cosines, 'sun_frame'), k)
-        self.publish('torque_mag', vector3_stamped(truth.torque_magnetic_body_nm), k)
-        self.publish('torque_gg', vector3_stamped(truth.torque_gravity_gradient_body_nm), k)
-        imu = Imu()
-        imu.header.frame_id = 'body'
-        imu.orientation_covariance[0] = -1.0  # no orientation from rate gyros
-        imu.linear_acceleration_covariance[0] = -1.0
-        w = imu.angular_velocity
-        w.x, w.y, w.z = (float(x) for x in truth.omega_body_rad_s)
-        self.publish('gyro', imu, k)
-        sun = truth.sun_body_unit if truth.sun_present else np.zeros(3)
-        self.publish('sun_sensor', vector3_stamped(sun), k)
+from dynamics.rigid_body_step import RigidBodyStep
 
 
 def main(args: list[str] | None = None) -> int:
     """Console-script entry point ``rigid_body``."""
-    return run_node('rigid_body', RigidBodyNode, args)
+    return run_node(RigidBodyStep, args)

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 from acds_common import units
+from acds_common.inertia import InertiaError
 from dynamics.environment import (
     DynamicsError,
     EarthFieldConfig,
@@ -67,11 +68,11 @@ def test_inertia_tensor_sign_convention_and_table_4_1_values() -> None:
 
 
 def test_inertia_tensor_rejects_unphysical_values() -> None:
-    with pytest.raises(DynamicsError, match="positive definite"):
+    with pytest.raises(InertiaError, match="positive definite"):
         inertia_tensor(100.0, 100.0, 100.0, 200.0, 0.0, 0.0)
-    with pytest.raises(DynamicsError, match="triangle"):
+    with pytest.raises(InertiaError, match="triangle"):
         inertia_tensor(100.0, 100.0, 300.0, 0.0, 0.0, 0.0)
-    with pytest.raises(DynamicsError, match="finite"):
+    with pytest.raises(InertiaError, match="finite"):
         inertia_tensor(float("nan"), 100.0, 100.0, 0.0, 0.0, 0.0)
 
 

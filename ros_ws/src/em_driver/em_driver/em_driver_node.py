@@ -1,117 +1,16 @@
-"""em_driver node: three redundant electromagnet drives, one control period per step (spec §6).
+"""em_driver node: electromagnets and their bridge-switch drivers (spec §2).
 
-Step k: the moment command of step k (``controller/moment_command``, lag 0) from the node
-named by ``em_driver_command_source`` (acds_controller for HEAO, ascs_mode_manager for
-SSS) — or, when that node is not in the graph, the fixed ``em_driver.bench_command`` —
-and the ``mode`` array of step k (lag 0) whose ``command/em_driver`` entries
-(``eea_select x B`` …) are applied first. The scenario failure (``em_driver.failure``)
-is injected at the first step with t_k ≥ failure_time. The coils are driven over
-[t_k, t_k+1]; published: the step-average achieved dipole (what rigid_body applies),
-the dipole and coil current at t_k+1, e_ft, and ``diagnostics`` (duty, switch count,
-power, per-axis alarm, active units, events) every ``telemetry_every`` steps and at
-every event, alarm change or rejected command. A NaN/inf command component is rejected
-with a WARN diagnostic and that axis holds its last valid command; the excess-coil-
-current / mismatch alarm is reported at level ERROR.
+ROS plumbing only: :class:`acds_common.lockstep.LockstepNode` hosts the pure stepper
+:class:`em_driver.em_driver_step.EmDriverStep` with the ports :mod:`acds_common.graph` declares for this node.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from acds_common.lockstep import run_node
 
-import numpy as np
-from acds_common import topics
-from acds_common.lockstep import ConfigError, Input, LockstepNode, run_node
-from acds_common.messages import diagnostic, mode_status, vec, vector3_stamped
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import Vector3Stamped
-
-from em_driver.bridge_switch import EmDriverError
-from em_driver.configuration import build_assembly, parse_command
-from em_driver.drive_assembly import AssemblyResult
-
-NODE = 'em_driver'
-
-
-class EmDriverNode(LockstepNode):
-    """Electromagnets with bridge-switch (HEAO) or constant-level (SSS) drives, active/standby."""
-
-    def __init__(self) -> None:
-        super().__init__(NODE)
-        self.cfg = self.section_params('em_driver')
-        try:
-            self.assembly = build_assembly(self.cfg)
-        except EmDriverError as exc:
-            raise ConfigError(f'{NODE}: {exc}') from None
-        self.source = self.cfg['command_source']
-        self._failure_pending = self.cfg['failure'] != 'none'
-        self._alarms = np.zeros(3, dtype=bool)
-        for key, topic in (('dipole_avg', topics.DIPOLE_AVG), ('dipole_end', topics.DIPOLE_END),
-                           ('coil_current', topics.COIL_CURRENT), ('e_ft', topics.E_FT)):
-            self.add_output(key, Vector3Stamped, topic)
-        self.add_output('diagnostics', DiagnosticArray, topics.DIAGNOSTICS)
-        self.add_stage('drive', [
-            Input('command', topics.MOMENT_COMMAND, Vector3Stamped, self.source),
-            Input('mode', topics.MODE, DiagnosticArray, 'ascs_mode_manager'),
-        ], self.drive)
-
-    def drive(self, k: int, t_s: float, inp: dict[str, Any]) -> None:
-        """Apply commands and failures due at step k, drive the coils for one control period."""
-        events: list[str] = []
-        rejected: list[str] = []
-        for text in mode_status(inp['mode'], NODE)[1]:
-            try:
-                events.append(parse_command(text).apply(self.assembly))
-            except EmDriverError as exc:
-                rejected.append(f'rejected command {text!r}: {exc}')
-        if self._failure_pending and t_s >= self.cfg['failure_time']:
-            self._failure_pending = False
-            axis, unit, kind = self.cfg['failure_axis'], self.cfg['failure_unit'], self.cfg['failure']
-            self.assembly.inject_failure(axis, unit, kind)
-            events.append(f'scenario failure at t={t_s:g} s: axis {"xyz"[axis]} unit {unit} {kind}')
-        command = vec(inp['command']) if self.present(self.source) else np.array(self.cfg['bench_command'])
-        result = self.assembly.step(command, self.control_period_s)
-        events.extend(result.events)
-        rejected.extend(result.diagnostics)
-        self.publish('dipole_avg', vector3_stamped(result.avg_dipole_am2), k)
-        self.publish('dipole_end', vector3_stamped(result.end_dipole_am2), k)
-        self.publish('coil_current', vector3_stamped(result.coil_current_a), k)
-        self.publish('e_ft', vector3_stamped(result.e_ft_v), k)
-        alarm_changed = bool(np.any(result.alarms != self._alarms))
-        self._alarms = result.alarms.copy()
-        if events or rejected or alarm_changed or k % self.cfg['telemetry_every'] == 0:
-            self.publish('diagnostics', self.telemetry(result, command, events, rejected), k)
-        for line in rejected:
-            self.get_logger().warning(f't={t_s:g} s: {line}')
-        for line in events:
-            self.get_logger().info(f't={t_s:g} s: {line}')
-
-    def telemetry(self, r: AssemblyResult, command: np.ndarray, events: list[str],
-                  rejected: list[str]) -> DiagnosticArray:
-        """Table 4-11 driver telemetry: coil current, current command, alarms, active units; plus duty/power."""
-        level, message = DiagnosticStatus.OK, 'ok'
-        if rejected:
-            level, message = DiagnosticStatus.WARN, rejected[0]
-        if np.any(r.alarms):
-            axes = ', '.join(a for a, on in zip('xyz', r.alarms, strict=True) if on)
-            level, message = DiagnosticStatus.ERROR, f'excess coil current / mismatch alarm on axis {axes}'
-        values: dict[str, object] = {}
-        for i, a in enumerate('xyz'):
-            values.update({
-                f'command_am2_{a}': f'{command[i]:.6g}',
-                f'commanded_current_a_{a}': f'{r.commanded_current_a[i]:.6g}',
-                f'coil_current_a_{a}': f'{r.coil_current_a[i]:.6g}',
-                f'e_ft_v_{a}': f'{r.e_ft_v[i]:.6g}',
-                f'duty_{a}': f'{r.duty[i]:.4f}',
-                f'switch_count_{a}': int(r.switch_count[i]),
-                f'power_w_{a}': f'{r.power_w[i]:.4g}',
-                f'alarm_{a}': 'true' if r.alarms[i] else 'false',
-                f'active_unit_{a}': r.active_units[i],
-            })
-        values.update({f'event_{i}': e for i, e in enumerate(events)})
-        values.update({f'rejected_{i}': e for i, e in enumerate(rejected)})
-        return diagnostic(NODE, values, message, level)
+from em_driver.em_driver_step import EmDriverStep
 
 
 def main(args: list[str] | None = None) -> int:
     """Console-script entry point ``em_driver``."""
-    return run_node(NODE, EmDriverNode, args)
+    return run_node(EmDriverStep, args)

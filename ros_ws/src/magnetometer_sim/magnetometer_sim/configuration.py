@@ -22,7 +22,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
+from acds_common.coupling import CouplingError, coupling_from_section
 from acds_common.units import GAUSS_T
 
 from magnetometer_sim.fluxgate import (
@@ -31,41 +31,22 @@ from magnetometer_sim.fluxgate import (
     FluxgateAxisParams,
     Magnetometer,
     MagnetometerError,
-    coupling_acquisition,
-    coupling_cruise,
 )
 
-__all__ = ['MagnetometerCommand', 'build_magnetometer', 'coupling_from_section', 'parse_command']
+__all__ = ['MagnetometerCommand', 'build_magnetometer', 'parse_command']
 
 _AXES = {'x': 0, 'y': 1, 'z': 2, 'all': None}
-
-
-def coupling_from_section(section: dict[str, Any]) -> np.ndarray:
-    """Δ (3×3, T/(A·m²)) for the section's ``coupling_preset``.
-
-    none: zeros. cruise: 8.75e-6 G/(A·m²) on the diagonal (seed 002 §4.3.2).
-    acquisition: 5 % of the 0.5 G maximum field for a 2000 A·m² magnet on the other two
-    axes, signs from ``coupling_signs`` (row-major, sensor axis i, magnet j; §4.3.1).
-    custom: ``coupling`` (row-major 3×3, T/(A·m²)).
-    """
-    preset = section['coupling_preset']
-    if preset == 'none':
-        return np.zeros((3, 3))
-    if preset == 'cruise':
-        return coupling_cruise()
-    if preset == 'acquisition':
-        return coupling_acquisition(np.asarray(section['coupling_signs'], dtype=float).reshape(3, 3))
-    if preset == 'custom':
-        return np.asarray(section['coupling'], dtype=float).reshape(3, 3)
-    raise MagnetometerError(f'unknown coupling_preset {preset!r}; expected none, cruise, acquisition or custom')
 
 
 def build_magnetometer(section: dict[str, Any], seed: int) -> Magnetometer:
     """The two-assembly magnetometer the section describes (faults are injected later, at fault_time)."""
     params = FluxgateAxisParams(noise_std_g=float(section['noise_std']) / GAUSS_T,
                                 accuracy_error_enabled=bool(section['accuracy_error']))
-    mag = Magnetometer(params, seed=int(seed), residual_field_t=section['residual_field'],
-                       coupling_t_per_am2=coupling_from_section(section))
+    try:
+        delta = coupling_from_section(section)
+    except CouplingError as exc:
+        raise MagnetometerError(str(exc)) from None
+    mag = Magnetometer(params, seed=int(seed), residual_field_t=section['residual_field'], coupling_t_per_am2=delta)
     mag.select_unit(section['active_unit'])
     return mag
 

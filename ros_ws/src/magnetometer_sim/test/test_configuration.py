@@ -6,11 +6,11 @@ from typing import Any
 
 import numpy as np
 import pytest
+from acds_common.coupling import coupling_from_section
 from acds_common.scenario import SCHEMA
 from magnetometer_sim.configuration import (
     MagnetometerCommand,
     build_magnetometer,
-    coupling_from_section,
     parse_command,
 )
 from magnetometer_sim.fluxgate import MagnetometerError

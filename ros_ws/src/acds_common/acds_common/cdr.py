@@ -1,0 +1,269 @@
+"""Serialized CDR of the graph's standard messages ↔ plain Python values (spec §2; no rclpy).
+
+Every lockstep node publishes and subscribes serialized messages (rclpy ``raw=True``,
+``publish(bytes)``) and converts them here, so the per-process graph and the direct
+engine (one process, no DDS) meet the cores with the *same* values, and the bytes a node
+publishes are exactly the bytes the direct engine records. Values are plain floats,
+tuples and strings: cheaper than rclpy message objects and exact (CDR carries IEEE
+doubles; decode(encode(v)) == v).
+
+Layout: XCDR1 little endian (encapsulation ``00 01 00 00``), primitives aligned to their
+size relative to the start of the payload, strings as uint32 length (with the NUL) +
+bytes + NUL, sequences as uint32 count + elements. Padding bytes are written as zeros,
+so equal values always give equal bytes (rclpy's own serializer leaves whatever was in
+memory in the padding). A header's ``frame_id`` is fixed per topic (:class:`Codec`).
+
+Value of each message type (SI, the frame names of :mod:`acds_common.frames`):
+
+* ``rosgraph_msgs/msg/Clock``: nothing (the stamp is the value).
+* ``std_msgs/msg/String``: the text.
+* ``geometry_msgs/msg/Vector3Stamped``: ``(x, y, z)``.
+* ``sensor_msgs/msg/MagneticField``: ``((bx, by, bz), covariance_9)`` in T and T².
+* ``sensor_msgs/msg/Imu``: ``((wx, wy, wz), covariance_9)``: rate gyros only (orientation and
+  linear acceleration marked "not provided", covariance[0] = −1, REP-145).
+* ``nav_msgs/msg/Odometry``: :class:`OdometryValue` (pose/twist covariances zero: truth).
+* ``diagnostic_msgs/msg/DiagnosticArray``: a tuple of :class:`Status`.
+"""
+
+from __future__ import annotations
+
+import struct
+from typing import Any, NamedTuple
+
+ENCAPSULATION = b'\x00\x01\x00\x00'
+_STAMP = struct.Struct('<iI')
+_U32 = struct.Struct('<I')
+_V3 = struct.Struct('<3d')
+_D9 = struct.Struct('<9d')
+_D36_ZERO = bytes(36 * 8)
+_NOT_PROVIDED_9 = struct.pack('<9d', -1.0, *([0.0] * 8))
+
+
+class CdrError(ValueError):
+    """A serialized message does not decode as its declared type (names the type and the reason)."""
+
+
+class Status(NamedTuple):
+    """One ``diagnostic_msgs/DiagnosticStatus``: level 0 OK, 1 WARN, 2 ERROR, 3 STALE."""
+
+    level: int
+    name: str
+    message: str
+    hardware_id: str
+    values: tuple[tuple[str, str], ...]
+
+
+class OdometryValue(NamedTuple):
+    """``nav_msgs/Odometry`` of the truth: ECI position (m) and velocity (m/s), q body→ECI (x, y, z, w), ω body (rad/s)."""
+
+    position: tuple[float, float, float]
+    orientation: tuple[float, float, float, float]
+    velocity: tuple[float, float, float]
+    angular: tuple[float, float, float]
+
+
+def stamp_ns(data: bytes) -> int:
+    """The stamp of a message whose first field is a Time (``header.stamp`` or ``clock``), ns."""
+    sec, nsec = _STAMP.unpack_from(data, 4)
+    return sec * 1_000_000_000 + nsec
+
+
+def _string(text: str) -> bytes:
+    raw = text.encode() + b'\0'
+    return _U32.pack(len(raw)) + raw
+
+
+def _pad(offset: int, align: int) -> bytes:
+    return bytes(-offset % align)
+
+
+def _header(frame_id: str) -> bytes:
+    """The constant part of a header after its stamp (frame_id) — payload offset 8 onwards."""
+    return _string(frame_id)
+
+
+class _Reader:
+    """Sequential CDR reader over one payload (offsets relative to the payload start)."""
+
+    __slots__ = ('data', 'pos')
+
+    def __init__(self, data: bytes, pos: int) -> None:
+        self.data = data
+        self.pos = pos
+
+    def align(self, n: int) -> None:
+        self.pos += -(self.pos - 4) % n
+
+    def u32(self) -> int:
+        self.align(4)
+        (v,) = _U32.unpack_from(self.data, self.pos)
+        self.pos += 4
+        return v
+
+    def string(self) -> str:
+        n = self.u32()
+        raw = self.data[self.pos:self.pos + n - 1]
+        self.pos += n
+        return raw.decode()
+
+    def doubles(self, s: struct.Struct) -> tuple[float, ...]:
+        self.align(8)
+        v = s.unpack_from(self.data, self.pos)
+        self.pos += s.size
+        return v
+
+    def octet(self) -> int:
+        v = self.data[self.pos]
+        self.pos += 1
+        return v
+
+
+class Codec:
+    """Encoder/decoder of one topic: its message type and, for stamped types, its fixed frame_id.
+
+    ``encode(t_ns, value) -> bytes`` and ``decode(data) -> (t_ns, value)``.
+    """
+
+    def __init__(self, msg_type: str, frame_id: str = '', child_frame_id: str = '') -> None:
+        if msg_type not in _TYPES:
+            raise CdrError(f'no codec for message type {msg_type!r} (known: {", ".join(sorted(_TYPES))})')
+        self.msg_type = msg_type
+        self.frame_id = frame_id
+        self.child_frame_id = child_frame_id
+        self.stamped = msg_type != 'std_msgs/msg/String'
+        self._head = _header(frame_id)
+        # Offset (in the payload) where the body after the header starts, before its alignment.
+        self._body_offset = 8 + len(self._head)
+        self.encode, self.decode = _TYPES[msg_type](self)
+
+    def __repr__(self) -> str:
+        return f'Codec({self.msg_type!r}, frame_id={self.frame_id!r})'
+
+
+def _clock(c: Codec) -> tuple[Any, Any]:
+    def encode(t_ns: int, _value: Any = None) -> bytes:
+        return ENCAPSULATION + _STAMP.pack(*divmod(t_ns, 1_000_000_000))
+
+    def decode(data: bytes) -> tuple[int, None]:
+        return stamp_ns(data), None
+    return encode, decode
+
+
+def _text(c: Codec) -> tuple[Any, Any]:
+    def encode(_t_ns: int, value: str) -> bytes:
+        return ENCAPSULATION + _string(value)
+
+    def decode(data: bytes) -> tuple[int, str]:
+        return 0, _Reader(data, 4).string()
+    return encode, decode
+
+
+def _vector3_stamped(c: Codec) -> tuple[Any, Any]:
+    head = c._head + _pad(c._body_offset, 8)
+
+    def encode(t_ns: int, value: Any) -> bytes:
+        return ENCAPSULATION + _STAMP.pack(*divmod(t_ns, 1_000_000_000)) + head + _V3.pack(*value)
+
+    def decode(data: bytes) -> tuple[int, tuple[float, float, float]]:
+        r = _Reader(data, 12)
+        r.string()
+        return stamp_ns(data), r.doubles(_V3)  # type: ignore[return-value]
+    return encode, decode
+
+
+def _magnetic_field(c: Codec) -> tuple[Any, Any]:
+    head = c._head + _pad(c._body_offset, 8)
+
+    def encode(t_ns: int, value: Any) -> bytes:
+        b, cov = value
+        return ENCAPSULATION + _STAMP.pack(*divmod(t_ns, 1_000_000_000)) + head + _V3.pack(*b) + _D9.pack(*cov)
+
+    def decode(data: bytes) -> tuple[int, Any]:
+        r = _Reader(data, 12)
+        r.string()
+        return stamp_ns(data), (r.doubles(_V3), r.doubles(_D9))
+    return encode, decode
+
+
+_QUAT = struct.Struct('<4d')
+_IDENTITY_ORIENTATION = _QUAT.pack(0.0, 0.0, 0.0, 1.0)
+
+
+def _imu(c: Codec) -> tuple[Any, Any]:
+    head = c._head + _pad(c._body_offset, 8)
+    tail = _V3.pack(0.0, 0.0, 0.0) + _NOT_PROVIDED_9
+
+    def encode(t_ns: int, value: Any) -> bytes:
+        w, cov = value
+        return (ENCAPSULATION + _STAMP.pack(*divmod(t_ns, 1_000_000_000)) + head + _IDENTITY_ORIENTATION
+                + _NOT_PROVIDED_9 + _V3.pack(*w) + _D9.pack(*cov) + tail)
+
+    def decode(data: bytes) -> tuple[int, Any]:
+        r = _Reader(data, 12)
+        r.string()
+        r.doubles(_QUAT)
+        r.doubles(_D9)
+        return stamp_ns(data), (r.doubles(_V3), r.doubles(_D9))
+    return encode, decode
+
+
+def _odometry(c: Codec) -> tuple[Any, Any]:
+    head = c._head + _pad(c._body_offset, 4) + _string(c.child_frame_id)
+    head += _pad(8 + len(head), 8)
+    _P = struct.Struct('<3d4d')
+    _T = struct.Struct('<3d3d')
+
+    def encode(t_ns: int, value: OdometryValue) -> bytes:
+        return (ENCAPSULATION + _STAMP.pack(*divmod(t_ns, 1_000_000_000)) + head
+                + _P.pack(*value.position, *value.orientation) + _D36_ZERO
+                + _T.pack(*value.velocity, *value.angular) + _D36_ZERO)
+
+    def decode(data: bytes) -> tuple[int, OdometryValue]:
+        r = _Reader(data, 12)
+        r.string()
+        r.string()
+        p = r.doubles(_P)
+        r.pos += 36 * 8
+        t = r.doubles(_T)
+        return stamp_ns(data), OdometryValue(p[:3], p[3:], t[:3], t[3:])  # type: ignore[arg-type]
+    return encode, decode
+
+
+def _diagnostic_array(c: Codec) -> tuple[Any, Any]:
+    head = c._head
+
+    def encode(t_ns: int, value: tuple[Status, ...]) -> bytes:
+        out = bytearray(_STAMP.pack(*divmod(t_ns, 1_000_000_000)) + head)
+        out += _pad(len(out), 4) + _U32.pack(len(value))
+        for st in value:
+            out.append(st.level)
+            for text in (st.name, st.message, st.hardware_id):
+                out += _pad(len(out), 4) + _string(text)
+            out += _pad(len(out), 4) + _U32.pack(len(st.values))
+            for key, text in st.values:
+                out += _pad(len(out), 4) + _string(key)
+                out += _pad(len(out), 4) + _string(text)
+        return ENCAPSULATION + bytes(out)
+
+    def decode(data: bytes) -> tuple[int, tuple[Status, ...]]:
+        r = _Reader(data, 12)
+        r.string()
+        statuses = []
+        for _ in range(r.u32()):
+            level = r.octet()
+            name, message, hardware_id = r.string(), r.string(), r.string()
+            values = tuple((r.string(), r.string()) for _ in range(r.u32()))
+            statuses.append(Status(level, name, message, hardware_id, values))
+        return stamp_ns(data), tuple(statuses)
+    return encode, decode
+
+
+_TYPES = {
+    'rosgraph_msgs/msg/Clock': _clock,
+    'std_msgs/msg/String': _text,
+    'geometry_msgs/msg/Vector3Stamped': _vector3_stamped,
+    'sensor_msgs/msg/MagneticField': _magnetic_field,
+    'sensor_msgs/msg/Imu': _imu,
+    'nav_msgs/msg/Odometry': _odometry,
+    'diagnostic_msgs/msg/DiagnosticArray': _diagnostic_array,
+}

@@ -1,0 +1,163 @@
+"""Node parameters: one declaration per parameter (type, default, range, unit, meaning), no rclpy.
+
+Every node's parameters are the lockstep ones (:data:`LOCKSTEP`, plus :data:`TIME_OWNER_ONLY`
+for ``rigid_body``) and the fields of its scenario sections
+(:data:`acds_common.scenario.NODE_SECTIONS`, named ``<section>_<field>_<si unit>``). The ROS
+host declares each as a typed, described, range-checked, read-only ROS parameter; the direct
+engine passes the same values; both go through :func:`normalize`, so a node core sees the same
+Python values in either engine.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from acds_common.graph import MONITOR_NAME, TIME_OWNER
+from acds_common.scenario import NODE_SECTIONS, REQUIRED, SCHEMA, Scenario
+
+
+class ConfigError(ValueError):
+    """A node's parameters are wrong (missing, unknown, out of range, inconsistent)."""
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One node parameter. ``kind``: float | int | bool | str | floats | strs. ``required``: no default."""
+
+    name: str
+    kind: str
+    default: Any
+    description: str
+    unit: str = ''
+    lo: float | None = None
+    hi: float | None = None
+    choices: tuple[str, ...] = ()
+    length: int | None = None
+
+    @property
+    def required(self) -> bool:
+        """The launcher always supplies it; a node started without it stops with 'missing parameter'."""
+        return self.default is REQUIRED
+
+
+#: Parameters every lockstep node takes.
+LOCKSTEP: tuple[ParamSpec, ...] = (
+    ParamSpec('control_period_s', 'float', 0.5, 'lockstep control period Δt (the DPA cycle)', 's', 1e-4, 60.0),
+    ParamSpec('graph_nodes', 'strs', REQUIRED, 'names of the nodes present in this graph (inputs from others '
+              'are absent)'),
+    ParamSpec('input_timeout_s', 'float', 30.0, 'wall seconds a stage may wait for an input before the run '
+              'fails', 's', 0.1, 3600.0),
+    ParamSpec('seed', 'int', 1, 'scenario random seed (deterministic noise streams)', '', 0, 2**31 - 1),
+)
+#: Parameters of the time owner only.
+TIME_OWNER_ONLY: tuple[ParamSpec, ...] = (
+    ParamSpec('total_steps', 'int', REQUIRED, 'number of control steps to run', '', 1, 10**9),
+    ParamSpec('real_time_factor', 'float', 0.0, 'pace sim time at this multiple of wall time (0: as fast as '
+              'possible)', '', 0.0, 1e6),
+)
+
+
+def node_param_specs(node: str) -> list[ParamSpec]:
+    """Every parameter of ``node``: lockstep ones, then its scenario sections' fields."""
+    specs = list(LOCKSTEP) + (list(TIME_OWNER_ONLY) if node == TIME_OWNER else [])
+    for section in NODE_SECTIONS[node]:
+        for name, f in SCHEMA[section].items():
+            bounded = f.kind not in ('str', 'bool', 'strs')
+            specs.append(ParamSpec(
+                f.param_name(section, name), f.kind, f.default, f.doc, f.si,
+                f.lo if bounded else None, f.hi if bounded else None,
+                f.choices if f.kind in ('str', 'strs') else (), f.length))
+    return specs
+
+
+def _check(spec: ParamSpec, node: str, value: Any) -> Any:
+    where = f'{node}: parameter {spec.name}'
+    if spec.kind in ('floats', 'strs'):
+        if not isinstance(value, (list, tuple)):
+            raise ConfigError(f'{where} must be a list, got {value!r}')
+        items = list(value)
+        if spec.length is not None and len(items) not in (0, spec.length):
+            raise ConfigError(f'{where} must have {spec.length} values, got {len(items)}')
+        scalar_kind = 'float' if spec.kind == 'floats' else 'str'
+        return [_scalar(spec, scalar_kind, where, v) for v in items]
+    return _scalar(spec, spec.kind, where, value)
+
+
+def _scalar(spec: ParamSpec, kind: str, where: str, value: Any) -> Any:
+    if kind == 'float':
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(f'{where} must be a number, got {value!r}')
+        value = float(value)
+    elif kind == 'int':
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(f'{where} must be an integer, got {value!r}')
+    elif kind == 'bool':
+        if not isinstance(value, bool):
+            raise ConfigError(f'{where} must be true or false, got {value!r}')
+        return value
+    else:
+        if not isinstance(value, str):
+            raise ConfigError(f'{where} must be a string, got {value!r}')
+        if spec.choices and value not in spec.choices:
+            raise ConfigError(f'{where}={value!r} not one of {list(spec.choices)}')
+        return value
+    if not math.isfinite(value):
+        raise ConfigError(f'{where} is not finite: {value}')
+    if (spec.lo is not None and value < spec.lo) or (spec.hi is not None and value > spec.hi):
+        raise ConfigError(f'{where}={value} outside [{spec.lo}, {spec.hi}]{" " + spec.unit if spec.unit else ""}')
+    return value
+
+
+def normalize(node: str, given: dict[str, Any]) -> dict[str, Any]:
+    """The node's parameter values: defaults filled in, types and ranges checked, unknown names refused.
+
+    ``given`` maps parameter names to values (a params file, or the scenario's
+    :func:`~acds_common.scenario.Scenario.node_parameters`); a ROS host passes ``None`` for a
+    parameter it did not receive.
+    """
+    specs = node_param_specs(node)
+    known = {s.name for s in specs}
+    unknown = sorted(set(given) - known - {'use_sim_time'})
+    if unknown:
+        raise ConfigError(f'{node}: unknown parameter(s) {", ".join(unknown)} (declared: {", ".join(sorted(known))})')
+    out: dict[str, Any] = {}
+    for spec in specs:
+        value = given.get(spec.name)
+        if value is None:
+            if spec.required:
+                raise ConfigError(f'{node}: missing parameter {spec.name} ({spec.description}); start the node '
+                                  f'with --ros-args --params-file FILE (./scripts/acds params SCENARIO)')
+            value = spec.default
+        out[spec.name] = _check(spec, node, value)
+    return out
+
+
+def section(params: dict[str, Any], name: str) -> dict[str, Any]:
+    """{field: value} of scenario section ``name`` from normalized node parameters (SI)."""
+    return {field: params[f.param_name(name, field)] for field, f in SCHEMA[name].items()}
+
+
+def node_parameters(scenario: Scenario, steps: int, rtf: float = 0.0,
+                    overrides: dict[str, dict[str, Any]] | None = None) -> dict[str, dict[str, Any]]:
+    """Every node's parameters for a run of ``steps`` steps: the lockstep ones plus its scenario sections.
+
+    What the launcher writes to ``params.yaml`` and the direct engine passes its steppers. Empty lists
+    are left out (rcl cannot type an empty list: the node uses its default).
+    """
+    nodes = list(scenario.get('', 'nodes'))
+    common = {
+        'control_period_s': scenario.control_period_s,
+        'graph_nodes': [*nodes, MONITOR_NAME],
+        'input_timeout_s': scenario.get('', 'input_timeout'),
+        'seed': scenario.get('', 'seed'),
+    }
+    out: dict[str, dict[str, Any]] = {}
+    for node in nodes:
+        params = {**common, **scenario.node_parameters(node)}
+        if node == TIME_OWNER:
+            params.update(total_steps=steps, real_time_factor=rtf)
+        params.update((overrides or {}).get(node, {}))
+        out[node] = {k: v for k, v in params.items() if v != []}  # rcl cannot type an empty list: node default
+    return out

@@ -1,0 +1,77 @@
+"""The ROS-free logic of a node: a stepper, hosted by a node process or by the direct engine (spec §2).
+
+A stepper is built from its node's normalized parameters (:mod:`acds_common.parameters`)
+and composes its package's pure cores. For every stage the graph declares
+(:mod:`acds_common.graph`) it has a method of that name::
+
+    def integrate(self, k: int, t_s: float, inputs: dict[str, Any]) -> dict[str, Any]
+
+which takes the stage's inputs of step k (values as :mod:`acds_common.cdr` defines them;
+``None`` for an absent source or a lagged input before its first step) and returns the
+outputs it publishes at this step, by output key. The host stamps each with
+t_(k + stamp_offset), encodes and publishes it (node process) or hands it on in memory
+(direct engine): the stepper cannot tell which, so both engines give the same data.
+
+A stepper reports through :meth:`log` (the host prints or logs it) and ends the run by
+setting :attr:`finished`; a failure the run cannot survive raises :class:`StepError`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, ClassVar
+
+from acds_common.parameters import section
+
+#: ``log(level, text)`` with level 'info' | 'warn' | 'error'.
+Log = Callable[[str, str], None]
+
+
+class StepError(RuntimeError):
+    """The step cannot be computed (non-finite physics, impossible actuator values): the run fails with this message."""
+
+
+def _print_log(level: str, text: str) -> None:
+    import sys
+    print(f'[{level}] {text}', file=sys.stderr)
+
+
+class Stepper:
+    """Base of every node's stepper: parameters, the control period, logging, run end."""
+
+    #: Node name (the graph's key for it).
+    node: ClassVar[str] = ''
+
+    def __init__(self, params: dict[str, Any], log: Log | None = None) -> None:
+        self.params = params
+        self.control_period_s: float = params['control_period_s']
+        self.dt_ns = round(self.control_period_s * 1e9)
+        self.graph_nodes: list[str] = list(params['graph_nodes'])
+        self.seed: int = params['seed']
+        self._log = log or _print_log
+        #: Set by the stepper to end the run after the current stage (time owner).
+        self.finished = False
+
+    def section(self, name: str) -> dict[str, Any]:
+        """{field: SI value} of a scenario section this node receives."""
+        return section(self.params, name)
+
+    def present(self, node: str) -> bool:
+        """Whether ``node`` is part of this graph."""
+        return node in self.graph_nodes
+
+    def step_time_s(self, k: int) -> float:
+        """t_k in seconds (exact integer-ns step identity, as the stamps)."""
+        return k * self.dt_ns / 1e9
+
+    def log(self, level: str, text: str) -> None:
+        """Report a line (info, warn, error)."""
+        self._log(level, text)
+
+    def start(self) -> dict[str, Any]:
+        """Outputs of step 0 published before any stage fires (the time owner's initial truth)."""
+        return {}
+
+    def receive_command(self, text: str) -> None:
+        """A live ground command (nodes that declare ``ground_commands`` override this)."""
+        raise NotImplementedError(f'{self.node} takes no ground commands')

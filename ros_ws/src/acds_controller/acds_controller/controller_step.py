@@ -1,0 +1,146 @@
+"""acds_controller stepper: transfer assembly + DPA, one control period per lockstep step (spec §7).
+
+Stage ``dpa`` of step k takes the magnetometer volts and bias volts (k), gyro rates (k), sun
+sensor (k), the ``mode`` of the mode manager (k, with any forwarded ``command/acds_controller``
+law/gain commands, applied before the step is computed), the attitude reference
+``truth/odometry`` (k; the ideal attitude of the cruise modes), the wheel momentum and rate of
+step k−1 (lag 1, so h(t_k) = h_{k−1} + ḣ_{k−1}·Δt exactly) and the coil current of step k−1
+(lag 1, TA telemetry only).
+
+It returns ``moment`` (A·m²) and ``volts`` (wheel drive, V) every step, and DPA + TA telemetry
+on ``diagnostics`` every ``controller.telemetry_every`` steps and at once when something is
+wrong (a refused command, a non-finite input).
+
+Absent sources: no magnetometer → zero sensed field (the magnetic laws command nothing); no
+mode manager → ``mode_1a`` (magnetics-only rate reduction); no wheels → zero wheel momentum.
+A non-finite input is rejected with a diagnostic and the step commands zero moment and zero
+wheel volts.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from acds_common.coupling import coupling_from_section
+from acds_common.inertia import inertia_tensor
+from acds_common.messages import WARN, diagnostic, mode_status, vec, vector3
+from acds_common.stepper import Stepper
+
+from acds_controller.dpa import MODES, Dpa, DpaConfig
+from acds_controller.magnetic_laws import ControllerError
+from acds_controller.transfer_assembly import TransferAssembly
+from acds_controller.wheel_laws import HEAO_A_ACQUISITION, HEAO_B_ACQUISITION, HEAO_B_ACQUISITION_PRELIMINARY
+
+#: Scenario ``controller.wheel_gains`` → Table 4-2 acquisition gain set.
+WHEEL_GAIN_SETS = {'heao_a': HEAO_A_ACQUISITION, 'heao_b': HEAO_B_ACQUISITION,
+                   'heao_b_preliminary': HEAO_B_ACQUISITION_PRELIMINARY}
+#: Excess-coil-current alarm: |I| above this multiple of the current of the maximum moment.
+EXCESS_CURRENT_FACTOR = 1.1
+_ZERO = (0.0, 0.0, 0.0)
+
+
+def build_dpa(sc: dict[str, Any], c: dict[str, Any], mag: dict[str, Any]) -> tuple[TransferAssembly, Dpa]:
+    """Transfer assembly and DPA from the scenario's spacecraft, controller and magnetometer sections (SI).
+
+    The coupling compensation subtracts exactly the Δ the magnetometer is built with
+    (:func:`acds_common.coupling.coupling_from_section`).
+    """
+    ta = TransferAssembly(adc_bits=c['adc_bits'])
+    dpa = Dpa(DpaConfig(
+        inertia_kg_m2=inertia_tensor(*sc['inertia']) * sc['inertia_scale'],
+        acquisition_law=c['acquisition_law'], unloading_law=c['unloading_law'],
+        acquisition_gain_study=c['acquisition_gain_per_s_g2'],
+        bdot_gain_study=c['bdot_gain_ft_lb_s_per_g2'],
+        unloading_gain_mode_1b_study=c['unloading_gain_mode_1b_per_s_g2'],
+        unloading_gain_scan_study=c['unloading_gain_scan_per_s_g2'],
+        unloading_gain_point_study=c['unloading_gain_point_per_s_g2'],
+        max_moment_am2=c['max_moment_am2'],
+        coupling_compensation=c['coupling_compensation'],
+        coupling_delta_t_per_am2=coupling_from_section(mag),
+        wheel_gains_acquisition=WHEEL_GAIN_SETS[c['wheel_gains']],
+        scan_rate_rad_s=c['scan_rate'],
+        target_q_body_to_eci=np.array(c['target_quaternion_xyzw']),
+        lead_time_s=c['lead_time_s']))
+    return ta, dpa
+
+
+def apply_command(dpa: Dpa, text: str) -> str:
+    """Apply a forwarded 'law <slot> <name>' or 'gain <name> <value>'; return what was done.
+
+    Raises :class:`ControllerError` for anything else (the stepper turns it into a diagnostic).
+    """
+    words = text.split()
+    if len(words) == 3 and words[0].lower() == 'law':
+        dpa.set_law(words[1].lower(), words[2].lower())
+        return f'law {words[1]} set to {words[2]}'
+    if len(words) == 3 and words[0].lower() == 'gain':
+        try:
+            value = float(words[2])
+        except ValueError as exc:
+            raise ControllerError(f'gain value {words[2]!r} is not a number') from exc
+        dpa.set_gain(words[1].lower(), value)
+        return f'gain {words[1]} set to {value:g}'
+    raise ControllerError(f'command {text!r} is not "law <slot> <name>" or "gain <name> <value>"')
+
+
+class ControllerStep(Stepper):
+    """Transfer assembly and digital processor of the HEAO ACDS."""
+
+    node = 'acds_controller'
+
+    def __init__(self, params: dict[str, Any], log: Any = None) -> None:
+        super().__init__(params, log)
+        c = self.section('controller')
+        self.telemetry_period = c['telemetry_every']
+        self.ta, self.dpa = build_dpa(self.section('spacecraft'), c, self.section('magnetometer'))
+        self.excess_current_a = EXCESS_CURRENT_FACTOR * c['max_moment_am2'] / self.ta.moment_per_amp_am2_per_a
+
+    def control(self, k: int, _t: float, inp: dict[str, Any]) -> dict[str, Any]:
+        """Stage ``control``: one DPA control period (commands applied first, inputs checked)."""
+        warnings: list[tuple[str, dict[str, str]]] = []
+        mode, commands = mode_status(inp['mode'], self.node)
+        for text in commands:
+            try:
+                self.log('info', f'step {k}: {apply_command(self.dpa, text)}')
+            except ControllerError as exc:
+                warnings.append((f'command refused: {text!r}: {exc}', {'command': text, 'reason': str(exc)}))
+        if mode is None:
+            mode = 'mode_1a'
+        elif mode not in MODES:
+            warnings.append((f'unknown mode {mode!r} from the mode manager: standby', {'mode': mode}))
+            mode = 'standby'
+        try:
+            result = self._dpa_step(k, mode, inp)
+        except ControllerError as exc:
+            warnings.append((f'input rejected, zero commands this step: {exc}', {}))
+            result = {'moment': _ZERO, 'volts': _ZERO}
+        if warnings:
+            for message, _values in warnings:
+                self.log('warn', f'step {k}: {message}')
+            result['diagnostics'] = tuple(s for message, values in warnings
+                                          for s in diagnostic(self.node, values, message, WARN)) \
+                + result.get('diagnostics', ())
+        return result
+
+    def _dpa_step(self, k: int, mode: str, inp: dict[str, Any]) -> dict[str, Any]:
+        volts = vec(inp['mag_volts'], (2.5, 2.5, 2.5))
+        bias = vec(inp['mag_bias'], (2.5, 2.5, 2.5))
+        omega = vec(None if inp['gyro'] is None else inp['gyro'][0])
+        sun = vec(inp['sun'])
+        dt = self.control_period_s
+        h = vec(inp['wheel_h']) + vec(inp['wheel_hdot']) * dt
+        q = None if inp['odometry'] is None else np.array(inp['odometry'].orientation)
+        coil = vec(inp['coil_current'])
+        for name, v in (('magnetometer volts', volts), ('bias volts', bias), ('gyro', omega),
+                        ('sun sensor', sun), ('wheel momentum', h), ('coil current', coil)):
+            if not np.all(np.isfinite(v)):
+                raise ControllerError(f'{name} input is not finite: {v.tolist()}')
+        b = self.ta.sense(volts, bias)
+        out = self.dpa.step(mode, b, omega, sun, h, q, dt)
+        result: dict[str, Any] = {'moment': vector3(out.moment_command_am2), 'volts': vector3(out.wheel_volts_v)}
+        if k % self.telemetry_period == 0:
+            alarms = [bool(abs(i) > self.excess_current_a) for i in coil]
+            telemetry = {**out.telemetry, **self.ta.telemetry(b, out.moment_command_am2, bias, coil, alarms)}
+            result['diagnostics'] = diagnostic(self.node, telemetry)
+        return result

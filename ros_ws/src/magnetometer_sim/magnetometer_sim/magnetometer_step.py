@@ -1,0 +1,96 @@
+"""magnetometer_sim stepper: the triaxial fluxgate's volts, bias volts and the field they mean (spec §5).
+
+Stage ``sample`` of step k takes B_true(t_k) from rigid_body (lag 0), the electromagnets'
+achieved step-average dipole of step k−1 from em_driver (lag 1: the declared feedback edge —
+never the command), and the ``mode`` of step k−1 from ascs_mode_manager (lag 1) whose
+``command/magnetometer_sim`` entries (e.g. ``magnetometer_select B``) are applied before
+sampling. The scenario fault (``magnetometer.fault``) is injected at the first step with
+t_k ≥ fault_time. Returns per-axis volts, bias volts, the field a naive reader makes of the
+volts (MagneticField, T, covariance from resolution/accuracy/noise) and telemetry every
+``telemetry_every`` steps and at every event. A non-finite input is rejected with an ERROR
+diagnostic and the last valid one is held.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from acds_common.messages import ERROR, OK, WARN, diagnostic, field, magnetic_field, mode_status, vec, vector3
+from acds_common.stepper import Stepper
+
+from magnetometer_sim.configuration import build_magnetometer, parse_command
+from magnetometer_sim.fluxgate import MagnetometerError, MagnetometerReading
+
+#: Telemetered bias voltage further than this from 2.5 V raises a WARN (a shift reads as field).
+BIAS_WARN_V = 0.02
+
+
+class MagnetometerStep(Stepper):
+    """Two fluxgate assemblies (active/standby) seeing B_true + residual + Δ·M."""
+
+    node = 'magnetometer_sim'
+
+    def __init__(self, params: dict[str, Any], log: Any = None) -> None:
+        super().__init__(params, log)
+        self.cfg = self.section('magnetometer')
+        self.mag = build_magnetometer(self.cfg, self.seed)
+        self._fault_pending = self.cfg['fault'] != 'none'
+        self._b_true = np.zeros(3)
+        self._dipole = np.zeros(3)
+
+    def sample(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
+        """Apply commands and faults due at step k, sample both units, return the active one."""
+        events: list[str] = []
+        errors: list[str] = []
+        for text in mode_status(inp['mode'], self.node)[1]:
+            try:
+                events.append(parse_command(text).apply(self.mag))
+            except MagnetometerError as exc:
+                errors.append(f'rejected command {text!r}: {exc}')
+        if self._fault_pending and t_s >= self.cfg['fault_time']:
+            self._fault_pending = False
+            axis = None if self.cfg['fault_axis'] < 0 else self.cfg['fault_axis']
+            value = self.cfg['fault_value_v'] if self.cfg['fault'] == 'bias_shift' else None
+            self.mag.inject_fault(self.cfg['fault_unit'], self.cfg['fault'], axis, value)
+            events.append(f'scenario fault at t={t_s:g} s: unit {self.cfg["fault_unit"]} {self.cfg["fault"]}'
+                          + (f' {value:+g} V' if value is not None else '')
+                          + (' on all axes' if axis is None else f' on axis {"xyz"[axis]}'))
+        b_true = field(inp['b_true'])
+        if np.all(np.isfinite(b_true)):
+            self._b_true = b_true
+        else:
+            errors.append(f'rejected non-finite B_true {b_true.tolist()}; holding the last valid field')
+        dipole = vec(inp['dipole'])
+        if np.all(np.isfinite(dipole)):
+            self._dipole = dipole
+        else:
+            errors.append(f'rejected non-finite achieved dipole {dipole.tolist()}; holding the last valid dipole')
+        reading = self.mag.read(self._b_true, self._dipole)
+        out: dict[str, Any] = {
+            'volts': vector3(reading.volts),
+            'bias_volts': vector3(reading.bias_volts),
+            'field': magnetic_field(reading.field_t, reading.covariance_t2.ravel()),
+        }
+        if events or errors or k % self.cfg['telemetry_every'] == 0:
+            out['diagnostics'] = self.telemetry(reading, events, errors)
+        for line in errors:
+            self.log('error', f't={t_s:g} s: {line}')
+        for line in events:
+            self.log('info', f't={t_s:g} s: {line}')
+        return out
+
+    def telemetry(self, reading: MagnetometerReading, events: list[str], errors: list[str]) -> Any:
+        """Table 4-11 magnetometer telemetry: bias voltage, per-axis volts, active unit; events."""
+        bias_off = float(np.max(np.abs(reading.bias_volts - 2.5)))
+        level, message = OK, 'ok'
+        if bias_off > BIAS_WARN_V:
+            level, message = WARN, f'bias voltage off nominal 2.5 V by {bias_off:.3f} V'
+        if errors:
+            level, message = ERROR, errors[0]
+        values: dict[str, object] = {'active_unit': reading.active_unit}
+        values.update({f'bias_volts_{a}': f'{v:.4f}' for a, v in zip('xyz', reading.bias_volts, strict=True)})
+        values.update({f'volts_{a}': f'{v:.4f}' for a, v in zip('xyz', reading.volts, strict=True)})
+        values.update({f'event_{i}': e for i, e in enumerate(events)})
+        values.update({f'error_{i}': e for i, e in enumerate(errors)})
+        return diagnostic(self.node, values, message, level)

@@ -1,0 +1,152 @@
+"""The direct engine: every node's stepper in one process, no DDS, the same data bit for bit (spec §2).
+
+Built from the same declaration as the per-process graph (:mod:`acds_common.graph`) and the
+same parameters the launcher writes to ``params.yaml`` (:func:`~acds_common.parameters.node_parameters`):
+the steppers are constructed exactly as the node processes construct them, and step k fires
+every stage in :meth:`~acds_common.graph.Graph.firing_order` (each lag-0 input produced
+before its consumer fires; the time owner closes the step), handing each stage the values its
+inputs carry for step k − lag. Values never leave memory unless a bag is recorded; then each
+message is encoded with the same codec the nodes publish with, so the bag holds the same bytes.
+The run summary is the same streaming :class:`~acds_cli.summary.RunObserver` the run monitor
+feeds, given values instead of bytes (and the bytes of the truth topics, for the digest).
+"""
+
+from __future__ import annotations
+
+import importlib
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from acds_common import topics
+from acds_common.cdr import Codec
+from acds_common.graph import TIME_OWNER, Graph, build_graph
+from acds_common.parameters import node_parameters, normalize
+from acds_common.scenario import Scenario
+from acds_common.stepper import StepError, Stepper
+
+from .launcher import LaunchError, RunResult, per_step_topics
+from .summary import RunObserver
+
+
+def stepper_class(path: str) -> type[Stepper]:
+    """'package.module:Class' → the stepper class."""
+    module, _, name = path.partition(':')
+    return getattr(importlib.import_module(module), name)
+
+
+def build_steppers(graph: Graph, params: dict[str, dict[str, Any]],
+                   log: Callable[[str, str, str], None] | None = None) -> dict[str, Stepper]:
+    """Every node's stepper, constructed from its normalized parameters as its node process does."""
+    out = {}
+    for name, spec in graph.nodes.items():
+        node_log = None if log is None else (lambda level, text, n=name: log(n, level, text))
+        out[name] = stepper_class(spec.stepper)(normalize(name, params[name]), log=node_log)
+    return out
+
+
+class DirectRun:
+    """Run a scenario's graph in this process (the ``--engine direct`` of ``acds run``)."""
+
+    def __init__(self, scenario: Scenario, *, steps: int | None = None, echo: Callable[[str], None] | None = None,
+                 progress: Callable[[int, int, float], None] | None = None, record: Path | None = None,
+                 record_storage: str = 'mcap', overrides: dict[str, dict[str, Any]] | None = None) -> None:
+        self.scenario = scenario
+        self.steps = steps if steps is not None else scenario.total_steps()
+        self.echo = echo or (lambda line: None)
+        self.progress = progress
+        self.record = Path(record) if record is not None else None
+        self.record_storage = record_storage
+        self.params = node_parameters(scenario, self.steps, 0.0, overrides)
+        self.graph = build_graph(self.params)
+        self.observer = RunObserver(scenario, per_step_topics(self.graph))
+        self.dt_ns = round(scenario.control_period_s * 1e9)
+        self.steppers = build_steppers(self.graph, self.params,
+                                       lambda node, level, text: self.echo(f'[{node}] [{level.upper()}] {text}'))
+        self._codecs = {(spec.name, out.key): (topics.resolve(out.topic), Codec(out.msg_type, out.frame_id,
+                                                                              out.child_frame_id), out)
+                        for spec, out in self.graph.outputs()}
+        self._clock = Codec(topics.TYPES[topics.CLOCK])
+        self._store: dict[str, dict[int, Any]] = {}
+        self._max_lag = max((i.lag for spec in self.graph.nodes.values() for st in spec.stages for i in st.inputs),
+                            default=0)
+        self._writer: Any = None
+
+    def _emit(self, node: str, outputs: dict[str, Any], k: int, *, initial: bool = False) -> None:
+        for key, value in outputs.items():
+            entry = self._codecs.get((node, key))
+            if entry is None:
+                raise LaunchError(f'{node}: stepper returned undeclared output {key!r}')
+            topic, codec, out = entry
+            step = k if initial else k + out.stamp_offset
+            if out.every_step:
+                self._store.setdefault(topic, {})[step] = value
+            record = self._writer is not None
+            for item in (value if out.many else (value,)):
+                data = codec.encode(step * self.dt_ns, item) if record or self.observer.wants(topic) else None
+                if record:
+                    self._writer.write(topic, data)
+                self.observer.feed(topic, step, item, data)
+
+    def _clock_tick(self, k: int) -> None:
+        if self._writer is not None:
+            self._writer.write(topics.CLOCK, self._clock.encode(k * self.dt_ns))
+
+    def run(self) -> RunResult:
+        """Run to completion (the time owner finishes); a stepper's StepError fails the run naming the node."""
+        if self.record is not None:
+            from .bag.writer import BagError, BagWriter, run_info
+            try:
+                self._writer = BagWriter(self.record, self.record_storage, run_info(self.scenario, self.steps,
+                                                                                    self.params))
+            except BagError as exc:
+                raise LaunchError(str(exc)) from None
+        t0 = time.monotonic()
+        try:
+            final = self._loop(t0)
+        finally:
+            if self._writer is not None:
+                for topic in sorted({t for t, _c, _o in self._codecs.values()}):
+                    self._writer.note_publishers(topic, self.graph.publisher_of(topics.relative(topic)))
+                self._writer.close()
+        wall = time.monotonic() - t0
+        if self._writer is not None and self._writer.error:
+            raise LaunchError(self._writer.error)
+        return RunResult(self.scenario, final, wall, self.observer.summary(final, wall), bag=self.record)
+
+    def _loop(self, t0: float) -> int:
+        owner = self.steppers[TIME_OWNER]
+        order = [(name, self.steppers[name], stage) for name, stage in self.graph.firing_order()]
+        present = set(self.graph.nodes)
+        self._clock_tick(0)
+        self._emit(TIME_OWNER, owner.start(), 0, initial=True)
+        k = 0
+        while True:
+            t_s = k * self.dt_ns / 1e9
+            for name, stepper, stage in order:
+                inputs = {}
+                for inp in stage.inputs:
+                    back = k - inp.lag
+                    if inp.source not in present or back < 0:
+                        inputs[inp.key] = None
+                        continue
+                    try:
+                        inputs[inp.key] = self._store[topics.resolve(inp.topic)][back]
+                    except KeyError:
+                        raise LaunchError(f'node {inp.source} produced no {topics.resolve(inp.topic)} for step '
+                                          f'{back} ({name}.{stage.name} needs it)') from None
+                try:
+                    outputs = getattr(stepper, stage.name)(k, t_s, inputs)
+                except StepError as exc:
+                    raise LaunchError(f'node {name} failed at step {k}: {exc}') from None
+                self._emit(name, outputs, k)
+            if owner.finished:
+                return k
+            k += 1
+            self._clock_tick(k)
+            if self.progress is not None:
+                self.progress(k, self.steps, time.monotonic() - t0)
+            oldest = k - self._max_lag - 1
+            for buf in self._store.values():
+                buf.pop(oldest, None)
