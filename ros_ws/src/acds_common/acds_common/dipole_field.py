@@ -44,12 +44,24 @@ MU0_OVER_4PI = MU0 / (4.0 * math.pi)
 def _split(r_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(r̂, |r|) with |r| keeping a trailing axis for broadcasting."""
     r = np.asarray(r_m, dtype=float)
-    rn = np.sqrt(np.sum(r * r, axis=-1, keepdims=True))
+    rn = np.sqrt(_dot(r, r))
     return r / rn, rn
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.sum(a * b, axis=-1, keepdims=True)
+    return np.einsum("...i,...i->...", a, b)[..., None]
+
+
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a × b over the last axis of (…, 3) arrays (broadcasting); numpy.cross without its per-call
+    axis handling, which dominates on the few-vector arrays of a formation step."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
 
 
 def dipole_field_t(mu_am2: np.ndarray, r_m: np.ndarray) -> np.ndarray:
@@ -87,7 +99,7 @@ def dipole_force_n(mu_a_am2: np.ndarray, mu_b_am2: np.ndarray, r_ab_m: np.ndarra
 
 def dipole_torque_nm(mu_a_am2: np.ndarray, mu_b_am2: np.ndarray, r_ab_m: np.ndarray) -> np.ndarray:
     """Torque (N·m) on dipole B from dipole A's field, about B's centre: τ_B = μ_B × B_A(r_AB)."""
-    return np.cross(np.asarray(mu_b_am2, dtype=float), dipole_field_t(mu_a_am2, r_ab_m))
+    return cross3(mu_b_am2, dipole_field_t(mu_a_am2, r_ab_m))
 
 
 def dipole_pair_wrench(mu_a_am2: np.ndarray, mu_b_am2: np.ndarray,
