@@ -64,6 +64,16 @@ def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
+def unit_perpendicular(v: np.ndarray) -> np.ndarray:
+    """A deterministic unit vector perpendicular to the non-zero 3-vector ``v`` (v × the axis least
+    aligned with it), for building a basis across a baseline or a coil axis."""
+    v = np.asarray(v, dtype=float)
+    seed = np.zeros(3)
+    seed[int(np.argmin(np.abs(v)))] = 1.0
+    u = cross3(v, seed)
+    return u / np.linalg.norm(u)
+
+
 def dipole_field_t(mu_am2: np.ndarray, r_m: np.ndarray) -> np.ndarray:
     """Field B (T) of dipole ``mu_am2`` (A·m²) at displacement ``r_m`` (m) from it (slide 12)."""
     mu = np.asarray(mu_am2, dtype=float)

@@ -68,7 +68,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from acds_common.dipole_field import MU0_OVER_4PI, cross3, dipole_force_n, dipole_pair_wrench, force_matrix
+from acds_common.dipole_field import (
+    MU0_OVER_4PI,
+    cross3,
+    dipole_force_n,
+    dipole_pair_wrench,
+    force_matrix,
+    unit_perpendicular,
+)
 from acds_common.units import MU0
 
 from acds_controller.magnetic_laws import ControllerError, as_matrix3, as_vector3, check_gain
@@ -81,14 +88,6 @@ _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 
 
 # ------------------------------------------------------------------------------ dipole solutions
-
-
-def _unit_perpendicular(r_hat: np.ndarray) -> np.ndarray:
-    """A deterministic unit vector perpendicular to ``r_hat``."""
-    seed = np.zeros(3)
-    seed[int(np.argmin(np.abs(r_hat)))] = 1.0
-    u = np.cross(r_hat, seed)
-    return u / np.linalg.norm(u)
 
 
 def _plane_g(alpha: np.ndarray, f1: float, f2: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -126,7 +125,7 @@ def min_norm_dipoles(r_ab_m: np.ndarray, force_b_n: np.ndarray, plane_normal: np
         n = cross3(e1, f)
         if np.linalg.norm(n) <= 1e-12 * float(np.linalg.norm(f)):
             perp = None if prev is None else prev - (prev @ e1) * e1
-            e2 = perp / np.linalg.norm(perp) if perp is not None and np.linalg.norm(perp) > 0 else _unit_perpendicular(e1)
+            e2 = perp / np.linalg.norm(perp) if perp is not None and np.linalg.norm(perp) > 0 else unit_perpendicular(e1)
             n = cross3(e1, e2)
         n = n / np.linalg.norm(n)
     e2 = cross3(n, e1)

@@ -37,7 +37,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from acds_common.dipole_field import MU0_OVER_4PI, dipole_force_n, dipole_torque_nm
+from acds_common.dipole_field import MU0_OVER_4PI, dipole_force_n, dipole_torque_nm, unit_perpendicular
 from acds_common.units import MU0
 
 from dynamics.environment import DynamicsError, finite_float, finite_vector3
@@ -81,15 +81,6 @@ class Loop:
         return self.amp_turns_a * math.pi * self.radius_m ** 2 * self.normal
 
 
-def _in_plane_basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unit û, v̂ with û × v̂ = n̂ (û from the axis least aligned with n̂, deterministic)."""
-    seed = np.zeros(3)
-    seed[int(np.argmin(np.abs(normal)))] = 1.0
-    u = np.cross(normal, seed)
-    u /= np.linalg.norm(u)
-    return u, np.cross(normal, u)
-
-
 def discretise(loops: Sequence[Loop], segments: int = DEFAULT_SEGMENTS) -> tuple[np.ndarray, np.ndarray]:
     """Nodes (M·n, 3) in m and current elements N I dl (M·n, 3) in A·m of the loops, M = ``segments``."""
     if int(segments) != segments or segments < 3:
@@ -98,7 +89,8 @@ def discretise(loops: Sequence[Loop], segments: int = DEFAULT_SEGMENTS) -> tuple
     c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
     points, elements = [], []
     for loop in loops:
-        u, v = _in_plane_basis(loop.normal)
+        u = unit_perpendicular(loop.normal)
+        v = np.cross(loop.normal, u)  # û × v̂ = n̂
         points.append(loop.centre_m + loop.radius_m * (c * u + s * v))
         elements.append((loop.amp_turns_a * loop.radius_m * 2.0 * math.pi / int(segments)) * (-s * u + c * v))
     return np.concatenate(points), np.concatenate(elements)
