@@ -46,8 +46,10 @@ def test_from_report_and_day_constant(tmp_path, capsys) -> None:
 
 
 def test_section_12_estimate_and_errors(tmp_path, capsys) -> None:
-    assert main(['size-magnet', '--mode', 'day-night', '--core', 'air', '--h-b-ftlbs', '255']) == 0
-    assert '§12 M_m = 12.5 H_b' in capsys.readouterr().out
+    assert main(['size-magnet', '--mode', 'day-night', '--core', 'air', '--h-b-ftlbs', '255',
+                 '--wire-area-in2', '0.008155']) == 0
+    text = capsys.readouterr().out
+    assert '§12 M_m = 12.5 H_b' in text and 'turns,' in text and 'V max' in text
     assert main(['size-magnet', '--mode', 'day-night', '--core', 'air', '--m-n-am2', '100', '--m-m-am2', '200']) == 2
     assert 'give both --m-n-am2 and --m-d-am2' in capsys.readouterr().err
     report = tmp_path / 'nonight.json'

@@ -141,6 +141,16 @@ def cmd_size_magnet(args: argparse.Namespace) -> int:
     for (label, g, _), (_, t, si) in zip(rows['gimbaled'], rows['three_orthogonal'], strict=True):
         print(f'  {label:{width}s}  {_fmt(g):>12s}  {_fmt(t):>16s}   {si}')
     print('\n  weights exclude insulation and winding forms (§7); totals over the three coils where there are three')
+    if args.wire_area_in2 is not None:
+        print(f'  winding with {args.wire_area_in2:g} in.² conductor (§8), per coil:')
+        for s, d in designs.items():
+            try:
+                w = ms.wind(d, args.wire_area_in2 * units.INCH_M ** 2, conductor)
+            except ms.MagnetSizingError as exc:
+                print(f'acds size-magnet: {exc}', file=sys.stderr)
+                return 2
+            print(f'    {s:16s} {w.turns:.1f} turns, {w.max_current_a:.3g} A max, {w.resistance_ohm:.3g} ohm, '
+                  f'{w.max_voltage_v:.3g} V max')
     if args.json:
         out = {'mode': args.mode, 'core': args.core, 'conductor': conductor.name, 'moments_source': source,
                'M_n_am2': moments.m_n_am2, 'M_d_am2': moments.m_d_am2, 'M_o_am2': moments.m_o_am2,
@@ -172,5 +182,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help='day-constant |M| as a multiple of the day-and-night M_m (default 1.3, §10)')
     p.add_argument('--altitude-nmi', type=float, default=220.0, help='circular orbit altitude for T_n, T_d (default 220)')
     p.add_argument('--daylight-deg', type=float, default=220.0, help='orbital daylight arc, degrees (default 220)')
+    p.add_argument('--wire-area-in2', type=float,
+                   help='also wind each coil with this conductor area, in.² (§8: #10 wire is 0.008155)')
     p.add_argument('--json', metavar='PATH', help='write the inputs and both designs as JSON (seed units)')
     p.set_defaults(func=cmd_size_magnet)

@@ -105,8 +105,3 @@ def ohm_in_to_ohm_m(rho):
 def lb_in3_to_kg_m3(sigma):
     """Specific weight lbs per in.³ (seed 000 Appendix D) to density kg/m³."""
     return sigma * LB_KG / INCH_M ** 3
-
-
-def kg_to_lb(m):
-    """kg to lbs (weight at 1 g)."""
-    return m / LB_KG

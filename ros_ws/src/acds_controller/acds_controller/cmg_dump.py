@@ -59,12 +59,6 @@ def khb_moment(h_s_nms: np.ndarray, b_t: np.ndarray, k_seed: float = K_SEED,
     return k_to_si(k_seed) * np.cross(h, as_vector3(b_t, 'b_t'))
 
 
-def cross_matrix(b: np.ndarray) -> np.ndarray:
-    """B̃, the matrix of the cross product B × (§3)."""
-    x, y, z = as_vector3(b, 'b')
-    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-
-
 def _samples(b_body_t: np.ndarray, weights_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     b = np.asarray(b_body_t, dtype=float)
     w = np.asarray(weights_s, dtype=float)
@@ -158,11 +152,6 @@ class SampledMomentum:
         self.clock = clock
         self._orbit: int | None = None
         self._h_s = np.zeros(3)
-
-    @property
-    def orbit(self) -> int | None:
-        """Orbit of the held sample (None before the first step)."""
-        return self._orbit
 
     def sample(self, t_s: float, h_cmg_nms: np.ndarray) -> np.ndarray:
         """H_s (N·m·s) for the step at ``t_s``; ``h_cmg_nms`` is the CMG momentum then (used only at a new orbit)."""

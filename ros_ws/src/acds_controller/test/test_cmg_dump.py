@@ -73,6 +73,21 @@ def test_moment_perpendicular_to_b_and_orbit_torque_opposes_h_s(h_s: np.ndarray,
     assert float(dump @ (h_s - h_0)) <= 1e-9 * np.linalg.norm(dump) * np.linalg.norm(h_s - h_0) + 1e-12
 
 
+@pytest.mark.parametrize('seed', [4, 5])
+def test_gramian_is_minus_the_integral_of_b_tilde_squared(seed: int) -> None:
+    """W = −∫ B̃² dt with B̃ the matrix of B × (eq. 3), symmetric and positive definite off the magnetic equator (B-4)."""
+    t, b = field_history(seed)
+    w = trapezoid_weights(t)
+
+    def tilde(v: np.ndarray) -> np.ndarray:
+        return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+    expected = -sum(wk * tilde(bk) @ tilde(bk) for wk, bk in zip(w, b, strict=True))
+    gram = field_gramian(b, w)
+    assert np.allclose(gram, expected, rtol=1e-12, atol=1e-24)
+    assert np.allclose(gram, gram.T) and np.linalg.eigvalsh(gram)[0] > 0.0
+
+
 def test_constant_field_direction_min_energy_dumps_exactly_h_b_closed_form() -> None:
     """B(t) = B0 (1 + ½ sin 2nt) x̂, H_b ⟂ x̂: W = ∫b² dt (I − x̂x̂ᵀ), c = H_b / ∫b² dt with ∫b² dt = (9/8) B0² T,
     and ∫ (c × B) × B dt = −H_b. A bias component along B cannot be dumped (§2) and is returned as such."""
@@ -195,6 +210,7 @@ def test_min_energy_law_steps_with_its_prediction() -> None:
         # the report's comparison solves eq. (3) on the orbit's own steps (556 or 557 of 10 s for T = 5562.8 s)
         assert s.m_o_am2 == pytest.approx(s.min_energy_m_o_am2, rel=2 * 10.0 / T_ORB)
     assert np.allclose(np.cross(law.min_energy_vector, b[-1]), m[-1])
+    assert np.allclose(law.undumpable_nms, 0.0, atol=1e-9)
 
 
 def test_law_selector_and_per_axis_limit() -> None:
