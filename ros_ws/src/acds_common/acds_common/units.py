@@ -21,8 +21,12 @@ SLUG_FT2_KG_M2 = FT_LB_NM
 DYNE_CM_NM = 1e-7
 #: 1 nautical mile in m.
 NMI_M = 1852.0
-#: 1 pound-mass in kg.
+#: 1 pound-mass in kg (also: a weight in lbs at 1 g, as the seeds quote hardware weights).
 LB_KG = 0.45359237
+#: 1 inch in m.
+INCH_M = 0.0254
+#: 1 foot in m.
+FOOT_M = 0.3048
 #: Mean equatorial Earth radius, m.
 EARTH_RADIUS_M = 6378137.0
 #: Earth gravitational parameter μ, m³/s².
@@ -91,3 +95,13 @@ def rad_s_to_rpm(w):
 #: Study gain unit (s·G²)⁻¹ with B in G and H in ft-lb-s gives M in ft-lb/G;
 #: 1 ft-lb/G = 13558.2 A·m² (spec §7).
 FTLB_PER_GAUSS_AM2 = FT_LB_NM / GAUSS_T
+
+
+def ohm_in_to_ohm_m(rho):
+    """Resistivity ohm-inch (seed 000 Appendix D "ohms per in.") to ohm-metre."""
+    return rho * INCH_M
+
+
+def lb_in3_to_kg_m3(sigma):
+    """Specific weight lbs per in.³ (seed 000 Appendix D) to density kg/m³."""
+    return sigma * LB_KG / INCH_M ** 3

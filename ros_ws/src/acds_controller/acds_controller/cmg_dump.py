@@ -1,0 +1,379 @@
+"""Magnetic CMG momentum dump of the AAP Workshop: the k·H_s × B law, its minimum-energy origin, and the per-orbit
+bookkeeping and report (seed 000 §2, §3, §5, Appendix B).
+
+Seed: ``000_aap_cmg_dump_levidow.txt``. Conventions: SI inside (B in T, body axes; momentum N·m·s; M in A·m²);
+the torque on the vehicle is T = M × B (eq. 1); the CMGs hold the attitude, so over an orbit their momentum
+changes by the bias H_b plus the magnetic torque's integral (§5): ΔH_s = H_b + ∫₀ᵀ M × B dt.
+
+Laws (selected by :class:`DumpLawConfig` ``law``):
+
+* ``'khb'``: M(t) = k H_s × B(t) (§3), H_s the CMG momentum sampled at the start of each orbit and held for it.
+  The seed's k = 4e6 with H_s in ft-lb-sec, B in Wb/m², M in amp-turn-m²; in SI
+  k_SI = 4e6 / 1.3558179 = 2.950e6 A·m² per (N·m·s·T), i.e. s⁻¹·T⁻² (:func:`k_to_si`).
+  The torque k (H_s × B) × B = −k |B|² H_s⊥ opposes the part of H_s normal to B.
+* ``'khb_shifted'``: M = k (H_s − H_0) × B (§3), which moves the region H_s settles in by H_0.
+* ``'min_energy'``: eq. (3), M(t) = [(−∫₀ᵀ B̃²(t) dt)⁻¹ H_b] × B(t), the M of least ∫|M|² dt that dumps exactly
+  H_b over the orbit (Appendix B), with B̃ the matrix of B × and B(t) over the coming orbit predicted on board.
+  W = −∫ B̃² dt = ∫ (|B|² I − B Bᵀ) dt is positive definite unless B keeps one direction all orbit (B-4). The
+  OCR copy of Appendix B lost the tildes ("∫ B² dt" in the λ line and in B-3); re-derived: λ =
+  −2 (∫ B̃ B̃ᵀ dt)⁻¹ H_b = −2 W⁻¹ H_b, M = −B̃ᵀ λ / 2 = B × λ/2 = (W⁻¹ H_b) × B, which is eq. (3).
+
+The sampled loop: with the unsaturated k·H_s × B law the orbit's magnetic momentum is ∫ M × B dt =
+−k W (H_s − H_0), so the once-per-orbit samples obey H_{n+1} − H_0 = (I − k W_n)(H_n − H_0) + H_b. Its fixed
+point k (H_s − H_0) = W⁻¹ H_b is eq. (3)'s bracket (§3: "the two solutions are identical"), and it is reached
+only if every eigenvalue of k W lies in (0, 2) (:func:`loop_gains`); the report carries those gains per orbit.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from acds_common.units import FT_LB_S_NMS, nms_to_ftlbs
+
+from acds_controller.magnetic_laws import ControllerError, as_vector3, check_gain, saturate
+
+#: The seed's gain, amp-turn-m² per (ft-lb-sec · Wb/m²) (§5: "All data in this report are based on using k = 4 × 10^6").
+K_SEED = 4e6
+#: The range the seed found to converge from H_s = 0 "after a few orbits" (§5: "3 × 10^6 to 5 × 10^6").
+K_SEED_RANGE = (3e6, 5e6)
+LAWS = ('khb', 'khb_shifted', 'min_energy')
+#: Default field samples per orbit for the minimum-energy prediction (trapezoid rule, closed interval).
+PREDICTION_SAMPLES = 720
+
+
+def k_to_si(k_seed: float) -> float:
+    """The seed's k (amp-turn-m² per ft-lb-sec per Wb/m²) in SI, A·m²/(N·m·s·T) = s⁻¹·T⁻²: k / 1.3558179."""
+    return check_gain(k_seed, 'k (amp-turn-m² per ft-lb-sec per Wb/m²)', 0.0, 1e12) / FT_LB_S_NMS
+
+
+def khb_moment(h_s_nms: np.ndarray, b_t: np.ndarray, k_seed: float = K_SEED,
+               h_0_nms: np.ndarray | None = None) -> np.ndarray:
+    """M = k (H_s − H_0) × B, A·m² (§3); ``h_0_nms`` None for the plain law. Unsaturated, perpendicular to B."""
+    h = as_vector3(h_s_nms, 'h_s_nms')
+    if h_0_nms is not None:
+        h = h - as_vector3(h_0_nms, 'h_0_nms')
+    return k_to_si(k_seed) * np.cross(h, as_vector3(b_t, 'b_t'))
+
+
+def _samples(b_body_t: np.ndarray, weights_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    b = np.asarray(b_body_t, dtype=float)
+    w = np.asarray(weights_s, dtype=float)
+    if b.ndim != 2 or b.shape[1] != 3 or w.shape != (b.shape[0],):
+        raise ControllerError(f'field samples must be (N, 3) with N weights, got {b.shape} and {w.shape}')
+    if not (np.all(np.isfinite(b)) and np.all(np.isfinite(w))) or np.any(w < 0.0):
+        raise ControllerError('field samples and weights must be finite, weights >= 0')
+    return b, w
+
+
+def field_gramian(b_body_t: np.ndarray, weights_s: np.ndarray) -> np.ndarray:
+    """W = −∫ B̃² dt = Σ w_k (|B_k|² I − B_k B_kᵀ), T²·s, from field samples (N, 3) and quadrature weights (s)."""
+    b, w = _samples(b_body_t, weights_s)
+    b2 = np.einsum('k,ki,ki->', w, b, b)
+    return b2 * np.eye(3) - np.einsum('k,ki,kj->ij', w, b, b)
+
+
+def trapezoid_weights(t_s: np.ndarray) -> np.ndarray:
+    """Trapezoid-rule weights (s) over increasing sample times (a closed interval)."""
+    t = np.asarray(t_s, dtype=float)
+    dt = np.diff(t)
+    if t.ndim != 1 or t.size < 2 or np.any(dt <= 0.0):
+        raise ControllerError('sample times must be increasing, at least two')
+    w = np.zeros_like(t)
+    w[:-1] += 0.5 * dt
+    w[1:] += 0.5 * dt
+    return w
+
+
+def hold_weights(t_s: np.ndarray) -> np.ndarray:
+    """Zero-order-hold weights (s): sample k holds until sample k+1 (the last for the previous spacing)."""
+    t = np.asarray(t_s, dtype=float)
+    dt = np.diff(t)
+    if t.ndim != 1 or t.size < 2 or np.any(dt <= 0.0):
+        raise ControllerError('step times must be increasing, at least two')
+    return np.append(dt, dt[-1])
+
+
+def min_energy_vector(w: np.ndarray, h_b_nms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(c, H_undumpable): c = W⁻¹ H_b (A·m²/T), eq. (3)'s bracket, and what no moment can dump (N·m·s).
+
+    W is positive definite for any orbit off the magnetic equator (Appendix B); when B keeps one
+    direction (W singular) c is the least-norm solution and H_b − W c is the component along B that
+    "it would be impossible to dump" (§2).
+    """
+    wm = np.asarray(w, dtype=float)
+    h_b = as_vector3(h_b_nms, 'h_b_nms')
+    vals, vecs = np.linalg.eigh(wm)
+    if vals[-1] <= 0.0:
+        raise ControllerError('the field gramian is zero: no field over the orbit, nothing can be dumped')
+    keep = vals > vals[-1] * 1e-9
+    c = vecs[:, keep] @ ((vecs[:, keep].T @ h_b) / vals[keep])
+    return c, h_b - wm @ c
+
+
+def loop_gains(w: np.ndarray, k_seed: float = K_SEED) -> np.ndarray:
+    """Eigenvalues of k W (dimensionless, ascending): the sampled k·H_s × B loop converges iff all are in (0, 2)."""
+    return np.linalg.eigvalsh(k_to_si(k_seed) * np.asarray(w, dtype=float))
+
+
+def proper_initial_h_s_nms(c: np.ndarray, k_seed: float = K_SEED, h_0_nms: np.ndarray | None = None) -> np.ndarray:
+    """The §5 initialisation, k (H_s − H_0) = eq. (3)'s bracket c: then exactly H_b is dumped on the first orbit."""
+    h = as_vector3(c, 'c') / k_to_si(k_seed)
+    return h if h_0_nms is None else h + as_vector3(h_0_nms, 'h_0_nms')
+
+
+@dataclass(frozen=True)
+class OrbitClock:
+    """Orbit boundaries t0 + n·T. A step belongs to orbit n = ⌊(t − t0)/T⌋ (a step at a boundary opens the next)."""
+
+    period_s: float
+    t0_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_gain(self.period_s, 'orbit period_s', 1.0, 1e9)
+        check_gain(self.t0_s, 't0_s', -1e12, 1e12)
+
+    def index(self, t_s: float) -> int:
+        """Orbit number of time ``t_s`` (tolerant of the last-bit rounding of step times k·Δt)."""
+        return math.floor((float(t_s) - self.t0_s) / self.period_s + 1e-9)
+
+    def start_s(self, n: int) -> float:
+        """Start time of orbit ``n``, s."""
+        return self.t0_s + n * self.period_s
+
+
+class SampledMomentum:
+    """H_s: the CMG momentum sampled at the first step of each orbit and held until the next (§3, §5)."""
+
+    def __init__(self, clock: OrbitClock) -> None:
+        self.clock = clock
+        self._orbit: int | None = None
+        self._h_s = np.zeros(3)
+
+    def sample(self, t_s: float, h_cmg_nms: np.ndarray) -> np.ndarray:
+        """H_s (N·m·s) for the step at ``t_s``; ``h_cmg_nms`` is the CMG momentum then (used only at a new orbit)."""
+        n = self.clock.index(t_s)
+        if self._orbit is None or n != self._orbit:
+            if self._orbit is not None and n < self._orbit:
+                raise ControllerError(f'time went back from orbit {self._orbit} to orbit {n} (t = {t_s} s)')
+            self._h_s = as_vector3(h_cmg_nms, 'h_cmg_nms').copy()
+            self._orbit = n
+        return self._h_s.copy()
+
+
+@dataclass(frozen=True)
+class DumpLawConfig:
+    """Choice and parameters of the dump law (§3, §5).
+
+    ``law``: 'khb' | 'khb_shifted' | 'min_energy'; ``k_seed``: k in the seed's units (4e6);
+    ``h_0_nms``: H_0 of the shifted law, N·m·s; ``max_moment_am2``: per-axis magnet limit, A·m² (None: no
+    limit; the seed's §5 runs are unconstrained); ``h_b_nms``: bias momentum per orbit that the minimum-energy
+    law dumps (known in advance, §3), N·m·s; ``prediction_samples``: field samples per predicted orbit.
+    """
+
+    law: str = 'khb'
+    k_seed: float = K_SEED
+    h_0_nms: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    max_moment_am2: float | None = None
+    h_b_nms: tuple[float, float, float] | None = None
+    prediction_samples: int = PREDICTION_SAMPLES
+
+    def __post_init__(self) -> None:
+        if self.law not in LAWS:
+            raise ControllerError(f'DumpLawConfig.law must be one of {LAWS}, got {self.law!r}')
+        k_to_si(self.k_seed)
+        as_vector3(self.h_0_nms, 'DumpLawConfig.h_0_nms')
+        if self.max_moment_am2 is not None:
+            check_gain(self.max_moment_am2, 'DumpLawConfig.max_moment_am2', 1e-9, 1e12)
+        if self.law == 'min_energy' and self.h_b_nms is None:
+            raise ControllerError("DumpLawConfig.law 'min_energy' needs h_b_nms, the bias momentum to dump per orbit")
+        if self.h_b_nms is not None:
+            as_vector3(self.h_b_nms, 'DumpLawConfig.h_b_nms')
+        if int(self.prediction_samples) != self.prediction_samples or self.prediction_samples < 8:
+            raise ControllerError(f'DumpLawConfig.prediction_samples must be an integer >= 8, got '
+                                  f'{self.prediction_samples!r}')
+
+
+class CmgDumpLaw:
+    """The dump law as a stepper: ``step(t, H_s, B) -> M`` per control step (§3).
+
+    ``predict_b_body_t``: the on-board prediction of the body-axis field (T) at a time (s), needed by
+    'min_energy' only; at the first step of each orbit it is sampled over that orbit and eq. (3)'s
+    bracket c_n = W_n⁻¹ H_b is fixed for the orbit. The k laws use the sampled H_s handed in (see
+    :class:`SampledMomentum`); 'min_energy' ignores it.
+    """
+
+    def __init__(self, cfg: DumpLawConfig, clock: OrbitClock,
+                 predict_b_body_t: Callable[[float], np.ndarray] | None = None) -> None:
+        if cfg.law == 'min_energy' and predict_b_body_t is None:
+            raise ControllerError("law 'min_energy' needs predict_b_body_t, the predicted field along the orbit")
+        self.cfg, self.clock, self._predict = cfg, clock, predict_b_body_t
+        self._orbit: int | None = None
+        self._c = np.zeros(3)
+        self._undumpable = np.zeros(3)
+        self._unsaturated = np.zeros(3)
+
+    @property
+    def min_energy_vector(self) -> np.ndarray:
+        """Eq. (3)'s bracket for the current orbit, A·m²/T ('min_energy' only; zeros before the first step)."""
+        return self._c.copy()
+
+    @property
+    def undumpable_nms(self) -> np.ndarray:
+        """Part of H_b the predicted field cannot dump this orbit, N·m·s ('min_energy' only)."""
+        return self._undumpable.copy()
+
+    @property
+    def unsaturated_am2(self) -> np.ndarray:
+        """The last step's moment before the per-axis limit, A·m²."""
+        return self._unsaturated.copy()
+
+    def predicted_gramian(self, n: int) -> np.ndarray:
+        """W of orbit ``n`` from the prediction (trapezoid rule over ``prediction_samples`` intervals), T²·s."""
+        if self._predict is None:
+            raise ControllerError('no field prediction was given to this law')
+        t = np.linspace(self.clock.start_s(n), self.clock.start_s(n + 1), self.cfg.prediction_samples + 1)
+        b = np.array([as_vector3(self._predict(float(x)), 'predicted field') for x in t])
+        return field_gramian(b, trapezoid_weights(t))
+
+    def step(self, t_s: float, h_s_nms: np.ndarray, b_body_t: np.ndarray) -> np.ndarray:
+        """Moment command M (A·m², body, per-axis limited) for the step at ``t_s`` with sampled H_s and measured B."""
+        b = as_vector3(b_body_t, 'b_body_t')
+        cfg = self.cfg
+        if cfg.law == 'min_energy':
+            n = self.clock.index(t_s)
+            if n != self._orbit:
+                self._c, self._undumpable = min_energy_vector(self.predicted_gramian(n), cfg.h_b_nms)
+                self._orbit = n
+            m = np.cross(self._c, b)
+        else:
+            m = khb_moment(h_s_nms, b, cfg.k_seed, cfg.h_0_nms if cfg.law == 'khb_shifted' else None)
+        self._unsaturated = m
+        return m if cfg.max_moment_am2 is None else saturate(m, cfg.max_moment_am2)
+
+
+# ----------------------------------------------------------------------------------------------- report
+
+
+@dataclass(frozen=True)
+class OrbitStats:
+    """The seed's per-orbit quantities (§5, Tables 1 and 2), SI. None where an orbit has no night or day samples."""
+
+    orbit: int
+    t_start_s: float
+    duration_s: float
+    night_s: float
+    day_s: float
+    m_n_am2: float | None
+    m_d_am2: float | None
+    m_o_am2: float
+    m_m_am2: float
+    h_s_nms: np.ndarray
+    delta_h_s_nms: np.ndarray
+    magnetic_momentum_nms: np.ndarray
+    min_energy_m_o_am2: float
+    loop_gains: np.ndarray | None
+
+    @property
+    def bias_observed_nms(self) -> np.ndarray:
+        """ΔH_s − ∫ M × B dt: the bias the CMGs took this orbit (equals H_b under ideal attitude hold)."""
+        return self.delta_h_s_nms - self.magnetic_momentum_nms
+
+
+def _rms(m2: np.ndarray, w: np.ndarray) -> float | None:
+    """Time-weighted rms from squared magnitudes, None over an empty stretch (e.g. no orbital night)."""
+    total = float(w.sum())
+    return None if total == 0.0 else math.sqrt(float((w * m2).sum()) / total)
+
+
+def _whole_orbit_rms(m2: np.ndarray, w: np.ndarray) -> float:
+    return math.sqrt(float((w * m2).sum()) / float(w.sum()))
+
+
+def orbit_stats(t_s: np.ndarray, m_am2: np.ndarray, b_body_t: np.ndarray, day: np.ndarray, h_s_nms: np.ndarray,
+                clock: OrbitClock, h_b_nms: np.ndarray, k_seed: float | None = None) -> list[OrbitStats]:
+    """Per-orbit statistics over per-step arrays (one row per control step, M held over the step).
+
+    ``t_s`` (N,) step times; ``m_am2`` (N, 3) moment produced; ``b_body_t`` (N, 3) field; ``day`` (N,) True in
+    orbital day; ``h_s_nms`` (N, 3) the sampled H_s each step used; ``h_b_nms`` the bias momentum per orbit
+    (for the minimum-energy comparison of Table 2, evaluated on each orbit's own field); ``k_seed``: when
+    given, each orbit also carries the sampled loop's gains (eigenvalues of k W). Only orbits followed by a
+    sample of the next orbit (so that ΔH_s is known) are reported.
+    """
+    t = np.asarray(t_s, dtype=float)
+    m = np.asarray(m_am2, dtype=float)
+    b = np.asarray(b_body_t, dtype=float)
+    dayv = np.asarray(day, dtype=bool)
+    hs = np.asarray(h_s_nms, dtype=float)
+    n_steps = t.shape[0]
+    for name, arr, shape in (('m_am2', m, (n_steps, 3)), ('b_body_t', b, (n_steps, 3)), ('day', dayv, (n_steps,)),
+                             ('h_s_nms', hs, (n_steps, 3))):
+        if arr.shape != shape:
+            raise ControllerError(f'{name} must have shape {shape} to match t_s, got {arr.shape}')
+    h_b = as_vector3(h_b_nms, 'h_b_nms')
+    w_hold = hold_weights(t)
+    orbit_of = np.array([clock.index(x) for x in t])
+    m2 = np.einsum('ki,ki->k', m, m)
+    torque = np.cross(m, b)
+    out = []
+    for n in range(int(orbit_of[0]), int(orbit_of[-1])):
+        sel = orbit_of == n
+        nxt = np.flatnonzero(orbit_of == n + 1)
+        if not sel.any() or nxt.size == 0:
+            continue
+        w = w_hold[sel]
+        first = int(np.flatnonzero(sel)[0])
+        night_sel, day_sel = ~dayv[sel], dayv[sel]
+        gram = field_gramian(b[sel], w)
+        c, _ = min_energy_vector(gram, h_b)
+        m_min = np.cross(c, b[sel])
+        out.append(OrbitStats(
+            orbit=n, t_start_s=float(t[first]), duration_s=float(w.sum()), night_s=float(w[night_sel].sum()),
+            day_s=float(w[day_sel].sum()), m_n_am2=_rms(m2[sel][night_sel], w[night_sel]),
+            m_d_am2=_rms(m2[sel][day_sel], w[day_sel]), m_o_am2=_whole_orbit_rms(m2[sel], w),
+            m_m_am2=float(np.sqrt(m2[sel].max())), h_s_nms=hs[first].copy(), delta_h_s_nms=hs[nxt[0]] - hs[first],
+            magnetic_momentum_nms=(w[:, None] * torque[sel]).sum(axis=0),
+            min_energy_m_o_am2=_whole_orbit_rms(np.einsum('ki,ki->k', m_min, m_min), w),
+            loop_gains=None if k_seed is None else loop_gains(gram, k_seed)))
+    return out
+
+
+def _largest(values: list[float | None]) -> float | None:
+    present = [v for v in values if v is not None]
+    return max(present) if present else None
+
+
+def dump_report(stats: list[OrbitStats]) -> dict[str, Any]:
+    """JSON-ready report: the largest M_n, M_d, M_o, M_m (A·m²), |ΔH_s| (ft-lb-sec) and minimum-energy M_o over the
+    orbits, as the seed's Tables 1 and 2 take them, plus ``per_orbit`` (momenta in ft-lb-sec, the seed's unit)."""
+    if not stats:
+        raise ControllerError('no complete orbit in the data: the report needs the first step of the orbit after')
+
+    def vec(v: np.ndarray) -> list[float]:
+        return [float(x) for x in nms_to_ftlbs(v)]
+
+    per_orbit = []
+    for s in stats:
+        row: dict[str, Any] = {
+            'orbit': s.orbit, 't_start_s': s.t_start_s, 'duration_s': s.duration_s, 'night_s': s.night_s,
+            'day_s': s.day_s, 'M_n_am2': s.m_n_am2, 'M_d_am2': s.m_d_am2, 'M_o_am2': s.m_o_am2, 'M_m_am2': s.m_m_am2,
+            'H_s_ftlbs': vec(s.h_s_nms), 'delta_H_s_ftlbs': float(nms_to_ftlbs(np.linalg.norm(s.delta_h_s_nms))),
+            'delta_H_s_vector_ftlbs': vec(s.delta_h_s_nms), 'magnetic_dump_ftlbs': vec(s.magnetic_momentum_nms),
+            'bias_observed_ftlbs': vec(s.bias_observed_nms), 'min_energy_M_o_am2': s.min_energy_m_o_am2,
+        }
+        if s.loop_gains is not None:
+            row['loop_gains'] = [float(x) for x in s.loop_gains]
+        per_orbit.append(row)
+    return {
+        'orbits': len(stats),
+        'M_n_am2': _largest([s.m_n_am2 for s in stats]),
+        'M_d_am2': _largest([s.m_d_am2 for s in stats]),
+        'M_o_am2': _largest([s.m_o_am2 for s in stats]),
+        'M_m_am2': _largest([s.m_m_am2 for s in stats]),
+        'delta_H_s_ftlbs': _largest([r['delta_H_s_ftlbs'] for r in per_orbit]),
+        'min_energy_M_o_am2': _largest([s.min_energy_m_o_am2 for s in stats]),
+        'per_orbit': per_orbit,
+    }
