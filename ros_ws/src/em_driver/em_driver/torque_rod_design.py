@@ -23,6 +23,8 @@ flux density, L and τ = L/R; then "vary l_c and r_c" until the design is optima
   feasible point. The moment is non-monotonic in r_c (thick windings lower n·I), and the
   winding's layer count makes the functions only piecewise smooth, so a grid-refinement
   search is used rather than a gradient method; scipy is not needed for two bounded variables.
+  When no grid point is feasible the largest constraint violation is minimised the same way
+  first: a feasible set thinner than a cell is found there and then refined for mass.
 * Infeasible requests raise :class:`InfeasibleDesignError` naming the binding constraint(s):
   each constraint is first checked alone over the box (e.g. ``mass``: even the thinnest
   core's rod, whose wire alone is fixed by V, P and AWG, is too heavy); if each is reachable
@@ -235,16 +237,21 @@ def _shrink(box: tuple[tuple[float, float], tuple[float, float]], at: tuple[floa
     return out[0], out[1]
 
 
-def _search(req: DesignRequest, feasible_for: tuple[str, ...], minimise: str) -> tuple[float, tuple[float, float], int, int]:
+def _search(req: DesignRequest, feasible_for: tuple[str, ...], minimise: str,
+            start: tuple[float, float] | None = None) -> tuple[float, tuple[float, float], int, int]:
     """Minimise ``minimise`` ('objective' = the rod's mass, kg; 'violation' = the largest g of ``feasible_for``;
     or one constraint's name: its g)
     over the points that satisfy ``feasible_for`` (all points for 'violation'), by grid refinement.
 
+    ``start``: a point known to qualify (the search then refines around the better of it and the grid).
     Returns (best value, (l_c, r_c), rounds, evaluations); the value is inf when no grid point qualifies.
     """
     bounds = _bounds(req)
     box = bounds
     best, best_at = math.inf, (math.nan, math.nan)
+    if start is not None:
+        mass, _ = _evaluate(req, np.array([start[0]]), np.array([start[1]]))
+        best, best_at = float(mass[0]), start
     rounds = evaluations = 0
     while rounds < _MAX_ROUNDS:
         rounds += 1
@@ -311,8 +318,12 @@ def design_torque_rod(req: DesignRequest) -> TorqueRodDesign:
             f'no torque rod meets the request; binding: power. V²/P = {req.voltage_v ** 2 / req.power_max_w:.3g} Ω '
             f'leaves nothing for the winding after the bridge’s {req.bridge_resistance_ohm:g} Ω', ('power',))
     best, (length, radius), rounds, evaluations = _search(req, CONSTRAINTS, 'objective')
-    if not math.isfinite(best):
-        raise _infeasible(req)
+    if not math.isfinite(best):  # no grid point feasible: the feasible set may be thinner than a grid cell
+        violation, at, more_rounds, more = _search(req, CONSTRAINTS, 'violation')
+        if violation > 0.0:
+            raise _infeasible(req)
+        best, (length, radius), rounds, evaluations = _search(req, CONSTRAINTS, 'objective', start=at)
+        rounds, evaluations = rounds + more_rounds, evaluations + more
     rod = TorqueRod(length, radius, CORE_MATERIALS[req.core], req.wire, req.coil_resistance_ohm / req.wire.ohm_per_m,
                     req.windings)
     p = rod.props
