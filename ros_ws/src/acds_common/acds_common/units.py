@@ -21,6 +21,8 @@ SLUG_FT2_KG_M2 = FT_LB_NM
 DYNE_CM_NM = 1e-7
 #: 1 nautical mile in m.
 NMI_M = 1852.0
+#: 1 g·mm² in kg·m² (seed 003 quotes J_min from the CAD model in g·mm²).
+G_MM2_KG_M2 = 1e-9
 #: 1 pound-mass in kg (also: a weight in lbs at 1 g, as the seeds quote hardware weights).
 LB_KG = 0.45359237
 #: 1 inch in m.

@@ -21,8 +21,9 @@ Circuit model (all currents in A, voltages in V, times in s):
   (same −(E + 2·ED) path) down to zero, then the transistors take over. The
   current therefore passes through zero monotonically, without a jump.
 
-Between switching events the RL circuit is integrated exactly:
-i(t) = i_∞ + (i_0 − i_∞)·exp(−t/τ); each next event time is solved with a log.
+Between switching events the RL circuit is integrated exactly
+(``em_driver.rl_circuit``): i(t) = i_∞ + (i_0 − i_∞)·exp(−t/τ); each next event
+time is solved with a log.
 
 Conventions:
 * ``duty`` is the fraction of the period the comparator commands the bridge
@@ -43,6 +44,8 @@ from dataclasses import dataclass
 from enum import StrEnum
 
 import numpy as np
+
+from em_driver import rl_circuit
 
 __all__ = [
     'EmDriverError',
@@ -408,15 +411,10 @@ class BridgeSwitchCoil:
                     returned += n * supply * area_off
                     switches += 2 * n
             remaining = duration_s - t
-            dt = remaining
-            if i_inf != i:
-                ratio = (target - i_inf) / (i - i_inf)
-                if 0.0 < ratio <= 1.0:
-                    dt = min(remaining, -tau * math.log(ratio))
+            dt = min(remaining, rl_circuit.time_to_reach_s(i, i_inf, target, tau))
             hit = dt < remaining
-            decay = math.exp(-dt / tau)
-            i_end = target if hit else i_inf + (i - i_inf) * decay
-            area = i_inf * dt + (i - i_inf) * tau * (1.0 - decay)  # ∫ i dt over the segment
+            i_free, area = rl_circuit.segment(i, i_inf, tau, dt)  # area = ∫ i dt over the segment
+            i_end = target if hit else i_free
             if recorder is not None:
                 recorder.segment(t, dt, i, i_inf, tau, on)
             integral_i += area

@@ -1,0 +1,38 @@
+"""``acds design-torque-rod`` through the user command: report, JSON record, infeasible and bad requests."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run_acds(*args: str) -> subprocess.CompletedProcess[str]:
+    env = {'PYTHONPATH': str(ROOT / 'scripts'), 'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': '/tmp/acds_ros_log'}
+    return subprocess.run([sys.executable, '-m', 'acds_cli', *args], capture_output=True, text=True,
+                          cwd=ROOT, env=env, timeout=120, check=False)
+
+
+def test_design_prints_every_quantity_and_writes_the_record(tmp_path: Path) -> None:
+    out = tmp_path / 'rod.json'
+    proc = run_acds('design-torque-rod', '--awg', '35', '--json', str(out))
+    assert proc.returncode == 0, proc.stderr
+    for label in ('core length', 'core radius', 'turns per winding', 'resistance per winding', 'inductance per winding',
+                  'time constant', 'demagnetising factor', 'core flux density', 'core saturates at full current',
+                  'dipole moment at full current', 'mass'):
+        assert label in proc.stdout
+    record = json.loads(out.read_text())
+    assert record['moment_am2'] >= 0.1552 and record['mass_g'] <= 100.0 and record['power_w'] <= 0.5 + 1e-12
+    assert record['core_saturates'] is False and record['awg'] == 35
+
+
+def test_infeasible_and_bad_requests_exit_non_zero_with_one_line() -> None:
+    proc = run_acds('design-torque-rod', '--moment-am2', '5', '--mass-g', '10')
+    assert proc.returncode == 1 and 'binding: moment, mass' in proc.stderr and 'Traceback' not in proc.stderr
+    proc = run_acds('design-torque-rod', '--envelope-mm', '35x35')
+    assert proc.returncode == 2 and 'envelope must be AxBxC' in proc.stderr
+    proc = run_acds('design-torque-rod', '--awg', '20')
+    assert proc.returncode == 2 and 'insulation' in proc.stderr and 'Traceback' not in proc.stderr
