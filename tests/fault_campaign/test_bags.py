@@ -248,12 +248,12 @@ def test_sqlite_hot_journal_is_rolled_back_in_memory_only(tmp_path, folder_state
     before = folder_state(bag)
     with Reader(db) as naive:  # ignoring the journal sees the torn, uncommitted state
         torn = sum(1 for _ in naive.messages())
-    read = open_bag(bag, note=lambda _t: None)
+    read = open_bag(bag)
     msgs = list(read.messages())
+    assert folder_state(bag) == before, 'reading rolled back the journal on disk'
     assert read.counts == {topics.CLOCK: 100, WHEELS: 100} and len(msgs) == 200
     assert [t for topic, t, _ in msgs if topic == topics.CLOCK] == [k * 500_000_000 for k in range(100)]
     assert torn != 200, 'the test needs a journal that matters (uncommitted pages in the database file)'
-    assert folder_state(bag) == before, 'reading rolled back the journal on disk'
     # what SQLite itself restores (on a copy): the same rows
     copy = tmp_path / 'sqlite_copy'
     copy.mkdir()
@@ -273,17 +273,17 @@ def test_unclosed_mcap_streams_in_time_order_across_out_of_order_chunks(tmp_path
     bag = tmp_path / 'late'
     make_bag(bag, steps=200, late=100, flush_every=40, spill=10, close=False)
     before = folder_state(bag)
-    read = open_bag(bag, note=lambda _t: None)
+    read = open_bag(bag)
+    msgs = list(read.messages())
+    assert folder_state(bag) == before
     assert read.unclosed == 'up to its last complete chunk'
     assert read.counts == {topics.CLOCK: 200, WHEELS: 100}
     starts = read.source.starts
     assert starts != sorted(starts), 'the late history makes a chunk start before the ones written earlier'
-    msgs = list(read.messages())
     stamps = [t for _, t, _ in msgs]
     assert stamps == sorted(stamps)
     assert [topic for topic, t, _ in msgs if t == 0] == [topics.CLOCK, WHEELS], 'equal times: recorded order'
     assert read.stats()[WHEELS].last_ns == 99 * 500_000_000
-    assert folder_state(bag) == before
 
 
 # ---- 2. acds recover SRC DEST ------------------------------------------------------------------------------
@@ -310,7 +310,7 @@ def test_recover_writes_a_repaired_copy_and_never_touches_the_source(tmp_path, f
     assert custom['acds.recovered'].startswith('170 messages from ')
     assert yaml.safe_load(custom['acds.publishers']) == {WHEELS: ['reaction_wheels']}
     from acds_cli.bag.reader import open_bag
-    assert got == list(open_bag(src, note=lambda _t: None).messages()), 'same messages, stamps and order'
+    assert got == list(open_bag(src).messages()), 'same messages, stamps and order'
     # the copy is an ordinary closed bag
     info = acds('info', str(dest))
     assert info.returncode == 0 and info.stderr == '' and 'recovered:  170 messages' in info.stdout
@@ -351,18 +351,20 @@ def test_a_bag_being_recorded_is_refused_in_one_line(tmp_path, folder_state, dom
     assert acds('info', str(bag)).returncode == 0
 
 
-def test_a_dead_recorders_lock_file_does_not_look_like_a_recording(tmp_path):
+def test_a_dead_recorders_lock_file_does_not_look_like_a_recording(tmp_path, folder_state):
     """The killed writer leaves its lock file, and its child process (a node of a dead launcher) lives on:
     neither makes the bag look recorded (the lock is not inherited; a dead holder's lock is released)."""
-    from acds_cli.bag.recording import being_recorded
 
     bag = tmp_path / 'crashed'
     got = make_bag(bag, steps=40, child=True, close=False)
     try:
-        assert (bag / 'acds_recording.lock').exists()
-        assert not being_recorded(bag)
+        before = folder_state(bag)
         proc = acds('info', str(bag))
-        assert proc.returncode == 0 and 'was not closed' in proc.stderr, proc.stderr
+        assert proc.returncode == 0 and f'bag {bag} was not closed' in proc.stderr, proc.stderr
+        assert folder_state(bag) == before
+        assert (bag / 'acds_recording.lock').exists(), 'the dead writer left its lock file'
+        from acds_cli.bag.recording import being_recorded
+        assert not being_recorded(bag)
     finally:
         os.kill(got['child'], signal.SIGKILL)
 

@@ -258,7 +258,8 @@ def open_bag(path: Path | str, *, use_metadata: bool = True, note: Callable[[str
     """Open a bag read-only: a bag folder, or its storage file (MCAP or sqlite3).
 
     ``use_metadata=False`` reads the storage file even when ``metadata.yaml`` exists (how a repair reads).
-    ``note`` receives the one line saying that an unclosed bag was read (default: stderr).
+    ``note`` receives the one line saying that an unclosed bag was read (default: stderr; not with
+    ``use_metadata=False``, whose caller reports what it read).
     Raises :class:`BagError` (one line) for a bag being recorded and for anything that is not a readable bag.
     """
     note = note or _stderr_note
@@ -272,7 +273,10 @@ def open_bag(path: Path | str, *, use_metadata: bool = True, note: Callable[[str
         return _open_closed(folder)
     state = 'was not closed (no metadata.yaml: its recorder died?)'
     if file.suffix == '.mcap':
-        source: Any = UnclosedMcap(file)
+        try:
+            source: Any = UnclosedMcap(file)
+        except OSError as exc:
+            raise BagError(f'bag {file}: cannot read it: {exc.strerror or exc}') from None
         types = {topic: ty for topic, ty, _ in source.channels.values()}
         qos = {topic: q for topic, _, q in source.channels.values()}
         counts = {t: source.counts.get(t, 0) for t in types}
@@ -280,12 +284,12 @@ def open_bag(path: Path | str, *, use_metadata: bool = True, note: Callable[[str
         if source.complete:
             state, unclosed = 'has no metadata.yaml', 'to its end (a complete MCAP file)'
     else:
-        target, rolled_back = committed_view(file)
-        source = _Rosbags(target)
         try:
+            target, rolled_back = committed_view(file)
             types, qos, counts, _ = _describe(target)
         except Exception as exc:  # noqa: BLE001 (apsw / rosbags errors on a foreign or damaged file)
             raise BagError(f'bag {file}: not a readable sqlite3 bag ({_one_line(exc)})') from None
+        source = _Rosbags(target)
         unclosed = 'up to its last committed transaction' + (
             ' (the interrupted one left out, from its journal)' if rolled_back else '')
     info = _read_info_file(folder)

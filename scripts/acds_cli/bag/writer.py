@@ -238,14 +238,19 @@ class BagWriter:
         except OSError as exc:
             self._writer.release()
             raise BagError(f'bag {self.path}: cannot create it: {exc.strerror or exc}') from None
+        except BaseException:
+            self._writer.release()
+            raise
         self._last_flush = time.monotonic()
+
+    def _publishers_yaml(self) -> str:
+        return yaml.safe_dump({t: sorted(v) for t, v in sorted(self.publishers.items())}, sort_keys=True)
 
     def _write_run_info(self) -> None:
         """The sidecar, replaced atomically (a crash never leaves half of it); publishers as known so far."""
         info = dict(self.info)
         if self.publishers:
-            info['publishers'] = yaml.safe_dump({t: sorted(v) for t, v in sorted(self.publishers.items())},
-                                                sort_keys=True)
+            info['publishers'] = self._publishers_yaml()
         tmp = self.path / f'{RUN_INFO_FILE}.tmp'
         tmp.write_text(yaml.safe_dump({'storage': self.storage, 'flush_period_s': self.flush_period_s, **info},
                                       sort_keys=False))
@@ -333,8 +338,7 @@ class BagWriter:
             if self.closed:
                 return
             self.closed = True
-            info = {**self.info, 'publishers': yaml.safe_dump(
-                {t: sorted(v) for t, v in sorted(self.publishers.items())}, sort_keys=True)}
+            info = {**self.info, 'publishers': self._publishers_yaml()}
             for key, value in info.items():
                 self._writer.set_custom_data(f'acds.{key}', value)
             try:
