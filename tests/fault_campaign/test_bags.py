@@ -15,7 +15,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 import tracemalloc
 from pathlib import Path
 
@@ -210,7 +209,7 @@ def test_every_verb_reads_an_unclosed_bag_without_changing_it(tmp_path, folder_s
     bag = tmp_path / 'area' / 'killed'
     got = make_bag(bag, storage, steps=120, spill=30, close=False)
     assert got['flushed'] == {topics.CLOCK: 120, WHEELS: 120}
-    assert sorted(p.name for p in bag.iterdir()) >= ['acds_recording.lock', 'acds_run.yaml'], \
+    assert {p.name for p in bag.iterdir()} >= {'acds_recording.lock', 'acds_run.yaml'}, \
         'a killed writer leaves its (released) lock file behind'
     before = folder_state(tmp_path / 'area')
     for verb in BAG_VERBS:
@@ -431,9 +430,7 @@ def test_bad_bag_options_are_one_line_before_reading(tmp_path, unclosed_bag, fol
     blocker.write_text('x')
     fill = {'bag': str(unclosed_bag), 'file': str(blocker)}
     before = folder_state(tmp_path)
-    started = time.monotonic()
     proc = acds(*(a.format(**fill) for a in args))
     line = one_line(proc)  # the unclosed-bag note would be a second line: the bag was not read
     assert proc.returncode == 2 and line.startswith(f'acds {args[0]}: ') and message.format(**fill) in line, line
     assert folder_state(tmp_path) == before
-    assert time.monotonic() - started < 60
