@@ -98,8 +98,8 @@ class UnclosedMcap:
                     raise BagError(f'bag {self.file}: its chunks use a compression this reader lacks ({exc})') from None
                 except Exception as exc:  # noqa: BLE001 (a truncated or torn record: what reached the disk ends here)
                     if first:
-                        raise BagError(f'bag {self.file}: not a readable MCAP file ({type(exc).__name__} '
-                                       f'in its first record)') from None
+                        why = 'is cut off' if isinstance(exc, _Truncated) else f'is unreadable ({type(exc).__name__})'
+                        raise BagError(f'bag {self.file}: not a readable MCAP file (its first record {why})') from None
                     return
                 if first and not (isinstance(rec, Header) and rec.profile == 'ros2'):
                     raise BagError(f'bag {self.file}: not an MCAP file of ROS 2 messages (no "ros2" header record)')
