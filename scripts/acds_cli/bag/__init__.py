@@ -8,6 +8,11 @@ Timestamps are sim time: a message's ``header.stamp`` (``clock`` for
 latest ``/clock``. The run's scenario, the exact node parameters and who
 published each topic are stored in ``custom_data`` (``acds.*`` keys) and, from
 the moment recording starts, beside the storage file in ``acds_run.yaml``.
+
+Reading never writes: every verb opens bags read-only and streams their
+messages (:mod:`.reader`); an unclosed bag is read as far as it is readable
+(:mod:`.salvage`), a bag being recorded is recognised by its writer's lock
+(:mod:`.recording`), and a repaired copy is an explicit step (:mod:`.recover`).
 """
 
 from __future__ import annotations

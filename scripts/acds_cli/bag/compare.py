@@ -78,6 +78,14 @@ class CompareResult:
         return '\n'.join(lines)
 
 
+def check_tolerance(tolerance: float) -> float:
+    """``--tolerance``: a finite number >= 0 (0: bit-identical); a one-line :class:`BagError` otherwise."""
+    if not math.isfinite(tolerance) or tolerance < 0:
+        raise BagError(f'--tolerance {tolerance:g}: must be a finite number >= 0 '
+                       f'(absolute float difference allowed; 0 = bit-identical)')
+    return tolerance
+
+
 def parse_sets(items: list[str] | None) -> dict[str, Any]:
     """``['name:=value', ...]`` → {name: YAML-parsed value}."""
     out = {}
@@ -126,7 +134,7 @@ def outputs_of(bag: Bag, node: str) -> list[str]:
     pubs = yaml.safe_load(bag.info.get('publishers', '') or '{}') or {}
     if not pubs:
         raise BagError(f'bag {bag.path}: it does not say which node published what (acds.publishers)')
-    return sorted(t for t, names in pubs.items() if node in names and t in bag.raw and bag.raw[t])
+    return sorted(t for t, names in pubs.items() if node in names and bag.has(t))
 
 
 def _by_step(msgs: list[tuple[int, bytes]], dt_ns: int, keyed: bool) -> dict[int, bytes]:
@@ -135,68 +143,76 @@ def _by_step(msgs: list[tuple[int, bytes]], dt_ns: int, keyed: bool) -> dict[int
     return {t // dt_ns: d for t, d in msgs}
 
 
-def _own_diagnostics(msgs: list[tuple[int, bytes]], node: str) -> list[tuple[int, bytes]]:
-    ts = typestore()
-    out = []
-    for t, d in msgs:
-        m = ts.deserialize_cdr(d, 'diagnostic_msgs/msg/DiagnosticArray')
-        if m.status and m.status[0].name == node:
-            out.append((t, d))
-    return out
+def _own(data: bytes, node: str) -> bool:
+    """Whether a raw DiagnosticArray is ``node``'s own status."""
+    m = typestore().deserialize_cdr(data, 'diagnostic_msgs/msg/DiagnosticArray')
+    return bool(m.status) and m.status[0].name == node
 
 
-def _diff(rec: Any, new: Any, tol: float, result: CompareResult, where: str) -> str | None:
-    """First differing field of two messages (None if equal within tol); updates the largest float diff."""
+def _diff(rec: Any, new: Any, tol: float, where: str) -> tuple[str | None, float, str]:
+    """(first field differing beyond tol or None, largest float difference, where it is) of two messages."""
     a, b = list(iter_fields(rec)), list(iter_fields(new))
     if len(a) != len(b):
-        return f'{where}: different number of fields ({len(a)} recorded, {len(b)} now)'
-    first = None
+        return f'{where}: different number of fields ({len(a)} recorded, {len(b)} now)', 0.0, ''
+    first, top, top_where = None, 0.0, ''
     for (path, x), (path2, y) in zip(a, b, strict=True):
         if path != path2:
-            return first or f'{where}: field {path} recorded, {path2} now'
+            return first or f'{where}: field {path} recorded, {path2} now', top, top_where
         if isinstance(x, float) or isinstance(y, float):
             x, y = float(x), float(y)
             d = abs(x - y) if math.isfinite(x) and math.isfinite(y) else (0.0 if x == y or (x != x and y != y)
                                                                            else math.inf)
-            if d > result.max_diff:
-                result.max_diff, result.max_diff_where = d, f'{where} field {path}'
+            if d > top:
+                top, top_where = d, f'{where} field {path}'
             if (d > tol or (tol == 0 and x != y)) and first is None:
                 first = f'{where} field {path}: recorded {x!r}, now {y!r} (difference {d:.6g})'
         elif x != y and first is None:
             first = f'{where} field {path}: recorded {x!r}, now {y!r}'
-    return first
+    return first, top, top_where
 
 
 def compare_outputs(bag: Bag, node: str, outputs: list[str], new: dict[str, list[tuple[int, bytes]]],
                     tolerance: float) -> CompareResult:
-    """Compare recorded and new outputs, step by step (earliest difference wins)."""
+    """Compare the recorded outputs (streamed from the bag) with the new ones, step by step.
+
+    The earliest difference wins: steps in order, at one step a step's data topics before diagnostics,
+    then by topic name; the largest float difference reported is the earliest one of that size.
+    """
     ts = typestore()
     dt_ns = bag.control_period_ns or 1
     result = CompareResult(node, tolerance)
-    items = []
-    for topic in outputs:
-        rec_msgs = bag.raw[topic]
-        new_msgs = new.get(topic, [])
-        if topic == DIAGNOSTICS:
-            rec_msgs, new_msgs = _own_diagnostics(rec_msgs, node), _own_diagnostics(new_msgs, node)
-        keyed = stamped(bag.types[topic])
-        rec, now = _by_step(rec_msgs, dt_ns, keyed), _by_step(new_msgs, dt_ns, keyed)
-        for k in sorted(rec):
-            items.append((k, topic, rec[k], now.get(k), keyed))
-    items.sort(key=lambda x: (x[0], x[1] == DIAGNOSTICS, x[1]))  # a step's data topics before diagnostics
-    for k, topic, rec_raw, new_raw, keyed in items:
+    keyed = {t: stamped(bag.types[t]) for t in outputs}
+    now = {t: _by_step([(k, d) for k, d in new.get(t, []) if t != DIAGNOSTICS or _own(d, node)], dt_ns, keyed[t])
+           for t in outputs}
+    index = dict.fromkeys(outputs, 0)
+    first: tuple[tuple[int, bool, str], str] | None = None
+    top: tuple[float, tuple[int, bool, str], str] | None = None
+    for topic, t, rec_raw in bag.messages(outputs):
+        if topic == DIAGNOSTICS and not _own(rec_raw, node):
+            continue
+        if keyed[topic]:
+            k = t // dt_ns
+        else:
+            k, index[topic] = index[topic], index[topic] + 1
+        order = (k, topic == DIAGNOSTICS, topic)  # a step's data topics before diagnostics
         result.compared[topic] = result.compared.get(topic, 0) + 1
-        where = f'topic {topic} step {k}' if keyed else f'topic {topic} message #{k}'
+        where = f'topic {topic} step {k}' if keyed[topic] else f'topic {topic} message #{k}'
+        new_raw = now[topic].get(k)
         if new_raw is None:
-            result.first = result.first or f'{where}: recorded, but the node published nothing for it'
+            text: str | None = f'{where}: recorded, but the node published nothing for it'
+        elif new_raw == rec_raw:
             continue
-        if new_raw == rec_raw:
-            continue
-        msgtype = bag.types[topic]
-        first = _diff(ts.deserialize_cdr(rec_raw, msgtype), ts.deserialize_cdr(new_raw, msgtype), tolerance,
-                      result, where)
-        if first and result.first is None:
-            result.first = first
+        else:
+            msgtype = bag.types[topic]
+            text, d, d_where = _diff(ts.deserialize_cdr(rec_raw, msgtype), ts.deserialize_cdr(new_raw, msgtype),
+                                     tolerance, where)
+            if d > 0 and (top is None or d > top[0] or (d == top[0] and order < top[1])):
+                top = (d, order, d_where)
+        if text is not None and (first is None or order < first[0]):
+            first = (order, text)
+    if top is not None:
+        result.max_diff, result.max_diff_where = top[0], top[2]
+    result.first = first[1] if first is not None else None
     return result
 
 
@@ -248,6 +264,7 @@ def run_compare(bag_path: Path | str, node: str, *, tolerance: float = 0.0, scen
     """Replay ``bag_path``'s inputs into ``node`` alone and compare its outputs (raises BagError on set-up)."""
     from ..launcher import DomainLease
 
+    check_tolerance(tolerance)
     log = log or (lambda text: print(text, file=sys.stderr, flush=True))
     if node == TIME_OWNER:
         raise BagError(f'{node} is the time owner: compare replays /clock into a non-owner node')
@@ -259,10 +276,11 @@ def run_compare(bag_path: Path | str, node: str, *, tolerance: float = 0.0, scen
     if not [t for t in outputs if t != DIAGNOSTICS]:
         raise BagError(f'bag {bag.path}: no recorded outputs of node {node} '
                        f'(recorded publishers: {bag.info.get("publishers", "?").strip()})')
-    inputs = [t for t in bag.raw if t not in outputs and t != DIAGNOSTICS and bag.raw[t]]
+    inputs = [t for t in bag.types if t not in outputs and t != DIAGNOSTICS and bag.has(t)]
     params = node_parameters(bag, node, scenario, sets)
     n_clock = bag.count(topics.CLOCK)
-    pacing = [t for t in outputs if t != DIAGNOSTICS and len(bag.raw[t]) >= n_clock - 2 and stamped(bag.types[t])]
+    pacing = [t for t in outputs if t != DIAGNOSTICS and bag.count(t) >= n_clock - 2 and stamped(bag.types[t])]
+    last_step = {t: bag.stats()[t].last_ns // dt_ns for t in pacing}
     tol_text = f'tolerance {tolerance:g}' if tolerance > 0 else 'bit-identical'
     log(f'[compare] {node} alone against {bag.path}: {n_clock} steps; replaying {len(inputs)} topics; '
         f'comparing {", ".join(outputs)} ({tol_text})')
@@ -324,7 +342,7 @@ def run_compare(bag_path: Path | str, node: str, *, tolerance: float = 0.0, scen
         while True:
             with lock:
                 counts = sum(len(v) for v in new.values())
-                done = all(progress[t] >= bag.raw[t][-1][0] // dt_ns for t in pacing)
+                done = all(progress[t] >= last_step[t] for t in pacing)
             if done:
                 break
             if counts != seen:

@@ -1,7 +1,7 @@
 """Play a bag back into a ROS graph: raw CDR with the original types, ``/clock`` included.
 
-Messages go out in sim-time order (at equal times ``/clock`` first), as fast
-as possible or at ``rate`` × real time. Flow control: every
+Messages go out in sim-time order (at equal times ``/clock`` first), streamed
+from the bag's storage, as fast as possible or at ``rate`` × real time. Flow control: every
 :data:`ACK_EVERY_STEPS` clock steps the player waits until every matched
 reader has acknowledged what it sent, so a subscriber never falls behind the
 lockstep history depth (1000). Topic selection and remapping make the player
@@ -10,10 +10,12 @@ stand in for any subset of nodes.
 
 from __future__ import annotations
 
+import math
 import os
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import closing
 from pathlib import Path
 from typing import Any
 
@@ -54,6 +56,13 @@ def rclpy_qos(q: Any) -> QoSProfile:
         else DurabilityPolicy.VOLATILE)
 
 
+def check_rate(rate: float) -> float:
+    """``--rate``: a finite number ≥ 0 (0: as fast as possible); a one-line :class:`BagError` otherwise."""
+    if not math.isfinite(rate) or rate < 0:
+        raise BagError(f'--rate {rate:g}: must be a finite number >= 0 (sim time per wall time; 0 = as fast as possible)')
+    return rate
+
+
 def parse_remaps(items: list[str] | None) -> dict[str, str]:
     """``['a:=b', ...]`` → {absolute a: absolute b}."""
     out = {}
@@ -71,11 +80,11 @@ class Player:
     def __init__(self, bag: Bag, *, domain_id: int | None = None, select: list[str] | None = None,
                  remap: dict[str, str] | None = None, name: str = 'acds_player') -> None:
         self.bag = bag
-        wanted = {topics.resolve(t) for t in select} if select else set(bag.raw)
-        unknown = sorted(wanted - set(bag.raw))
+        wanted = {topics.resolve(t) for t in select} if select else set(bag.types)
+        unknown = sorted(wanted - set(bag.types))
         if unknown:
-            raise BagError(f'bag {bag.path}: no topic {", ".join(unknown)} (topics: {", ".join(sorted(bag.raw))})')
-        if topics.CLOCK in bag.raw:
+            raise BagError(f'bag {bag.path}: no topic {", ".join(unknown)} (topics: {", ".join(sorted(bag.types))})')
+        if topics.CLOCK in bag.types:
             wanted.add(topics.CLOCK)  # /clock always goes with the data
         self.topics = wanted
         self.remap = remap or {}
@@ -114,14 +123,9 @@ class Player:
         """Wait until every matched reader acknowledged everything published (flow control)."""
         return all(p.wait_for_all_acked(Duration(seconds=timeout_s)) for p in self.publishers.values())
 
-    def steps(self) -> list[tuple[int, list[tuple[str, bytes]]]]:
-        """The selected messages grouped by timestamp, in order: [(t_ns, [(topic, raw), ...])]."""
-        out: list[tuple[int, list[tuple[str, bytes]]]] = []
-        for t, topic, data in self.bag.ordered(self.topics):
-            if not out or out[-1][0] != t:
-                out.append((t, []))
-            out[-1][1].append((topic, data))
-        return out
+    def steps(self) -> Iterator[tuple[int, list[tuple[str, bytes]]]]:
+        """The selected messages grouped by timestamp, in order, streamed: (t_ns, [(topic, raw), ...])."""
+        return self.bag.ordered(self.topics)
 
     def publish_group(self, items: list[tuple[str, bytes]]) -> None:
         """Publish one timestamp's messages (raw bytes)."""
@@ -136,22 +140,24 @@ class Player:
         ``before_step(t_ns)`` (optional) is called before each timestamp and may block (flow control);
         returning False stops playback.
         """
+        check_rate(rate)
         stop = stop or self._stop
-        groups = self.steps()
-        t_first = groups[0][0] if groups else 0
-        wall0 = time.monotonic()
-        for i, (t, items) in enumerate(groups, 1):
-            if stop.is_set():
-                break
-            if rate > 0:
-                delay = wall0 + (t - t_first) / 1e9 / rate - time.monotonic()
-                if delay > 0 and stop.wait(delay):
+        t_first = wall0 = None
+        with closing(self.steps()) as groups:  # stopping early closes the storage reader at once
+            for i, (t, items) in enumerate(groups, 1):
+                if stop.is_set():
                     break
-            if before_step is not None and not before_step(t):
-                break
-            self.publish_group(items)
-            if i % ACK_EVERY_STEPS == 0:
-                self.ack()
+                if t_first is None or wall0 is None:
+                    t_first, wall0 = t, time.monotonic()
+                if rate > 0:
+                    delay = wall0 + (t - t_first) / 1e9 / rate - time.monotonic()
+                    if delay > 0 and stop.wait(delay):
+                        break
+                if before_step is not None and not before_step(t):
+                    break
+                self.publish_group(items)
+                if i % ACK_EVERY_STEPS == 0:
+                    self.ack()
         self.ack(10.0)
         return self.published
 

@@ -6,11 +6,15 @@ momentum ft-lb-sec, magnetic moment A·m²), Fig. 4-18 / 4-43 / 4-51 (magnetic
 moments and the angle between the Earth field and the momentum vector),
 plus the mode timeline. SSS (seed 001): spin rate (rpm) and the magnetic
 torque about the spin axis (dyne-cm). A figure whose topics are absent is skipped.
-Time axes are sim minutes.
+Time axes are sim minutes. The series are gathered in one streaming pass over
+the bag (only the plotted fields are kept), and the output folder is checked
+before the bag is read.
 """
 
 from __future__ import annotations
 
+from array import array
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -19,16 +23,36 @@ import yaml
 from acds_common import topics, units
 
 from .reader import Bag, open_bag
+from .writer import check_out_dir, typestore
 
 AXES = (('x', 'roll'), ('y', 'pitch'), ('z', 'yaw'))
 
 
-def _series(bag: Bag, topic: str, get: Any) -> tuple[np.ndarray, np.ndarray]:
-    msgs = bag.messages(topic)
-    if not msgs:
+Gathered = dict[str, tuple[array, Any]]
+
+
+def _gather(bag: Bag, vectors: dict[str, Callable[[Any], list[float]]],
+            texts: dict[str, Callable[[Any], str]]) -> Gathered:
+    """{topic: (timestamps ns, values)} in one pass over the bag: 3-vectors packed as doubles, texts as a list."""
+    ts = typestore()
+    getters = {topics.resolve(t): get for t, get in (*vectors.items(), *texts.items()) if bag.has(t)}
+    out: Gathered = {t: (array('q'), [] if t in {topics.resolve(x) for x in texts} else array('d')) for t in getters}
+    for topic, t, data in bag.messages(getters):
+        stamps, values = out[topic]
+        stamps.append(t)
+        got = getters[topic](ts.deserialize_cdr(data, bag.types[topic]))
+        if isinstance(values, array):
+            values.extend(got)
+        else:
+            values.append(got)
+    return out
+
+
+def _series(gathered: Gathered, topic: str) -> tuple[np.ndarray, np.ndarray]:
+    stamps, values = gathered.get(topics.resolve(topic), ((), ()))
+    if not len(stamps):
         return np.zeros(0), np.zeros((0, 3))
-    t = np.array([ts for ts, _ in msgs]) / 60e9
-    return t, np.array([get(m) for _, m in msgs], dtype=float)
+    return np.asarray(stamps, dtype=float) / 60e9, np.asarray(values, dtype=float).reshape(-1, 3)
 
 
 def _v3(v: Any) -> list[float]:
@@ -65,10 +89,27 @@ def make_plots(bag_path: Path | str, out_dir: Path | str | None = None) -> list[
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
 
+    out = Path(out_dir) if out_dir is not None else None
+    if out is not None:
+        check_out_dir(out)  # before reading anything
     bag = open_bag(bag_path)
-    out = Path(out_dir) if out_dir is not None else bag.path.parent / 'plots'
-    out.mkdir(parents=True, exist_ok=True)
+    if out is None:
+        out = bag.path.parent / 'plots'
+        check_out_dir(out)
     name = bag.info.get('scenario_name', bag.path.name)
+    vectors: dict[str, Callable[[Any], list[float]]] = {
+        topics.TRUTH_SUN_COSINES: lambda m: _v3(m.vector),
+        topics.TRUTH_ODOMETRY: lambda m: _v3(m.twist.twist.angular),
+        topics.WHEEL_MOMENTUM: lambda m: _v3(m.vector),
+        topics.DIPOLE_AVG: lambda m: _v3(m.vector),
+        topics.TRUTH_B_BODY: lambda m: _v3(m.magnetic_field),
+    }
+    if not bag.has(topics.TRUTH_ODOMETRY):
+        vectors[topics.GYRO] = lambda m: _v3(m.angular_velocity)
+    if name.startswith('sss'):
+        vectors[topics.TRUTH_TORQUE_MAG] = lambda m: _v3(m.vector)
+    data = _gather(bag, vectors, {topics.MODE: lambda m: m.status[0].message if m.status else ''})
+    out.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
 
     def save(fig: Any, stem: str, title: str) -> None:
@@ -82,7 +123,7 @@ def make_plots(bag_path: Path | str, out_dir: Path | str | None = None) -> list[
 
     # Fig. 4-14: direction cosines against the sun frame
     if bag.has(topics.TRUTH_SUN_COSINES):
-        t, b = _series(bag, topics.TRUTH_SUN_COSINES, lambda m: _v3(m.vector))
+        t, b = _series(data, topics.TRUTH_SUN_COSINES)
         fig, axs = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
         for ax, (i, label) in zip(axs, ((2, 'B33'), (1, 'B23'), (0, 'B13')), strict=True):
             ax.plot(t, b[:, i], lw=0.8)
@@ -91,11 +132,11 @@ def make_plots(bag_path: Path | str, out_dir: Path | str | None = None) -> list[
             ax.grid(alpha=0.3)
         save(fig, 'fig_4-14_direction_cosines', 'Direction cosines, body vs sun frame (cf. Fig. 4-14)')
 
-    t_w, w = _series(bag, topics.TRUTH_ODOMETRY, lambda m: _v3(m.twist.twist.angular))
+    t_w, w = _series(data, topics.TRUTH_ODOMETRY)
     if not len(t_w):
-        t_w, w = _series(bag, topics.GYRO, lambda m: _v3(m.angular_velocity))
-    t_h, h = _series(bag, topics.WHEEL_MOMENTUM, lambda m: _v3(m.vector))
-    t_m, mm = _series(bag, topics.DIPOLE_AVG, lambda m: _v3(m.vector))
+        t_w, w = _series(data, topics.GYRO)
+    t_h, h = _series(data, topics.WHEEL_MOMENTUM)
+    t_m, mm = _series(data, topics.DIPOLE_AVG)
 
     # Figs. 4-15 … 4-17: per-axis responses
     if len(t_w) or len(t_h) or len(t_m):
@@ -113,7 +154,7 @@ def make_plots(bag_path: Path | str, out_dir: Path | str | None = None) -> list[
 
     # Fig. 4-18 (and 4-43, 4-51): magnetic moments and the field / momentum angle
     if len(t_m) or (bag.has(topics.TRUTH_B_BODY) and (len(t_h) or len(t_w))):
-        t_b, b_body = _series(bag, topics.TRUTH_B_BODY, lambda m: _v3(m.magnetic_field))
+        t_b, b_body = _series(data, topics.TRUTH_B_BODY)
         rows: list[tuple[str, list[tuple[np.ndarray, np.ndarray, str]]]] = []
         if len(t_m):
             rows.append(('magnetic moment, A·m²', [(t_m, mm[:, i], f'M{a}') for i, (a, _) in enumerate(AXES)]))
@@ -145,7 +186,8 @@ def make_plots(bag_path: Path | str, out_dir: Path | str | None = None) -> list[
 
     # mode timeline
     if bag.has(topics.MODE):
-        modes = [(ts / 60e9, m.status[0].message if m.status else '') for ts, m in bag.messages(topics.MODE)]
+        stamps, names_at = data[topics.resolve(topics.MODE)]
+        modes = [(ts / 60e9, n) for ts, n in zip(stamps, names_at, strict=True)]
         names = list(dict.fromkeys(n for _, n in modes))
         fig, ax = plt.subplots(figsize=(8, 1.0 + 0.35 * len(names)))
         ax.step([t for t, _ in modes], [names.index(n) for _, n in modes], where='post', lw=1.2)
@@ -158,7 +200,7 @@ def make_plots(bag_path: Path | str, out_dir: Path | str | None = None) -> list[
     if name.startswith('sss') and len(t_w):
         rows2 = [(t_w, units.rad_s_to_rpm(w[:, 2]), 'spin rate ωz, rpm')]
         if bag.has(topics.TRUTH_TORQUE_MAG):
-            t_q, q = _series(bag, topics.TRUTH_TORQUE_MAG, lambda m: _v3(m.vector))
+            t_q, q = _series(data, topics.TRUTH_TORQUE_MAG)
             rows2.append((t_q, units.nm_to_dyne_cm(q[:, 2]), 'magnetic torque Tz, dyne-cm'))
         fig, axs = plt.subplots(len(rows2), 1, figsize=(8, 2.6 * len(rows2) + 0.8), sharex=True, squeeze=False)
         for ax, (tt, y, ylabel) in zip(axs[:, 0], rows2, strict=True):

@@ -1,211 +1,317 @@
-"""Read ACDS bags (either storage) with ``rosbags``; recover a bag whose recorder was killed.
+"""Read ACDS bags (either storage) strictly read-only, streaming messages from the storage.
 
-A bag without ``metadata.yaml`` was not closed (recorder SIGKILLed, power
-lost). :func:`recover_bag` rebuilds it from what reached the disk: every
-complete MCAP chunk (read with the ``mcap`` stream reader, which stops at the
-first truncated record) or every committed sqlite3 transaction, rewritten
-through ``rosbags`` with an index and ``metadata.yaml``. :func:`open_bag`
-does this automatically and says so on stderr.
+:func:`open_bag` never creates, renames, truncates or deletes a file and never
+opens a storage file for writing. It reads the bag's description (topics,
+types, QoS, counts, the run's ``acds.*`` data) and returns a :class:`Bag` whose
+messages are streamed from the storage on each iteration, in timestamp order
+(equal times: recorded order), so no verb holds a whole bag in memory.
+
+- A closed bag (``metadata.yaml``) is read with ``rosbags``.
+- A bag being recorded (no ``metadata.yaml``, its writer's recording lock held,
+  :mod:`acds_cli.bag.recording`) is refused with one line: reading it would
+  race its writer.
+- An unclosed bag (no ``metadata.yaml``, lock free: the recorder died) is read
+  as far as it is readable (:mod:`acds_cli.bag.salvage`): MCAP up to its last
+  complete chunk, sqlite3 up to its last committed transaction; the run data
+  comes from the sidecar ``acds_run.yaml``. One line says so;
+  :func:`acds_cli.bag.recover.recover_bag` writes a repaired copy.
+- Anything else (random bytes named ``.mcap``, an empty file, a folder without
+  storage, a truncated ``metadata.yaml``) is a :class:`BagError` of one line
+  naming the path and what is wrong.
 """
 
 from __future__ import annotations
 
-import shutil
-import sqlite3
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import closing
 from dataclasses import dataclass, field
+from itertools import islice
 from pathlib import Path
 from typing import Any
 
 import yaml
 from acds_common import topics
-from rosbags.rosbag2 import Reader, Writer
-from rosbags.rosbag2.errors import ReaderError
+from rosbags.rosbag2 import Reader
 
-from .writer import RUN_INFO_FILE, STORAGES, BagError, qos_from_dicts, typestore
+from .recording import LOCK_FILE, being_recorded
+from .salvage import UnclosedMcap, committed_view
+from .writer import RUN_INFO_FILE, BagError, typestore
 
 CLOCK = topics.CLOCK
+#: Storage file suffix → rosbag2 storage name.
+STORAGE_SUFFIXES = {'.mcap': 'mcap', '.db3': 'sqlite3'}
+
+
+def _one_line(exc: BaseException) -> str:
+    text = ' '.join(str(exc).split())
+    return f'{type(exc).__name__}: {text}' if text else type(exc).__name__
+
+
+@dataclass(frozen=True)
+class TopicStats:
+    """Messages of one topic: how many, first and last timestamp (ns)."""
+
+    count: int
+    first_ns: int
+    last_ns: int
+
+
+class _Rosbags:
+    """Messages through ``rosbags``: a closed bag folder, or the committed view of an unclosed sqlite3 file."""
+
+    def __init__(self, target: Any) -> None:
+        self.target = target
+
+    def messages(self, names: set[str] | None) -> Iterator[tuple[str, int, bytes]]:
+        with Reader(self.target) as reader:
+            conns = [c for c in reader.connections if names is None or c.topic in names]
+            if conns:  # an empty selection would mean "everything" to rosbags
+                for conn, t, data in reader.messages(connections=conns):
+                    yield conn.topic, t, bytes(data)
 
 
 @dataclass
 class Bag:
-    """A bag read into memory: per-topic raw messages in recorded order, with sim-time stamps."""
+    """A bag's description, and its messages streamed from the storage on demand (never all in memory)."""
 
+    #: The bag folder (where the storage file is).
     path: Path
     storage: str
+    #: The storage files read.
+    files: list[Path]
     types: dict[str, str]
-    #: topic → [(timestamp ns, raw CDR)], in recorded (arrival) order.
-    raw: dict[str, list[tuple[int, bytes]]]
+    qos: dict[str, list[Any]]
+    counts: dict[str, int]
     #: The run description (``acds.*`` custom data without the prefix, or the sidecar file).
     info: dict[str, str] = field(default_factory=dict)
-    qos: dict[str, list[Any]] = field(default_factory=dict)
-    recovered: int | None = None
+    #: How an unclosed bag was read (e.g. "up to its last complete chunk"); None for a closed bag.
+    unclosed: str | None = None
+    source: Any = field(default=None, repr=False)
+    _stats: dict[str, TopicStats] | None = field(default=None, repr=False)
 
     def count(self, topic: str) -> int:
         """Number of messages of ``topic`` (relative or absolute name)."""
-        return len(self.raw.get(topics.resolve(topic), []))
+        return self.counts.get(topics.resolve(topic), 0)
 
     def has(self, topic: str) -> bool:
         """Whether the bag holds messages of ``topic``."""
         return self.count(topic) > 0
 
-    def messages(self, topic: str) -> list[tuple[int, Any]]:
-        """[(timestamp ns, deserialized message)] of ``topic`` (rosbags message objects)."""
-        name = topics.resolve(topic)
-        ts = typestore()
-        msgtype = self.types.get(name)
-        return [(t, ts.deserialize_cdr(d, msgtype)) for t, d in self.raw.get(name, [])]
+    @property
+    def total(self) -> int:
+        """Number of messages in the bag."""
+        return sum(self.counts.values())
 
-    def ordered(self, selected: set[str] | None = None) -> list[tuple[int, str, bytes]]:
-        """Every message as (timestamp, topic, raw) in sim-time order; at equal times /clock first."""
-        items = []
-        for topic, msgs in self.raw.items():
-            if selected is not None and topic not in selected:
-                continue
-            rank = 0 if topic == CLOCK else 1
-            items.extend((t, rank, i, topic, d) for i, (t, d) in enumerate(msgs))
-        items.sort(key=lambda x: (x[0], x[1], x[3], x[2]))
-        return [(t, topic, d) for t, _r, _i, topic, d in items]
+    def messages(self, selected: Iterable[str] | None = None) -> Iterator[tuple[str, int, bytes]]:
+        """(absolute topic, timestamp ns, raw CDR) of the ``selected`` topics (all by default), streamed in
+        timestamp order, at equal times in recorded order."""
+        names = None if selected is None else {topics.resolve(t) for t in selected}
+        try:
+            yield from self.source.messages(names)
+        except BagError:
+            raise
+        except Exception as exc:  # noqa: BLE001 (a storage error while streaming: one line naming the bag)
+            raise BagError(f'bag {self.path}: reading its messages failed: {_one_line(exc)}') from None
+
+    def decoded(self, topic: str) -> Iterator[tuple[int, Any]]:
+        """(timestamp ns, deserialized message) of ``topic`` (rosbags message objects), streamed."""
+        name = topics.resolve(topic)
+        ts, msgtype = typestore(), self.types.get(name)
+        for _, t, data in self.messages([name]):
+            yield t, ts.deserialize_cdr(data, msgtype)
+
+    def ordered(self, selected: Iterable[str] | None = None) -> Iterator[tuple[int, list[tuple[str, bytes]]]]:
+        """The messages grouped by timestamp, streamed: (t_ns, [(topic, raw), ...]); in a group /clock first,
+        then by topic name, each topic in recorded order."""
+        group_t: int | None = None
+        items: list[tuple[str, bytes]] = []
+        for topic, t, data in self.messages(selected):
+            if t != group_t and items:
+                yield group_t, sorted(items, key=_group_rank)  # type: ignore[misc]
+                items = []
+            group_t = t
+            items.append((topic, data))
+        if items:
+            yield group_t, sorted(items, key=_group_rank)  # type: ignore[misc]
+
+    def first(self, topic: str, n: int) -> list[tuple[int, bytes]]:
+        """The first ``n`` (timestamp ns, raw) of ``topic`` (stops reading there)."""
+        with closing(self.messages([topic])) as stream:
+            return [(t, d) for _, t, d in islice(stream, n)]
+
+    def stats(self) -> dict[str, TopicStats]:
+        """Per topic with messages: count, first and last timestamp (one streaming pass, then kept)."""
+        if self._stats is None:
+            acc: dict[str, list[int]] = {}
+            for topic, t, _ in self.messages():
+                a = acc.get(topic)
+                if a is None:
+                    acc[topic] = [1, t, t]
+                else:
+                    a[0] += 1
+                    a[1] = min(a[1], t)
+                    a[2] = max(a[2], t)
+            self._stats = {topic: TopicStats(*a) for topic, a in acc.items()}
+        return self._stats
 
     def span_ns(self) -> tuple[int, int]:
         """First and last timestamp in the bag (0, 0 when empty)."""
-        stamps = [t for msgs in self.raw.values() for t, _ in msgs]
-        return (min(stamps), max(stamps)) if stamps else (0, 0)
+        stats = self.stats().values()
+        return (min(s.first_ns for s in stats), max(s.last_ns for s in stats)) if stats else (0, 0)
 
     @property
     def control_period_ns(self) -> int | None:
-        """Δt of the recorded run (from the run info, else from consecutive /clock stamps)."""
+        """Δt of the recorded run (from the run info, else from the first two /clock stamps)."""
         if 'control_period_s' in self.info:
             return round(float(self.info['control_period_s']) * 1e9)
-        clock = [t for t, _ in self.raw.get(CLOCK, [])]
+        clock = [t for t, _ in self.first(CLOCK, 2)]
         return clock[1] - clock[0] if len(clock) > 1 else None
 
 
-def _storage_files(path: Path) -> list[Path]:
-    return sorted([*path.glob('*.mcap'), *path.glob('*.db3')])
+def _group_rank(item: tuple[str, bytes]) -> tuple[bool, str]:
+    return item[0] != CLOCK, item[0]
 
 
-def unfinished(path: Path) -> bool:
-    """Whether ``path`` is a bag folder whose recorder never closed it."""
+def _storage_files(folder: Path) -> list[Path]:
+    return sorted([*folder.glob('*.mcap'), *folder.glob('*.db3')])
+
+
+def unfinished(path: Path | str) -> bool:
+    """Whether ``path`` is a bag folder whose recorder never closed it (a storage file, no ``metadata.yaml``)."""
     path = Path(path)
     return path.is_dir() and not (path / 'metadata.yaml').exists() and bool(_storage_files(path))
 
 
-def _read_info_file(path: Path) -> dict[str, str]:
-    f = path / RUN_INFO_FILE
-    if not f.exists():
-        return {}
-    data = yaml.safe_load(f.read_text()) or {}
-    return {str(k): str(v) for k, v in data.items()}
-
-
-def _salvage_mcap(file: Path) -> tuple[list[tuple[str, str, list[Any]]], list[tuple[str, int, bytes]]]:
-    from mcap.records import Channel, Message, Schema
-    from mcap.stream_reader import StreamReader
-
-    schemas: dict[int, str] = {}
-    channels: dict[int, tuple[str, str, list[Any]]] = {}
-    msgs: list[tuple[str, int, bytes]] = []
-    with file.open('rb') as fh:
-        try:
-            for rec in StreamReader(fh, skip_magic=False).records:
-                if isinstance(rec, Schema):
-                    schemas[rec.id] = rec.name
-                elif isinstance(rec, Channel):
-                    qos = qos_from_dicts(yaml.safe_load(rec.metadata.get('offered_qos_profiles', '[]') or '[]'))
-                    channels[rec.id] = (rec.topic, schemas.get(rec.schema_id, ''), qos)
-                elif isinstance(rec, Message) and rec.channel_id in channels:
-                    msgs.append((channels[rec.channel_id][0], rec.log_time, bytes(rec.data)))
-        except Exception:  # noqa: BLE001 (a truncated record ends what reached the disk)
-            pass
-    return list(channels.values()), msgs
-
-
-def _salvage_sqlite(file: Path) -> tuple[list[tuple[str, str, list[Any]]], list[tuple[str, int, bytes]]]:
-    conn = sqlite3.connect(str(file))  # read-write: rolls back a hot journal of the killed writer
+def _read_info_file(folder: Path) -> dict[str, str]:
+    """The sidecar's run description ({} when absent or unreadable: the messages are still readable)."""
     try:
-        rows = conn.execute('SELECT id, name, type, offered_qos_profiles FROM topics ORDER BY id').fetchall()
-        names = {r[0]: r[1] for r in rows}
-        conns = [(r[1], r[2], qos_from_dicts(yaml.safe_load(r[3] or '[]'))) for r in rows]
-        msgs = [(names[tid], ts, bytes(d)) for tid, ts, d in
-                conn.execute('SELECT topic_id, timestamp, data FROM messages ORDER BY id') if tid in names]
-    finally:
-        conn.close()
-    return conns, msgs
+        data = yaml.safe_load((folder / RUN_INFO_FILE).read_text())
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return {}
+    return {str(k): str(v) for k, v in data.items()} if isinstance(data, dict) else {}
 
 
-def recover_bag(path: Path | str) -> int:
-    """Rebuild an unclosed bag in place from what reached the disk; return the number of messages kept."""
-    path = Path(path)
-    files = _storage_files(path)
-    if not files:
-        raise BagError(f'bag {path}: no .mcap or .db3 storage file in it')
-    file = files[0]
-    storage = 'mcap' if file.suffix == '.mcap' else 'sqlite3'
-    conns, msgs = _salvage_mcap(file) if storage == 'mcap' else _salvage_sqlite(file)
-    tmp = path.with_name(path.name + '.recovering')
-    if tmp.exists():
-        shutil.rmtree(tmp)
-    writer = Writer(tmp, version=9, storage_plugin=STORAGES[storage])
-    writer.open()
-    by_topic = {}
-    for topic, msgtype, qos in conns:
-        by_topic[topic] = writer.add_connection(topic, msgtype, typestore=typestore(), offered_qos_profiles=qos)
-    for topic, t, data in msgs:
-        writer.write(by_topic[topic], t, data)
-    info = _read_info_file(path)
-    for key, value in info.items():
-        if key not in ('storage', 'flush_period_s'):
-            writer.set_custom_data(f'acds.{key}', value)
-    writer.set_custom_data('acds.recovered', f'{len(msgs)} messages from an unclosed bag')
-    writer.close()
-    for f in path.iterdir():
-        if f.name != RUN_INFO_FILE:
-            f.unlink()
-    for f in tmp.iterdir():
-        new = f.name.replace(tmp.name, path.name) if f.name != 'metadata.yaml' else f.name
-        f.rename(path / new)
-    tmp.rmdir()
-    meta = path / 'metadata.yaml'
-    meta.write_text(meta.read_text().replace(tmp.name, path.name))
-    return len(msgs)
-
-
-def open_bag(path: Path | str, *, recover: bool = True) -> Bag:
-    """Read a whole bag (MCAP or sqlite3) into memory; recover it first if it was never closed."""
-    path = Path(path)
+def _locate(path: Path, use_metadata: bool) -> tuple[Path, Path | None]:
+    """(bag folder, storage file to read directly, or None to read the folder through its metadata.yaml)."""
     if not path.exists():
         raise BagError(f'bag {path}: no such file or folder')
-    if path.is_file():  # a storage file given directly: its folder is the bag
-        path = path.parent
-    recovered = None
-    if unfinished(path):
-        if not recover:
-            raise BagError(f'bag {path}: was never closed (recorder killed?); open it with recovery')
-        recovered = recover_bag(path)
-        print(f'[acds] bag {path} was not closed (recorder killed?): recovered {recovered} messages '
-              f'up to its last flushed chunk', file=sys.stderr)
-    try:
-        reader = Reader(path)
-        reader.open()
-    except (ReaderError, OSError) as exc:
-        raise BagError(f'bag {path}: cannot read it: {exc}') from None
-    try:
-        types = {c.topic: c.msgtype for c in reader.connections}
-        qos = {c.topic: list(c.ext.offered_qos_profiles) for c in reader.connections}
-        raw: dict[str, list[tuple[int, bytes]]] = {t: [] for t in types}
-        for conn, t, data in reader.messages():
-            raw[conn.topic].append((t, bytes(data)))
-        meta = getattr(reader.storage, 'metadata', None)  # the directory reader's parsed metadata.yaml
-        custom = (meta.get('custom') if isinstance(meta, dict) else getattr(meta, 'custom', None)) or {}
-    finally:
-        reader.close()
-    info = {k.removeprefix('acds.'): v for k, v in custom.items() if k.startswith('acds.')} or _read_info_file(path)
-    info.pop('storage', None)
+    if path.is_file():
+        if path.name == 'metadata.yaml':
+            return _locate(path.parent, use_metadata)
+        if path.suffix not in STORAGE_SUFFIXES:
+            raise BagError(f'bag {path}: not a bag (expected a bag folder, or its .mcap or .db3 storage file)')
+        if path.stat().st_size == 0:
+            raise BagError(f'bag {path}: empty file (0 bytes): no bag was ever written to it')
+        if use_metadata and (path.parent / 'metadata.yaml').exists():
+            return path.parent, None
+        return path.parent, path
+    if not path.is_dir():
+        raise BagError(f'bag {path}: not a file or a folder')
+    if use_metadata and (path / 'metadata.yaml').exists():
+        return path, None
     files = _storage_files(path)
-    storage = ('sqlite3' if files[0].suffix == '.db3' else 'mcap') if files else ''
-    return Bag(path, storage, types, raw, info, qos, recovered)
+    if not files:
+        raise BagError(f'bag {path}: not a bag (no metadata.yaml and no .mcap or .db3 storage file in it)')
+    if len(files) > 1:
+        raise BagError(f'bag {path}: {len(files)} storage files and no metadata.yaml: give the one to read')
+    return _locate(files[0], use_metadata=False)
+
+
+def _check_metadata(folder: Path) -> None:
+    """One line for a metadata.yaml that is not rosbag2 metadata (truncated, edited, foreign)."""
+    meta = folder / 'metadata.yaml'
+    try:
+        data = yaml.safe_load(meta.read_text())
+    except OSError as exc:
+        raise BagError(f'bag {folder}: cannot read its metadata.yaml: {exc.strerror or exc}') from None
+    except UnicodeDecodeError:
+        raise BagError(f'bag {folder}: its metadata.yaml is not text') from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, 'problem_mark', None)
+        where = f' at line {mark.line + 1}' if mark is not None else ''
+        problem = getattr(exc, 'problem', None) or 'invalid YAML'
+        raise BagError(f'bag {folder}: its metadata.yaml is not valid YAML (truncated?): {problem}{where}') from None
+    info = data.get('rosbag2_bagfile_information') if isinstance(data, dict) else None
+    if not isinstance(info, dict):
+        raise BagError(f'bag {folder}: its metadata.yaml has no rosbag2_bagfile_information (truncated or not a bag)')
+    missing = [k for k in ('version', 'storage_identifier', 'relative_file_paths', 'topics_with_message_count',
+                           'duration', 'starting_time', 'message_count') if k not in info]
+    if missing:
+        raise BagError(f'bag {folder}: its metadata.yaml lacks {", ".join(missing)} (truncated?)')
+
+
+def _describe(target: Any) -> tuple[dict[str, str], dict[str, list[Any]], dict[str, int], dict[str, str]]:
+    """(types, offered QoS, message counts) per topic and the custom data, as rosbags reads them."""
+    with Reader(target) as reader:  # the reader's connection list is emptied when it closes: copy inside
+        conns = list(reader.connections)
+        custom = dict(reader.storage.metadata.custom or {})  # type: ignore[attr-defined]
+    return ({c.topic: c.msgtype for c in conns}, {c.topic: list(c.ext.offered_qos_profiles) for c in conns},
+            {c.topic: c.msgcount for c in conns}, custom)
+
+
+def _stderr_note(text: str) -> None:
+    print(f'[acds] {text}', file=sys.stderr, flush=True)
+
+
+def open_bag(path: Path | str, *, use_metadata: bool = True, note: Callable[[str], None] | None = None) -> Bag:
+    """Open a bag read-only: a bag folder, or its storage file (MCAP or sqlite3).
+
+    ``use_metadata=False`` reads the storage file even when ``metadata.yaml`` exists (how a repair reads).
+    ``note`` receives the one line saying that an unclosed bag was read (default: stderr; not with
+    ``use_metadata=False``, whose caller reports what it read).
+    Raises :class:`BagError` (one line) for a bag being recorded and for anything that is not a readable bag.
+    """
+    note = note or _stderr_note
+    path = Path(path)
+    near = path if path.is_dir() else path.parent  # checked first: a fresh recording's file may still be empty
+    if being_recorded(near):
+        raise BagError(f'bag {near}: is being recorded (its writer holds {LOCK_FILE}); '
+                       f'read it once the recording has ended')
+    folder, file = _locate(path, use_metadata)
+    if file is None:
+        return _open_closed(folder)
+    state = 'was not closed (no metadata.yaml: its recorder died?)'
+    if file.suffix == '.mcap':
+        try:
+            source: Any = UnclosedMcap(file)
+        except OSError as exc:
+            raise BagError(f'bag {file}: cannot read it: {exc.strerror or exc}') from None
+        types = {topic: ty for topic, ty, _ in source.channels.values()}
+        qos = {topic: q for topic, _, q in source.channels.values()}
+        counts = {t: source.counts.get(t, 0) for t in types}
+        unclosed = 'up to its last complete chunk'
+        if source.complete:
+            state, unclosed = 'has no metadata.yaml', 'to its end (a complete MCAP file)'
+    else:
+        try:
+            target, rolled_back = committed_view(file)
+            types, qos, counts, _ = _describe(target)
+        except Exception as exc:  # noqa: BLE001 (apsw / rosbags errors on a foreign or damaged file)
+            raise BagError(f'bag {file}: not a readable sqlite3 bag ({_one_line(exc)})') from None
+        source = _Rosbags(target)
+        unclosed = 'up to its last committed transaction' + (
+            ' (the interrupted one left out, from its journal)' if rolled_back else '')
+    info = _read_info_file(folder)
+    info.pop('storage', None)
+    bag = Bag(folder, STORAGE_SUFFIXES[file.suffix], [file], types, qos, counts, info, unclosed, source)
+    if use_metadata:
+        note(f'bag {folder} {state}: read {unclosed}, {bag.total} messages, without changing it; '
+             f'`acds recover {folder} DEST` writes a repaired copy')
+    return bag
+
+
+def _open_closed(folder: Path) -> Bag:
+    _check_metadata(folder)
+    try:
+        types, qos, counts, custom = _describe(folder)
+    except Exception as exc:  # noqa: BLE001 (rosbags, apsw and OS errors: one line naming the bag)
+        raise BagError(f'bag {folder}: cannot read it: {_one_line(exc)}') from None
+    info = {k.removeprefix('acds.'): v for k, v in custom.items() if k.startswith('acds.')} or _read_info_file(folder)
+    info.pop('storage', None)
+    files = _storage_files(folder)
+    storage = STORAGE_SUFFIXES[files[0].suffix] if files else ''
+    return Bag(folder, storage, files, types, qos, counts, info, None, _Rosbags(folder))
 
 
 def iter_fields(msg: Any, prefix: str = '') -> Iterator[tuple[str, Any]]:

@@ -99,21 +99,26 @@ def record(path: Path | str, *, storage: str = 'mcap', select: list[str] | None 
 
 
 def gaps(bag_path: Path) -> dict[str, int]:
-    """Per stamped topic: steps missing between its first and last message (a recorder that fell behind)."""
+    """Per stamped topic: steps missing between its first and last message (a recorder that fell behind).
+
+    Streamed: messages come in stamp order, so each topic needs only its first step, last step and the
+    number of distinct steps seen.
+    """
     from .reader import open_bag
     bag = open_bag(bag_path)
     dt = bag.control_period_ns
-    out = {}
     if not dt:
-        return out
-    for topic, msgs in bag.raw.items():
-        if topic.endswith('/diagnostics') or not msgs or not stamped(bag.types[topic]):
-            continue
-        steps = sorted({cdr_stamp_ns(d) // dt for _, d in msgs})
-        missing = steps[-1] - steps[0] + 1 - len(steps)
-        if missing:
-            out[topic] = missing
-    return out
+        return {}
+    watched = [t for t, ty in bag.types.items() if not t.endswith('/diagnostics') and bag.has(t) and stamped(ty)]
+    seen: dict[str, list[int]] = {}  # topic → [first step, last step, distinct steps]
+    for topic, _, data in bag.messages(watched):
+        step = cdr_stamp_ns(data) // dt
+        s = seen.get(topic)
+        if s is None:
+            seen[topic] = [step, step, 1]
+        elif step != s[1]:
+            s[1], s[2] = step, s[2] + 1
+    return {topic: missing for topic, (first, last, n) in seen.items() if (missing := last - first + 1 - n)}
 
 
 def main_record(args: Any) -> int:

@@ -7,8 +7,11 @@ chunk and flushes the file (sqlite3: commits) on the first message after the
 period elapsed, when a chunk reaches 1 MiB, every :data:`FLUSH_MESSAGES`
 messages, and on :meth:`BagWriter.flush`. A killed recorder therefore loses
 at most the last second of messages; the bag it leaves has no index and no
-``metadata.yaml``, and :func:`acds_cli.bag.reader.open_bag` recovers it (the
-``ros2 bag reindex`` equivalent) up to its last complete chunk.
+``metadata.yaml``: :func:`acds_cli.bag.reader.open_bag` reads it, without
+changing it, up to its last complete chunk, and
+:func:`acds_cli.bag.recover.recover_bag` writes a repaired copy (the
+``ros2 bag reindex`` equivalent). While it is open, the writer holds the bag
+folder's recording lock (:mod:`acds_cli.bag.recording`).
 """
 
 from __future__ import annotations
@@ -27,6 +30,8 @@ from acds_common import topics
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
+
+from .recording import RecordingLock
 
 #: Wall seconds after which buffered messages are made durable.
 FLUSH_PERIOD_S = 1.0
@@ -115,6 +120,28 @@ def cdr_stamp_ns(data: bytes) -> int:
     return sec * 1_000_000_000 + nsec
 
 
+def writable_parent(path: Path, what: str) -> Path:
+    """The nearest existing folder above ``path``; a one-line :class:`BagError` naming ``what`` if it cannot be written."""
+    parent = Path(path).parent
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        raise BagError(f'{what} {path}: cannot write in {parent} (permission denied or not a folder)')
+    return parent
+
+
+def check_out_dir(path: Path, what: str = 'output folder') -> None:
+    """Fail with a one-line :class:`BagError` if files cannot be written into folder ``path`` (creating nothing)."""
+    path = Path(path)
+    if path.exists():
+        if not path.is_dir():
+            raise BagError(f'{what} {path}: exists and is not a folder')
+        if not os.access(path, os.W_OK | os.X_OK):
+            raise BagError(f'{what} {path}: cannot write in it (permission denied)')
+        return
+    writable_parent(path, what)
+
+
 def check_target(path: Path, storage: str = 'mcap') -> None:
     """Fail with a one-line :class:`BagError` if a bag cannot be written at ``path``."""
     path = Path(path)
@@ -122,11 +149,7 @@ def check_target(path: Path, storage: str = 'mcap') -> None:
         raise BagError(f'bag {path}: unknown storage {storage!r} (choose {", ".join(STORAGES)})')
     if path.exists():
         raise BagError(f'bag {path}: already exists, not overwriting (choose a new path)')
-    parent = path.parent
-    while not parent.exists():
-        parent = parent.parent
-    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
-        raise BagError(f'bag {path}: cannot write in {parent} (permission denied or not a folder)')
+    parent = writable_parent(path, 'bag')
     free = shutil.disk_usage(parent).free
     if free < MIN_FREE_BYTES:
         raise BagError(f'bag {path}: only {free / 2**20:.1f} MiB free on the disk of {parent} '
@@ -155,8 +178,34 @@ def run_info(scenario: Any, steps: int, params: dict[str, Any] | None = None,
     return info
 
 
+class _LockedWriter(Writer):
+    """The rosbags writer, holding the folder's recording lock from before the storage file exists."""
+
+    recording: RecordingLock | None = None
+
+    def open(self) -> None:
+        """Create the bag folder, take its recording lock, then create the storage file."""
+        self.path.mkdir(mode=0o755, parents=True)  # FileExistsError if it appeared since check_target
+        self.recording = RecordingLock(self.path)
+        try:
+            self.storage = self.STORAGE_PLUGINS[self.storage_plugin](self.path, self.compression_mode)
+        except BaseException:
+            self.release()
+            raise
+
+    def release(self) -> None:
+        """Drop the recording lock (the recording is over, closed or not)."""
+        if self.recording is not None:
+            self.recording.release()
+
+
 class BagWriter:
-    """Thread-safe raw-CDR bag writer: connections added on a topic's first message."""
+    """Thread-safe raw-CDR bag writer: connections added on a topic's first message.
+
+    From construction to :meth:`close` it holds the bag folder's recording lock
+    (:mod:`acds_cli.bag.recording`), so readers can tell a bag being recorded
+    from one whose recorder died.
+    """
 
     def __init__(self, path: Path | str, storage: str = 'mcap', info: dict[str, str] | None = None,
                  flush_period_s: float = FLUSH_PERIOD_S) -> None:
@@ -165,7 +214,7 @@ class BagWriter:
         check_target(self.path, storage)
         self.flush_period_s = flush_period_s
         self._lock = threading.Lock()
-        self._writer = Writer(self.path, version=9, storage_plugin=STORAGES[storage])
+        self._writer = _LockedWriter(self.path, version=9, storage_plugin=STORAGES[storage])
         self.info = dict(info or {})
         self.publishers: dict[str, set[str]] = {}
         self.counts: dict[str, int] = {}
@@ -187,16 +236,34 @@ class BagWriter:
                 st.cursor = st.conn.cursor()
             self._write_run_info()
         except OSError as exc:
+            self._writer.release()
             raise BagError(f'bag {self.path}: cannot create it: {exc.strerror or exc}') from None
+        except BaseException:
+            self._writer.release()
+            raise
         self._last_flush = time.monotonic()
 
+    def _publishers_yaml(self) -> str:
+        return yaml.safe_dump({t: sorted(v) for t, v in sorted(self.publishers.items())}, sort_keys=True)
+
     def _write_run_info(self) -> None:
-        (self.path / RUN_INFO_FILE).write_text(yaml.safe_dump(
-            {'storage': self.storage, 'flush_period_s': self.flush_period_s, **self.info}, sort_keys=False))
+        """The sidecar, replaced atomically (a crash never leaves half of it); publishers as known so far."""
+        info = dict(self.info)
+        if self.publishers:
+            info['publishers'] = self._publishers_yaml()
+        tmp = self.path / f'{RUN_INFO_FILE}.tmp'
+        tmp.write_text(yaml.safe_dump({'storage': self.storage, 'flush_period_s': self.flush_period_s, **info},
+                                      sort_keys=False))
+        tmp.replace(self.path / RUN_INFO_FILE)
 
     # ---- writing ------------------------------------------------------------------------------------
-    def write(self, topic: str, data: bytes, *, msgtype: str | None = None, qos: list[Qos] | None = None) -> None:
-        """Write one raw message of ``topic`` (absolute name); stamp = its header stamp, else the last /clock."""
+    def write(self, topic: str, data: bytes, *, msgtype: str | None = None, qos: list[Qos] | None = None,
+              t_ns: int | None = None) -> None:
+        """Write one raw message of ``topic`` (absolute name).
+
+        Its bag timestamp is ``t_ns`` when given (a copy keeps the original's), else its header stamp,
+        else the last /clock.
+        """
         if topic in SKIP:
             return
         with self._lock:
@@ -211,11 +278,11 @@ class BagWriter:
                     self._conns[topic] = conn
                     self._stamped[topic] = stamped(msgtype)
                     self.counts[topic] = 0
-                if self._stamped[topic]:
+                if t_ns is None and self._stamped[topic]:
                     t_ns = cdr_stamp_ns(data)
                     if topic == topics.CLOCK:
                         self.last_clock_ns = max(self.last_clock_ns, t_ns)
-                else:
+                elif t_ns is None:
                     t_ns = self.last_clock_ns
                 self._writer.write(conn, t_ns, data)
                 self.counts[topic] += 1
@@ -228,9 +295,19 @@ class BagWriter:
                 self.error = f'bag {self.path}: write failed on {topic}: {type(exc).__name__}: {exc}'
 
     def note_publishers(self, topic: str, names: list[str]) -> None:
-        """Remember which nodes published ``topic`` (stored as ``acds.publishers``)."""
+        """Remember which nodes published ``topic`` (stored as ``acds.publishers``; in the sidecar at once)."""
         with self._lock:
-            self.publishers.setdefault(topic, set()).update(n for n in names if n)
+            known = self.publishers.setdefault(topic, set())
+            new = {n for n in names if n} - known
+            if not new:
+                return
+            known.update(new)
+            if self.closed:
+                return
+            try:
+                self._write_run_info()
+            except OSError as exc:
+                self.error = f'bag {self.path}: writing {RUN_INFO_FILE} failed: {exc.strerror or exc}'
 
     def _flush(self) -> None:
         storage = self._writer.storage
@@ -256,22 +333,22 @@ class BagWriter:
                     self.error = f'bag {self.path}: flush failed: {exc.strerror or exc}'
 
     def close(self) -> None:
-        """Write the index, the custom data and ``metadata.yaml`` (idempotent)."""
+        """Write the index, the custom data and ``metadata.yaml``, then release the recording lock (idempotent)."""
         with self._lock:
             if self.closed:
                 return
             self.closed = True
-            info = {**self.info, 'publishers': yaml.safe_dump(
-                {t: sorted(v) for t, v in sorted(self.publishers.items())}, sort_keys=True)}
+            info = {**self.info, 'publishers': self._publishers_yaml()}
             for key, value in info.items():
                 self._writer.set_custom_data(f'acds.{key}', value)
             try:
                 self._writer.close()
+                self.info = info
+                self._write_run_info()
             except OSError as exc:
                 self.error = f'bag {self.path}: closing failed: {exc.strerror or exc}'
-                return
-            self.info = info
-            self._write_run_info()
+            finally:
+                self._writer.release()
 
 
 def publisher_info(node: Any, topic: str) -> tuple[list[str], list[Qos]]:

@@ -1,4 +1,8 @@
-"""Bag verbs: record, play, compare, plot, info (rosbag2 bags on top of ``rosbags``)."""
+"""Bag verbs: record, play, compare, plot, info, recover (rosbag2 bags on top of ``rosbags``).
+
+Every verb that reads a bag reads it strictly read-only (:mod:`acds_cli.bag.reader`); bad options and
+paths that are not bags are one line and exit 2 before anything starts.
+"""
 
 from __future__ import annotations
 
@@ -14,16 +18,17 @@ def _record(args: argparse.Namespace) -> int:
 
 
 def _play(args: argparse.Namespace) -> int:
-
     from ..bag import stop_on_signals
-    from ..bag.player import Player, parse_remaps
+    from ..bag.player import Player, check_rate, parse_remaps
     from ..bag.reader import open_bag
     from ..bag.writer import BagError
 
     stop = stop_on_signals()
     try:
+        check_rate(args.rate)
+        remap = parse_remaps(args.remap)
         bag = open_bag(args.bag)
-        player = Player(bag, domain_id=args.domain, select=args.topics, remap=parse_remaps(args.remap))
+        player = Player(bag, domain_id=args.domain, select=args.topics, remap=remap)
     except BagError as exc:
         print(f'acds play: {exc}', file=sys.stderr)
         return 2
@@ -41,10 +46,11 @@ def _play(args: argparse.Namespace) -> int:
 
 
 def _compare(args: argparse.Namespace) -> int:
-    from ..bag.compare import EXIT_DIFFERENT, EXIT_ERROR, EXIT_SAME, parse_sets, run_compare
+    from ..bag.compare import EXIT_DIFFERENT, EXIT_ERROR, EXIT_SAME, check_tolerance, parse_sets, run_compare
     from ..bag.writer import BagError
 
     try:
+        check_tolerance(args.tolerance)
         result = run_compare(args.bag, args.node, tolerance=args.tolerance, scenario=args.scenario,
                              sets=parse_sets(args.set))
     except BagError as exc:
@@ -79,6 +85,21 @@ def _info(args: argparse.Namespace) -> int:
     except BagError as exc:
         print(f'acds info: {exc}', file=sys.stderr)
         return 2
+    return 0
+
+
+def _recover(args: argparse.Namespace) -> int:
+    from ..bag.recover import recover_bag
+    from ..bag.writer import BagError
+
+    try:
+        src, copy = recover_bag(args.src, args.dest)
+    except BagError as exc:
+        print(f'acds recover: {exc}', file=sys.stderr)
+        return 2
+    print(f'[recover] {src.path}: read {src.unclosed} ({src.total} messages), not changed; wrote {copy.path}: '
+          f'{copy.total} messages on {len(copy.types)} topics, with metadata.yaml and its run data', file=sys.stderr)
+    print(copy.path)
     return 0
 
 
@@ -131,3 +152,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('bag')
     p.add_argument('--no-scenario', action='store_true', help="don't print the scenario text")
     p.set_defaults(func=_info)
+
+    p = sub.add_parser('recover', help='write a repaired copy of an unclosed bag (SRC is never changed)',
+                       description="Rebuild a bag whose recorder died (no metadata.yaml) from what reached the disk: "
+                                   'MCAP up to its last complete chunk, sqlite3 up to its last committed transaction, '
+                                   "with the run's data from SRC/acds_run.yaml. Writes DEST (index, metadata.yaml, "
+                                   'acds custom data); SRC is only read.')
+    p.add_argument('src', help='the bag folder (or its storage file) to repair')
+    p.add_argument('dest', help='bag folder to create for the repaired copy (must not exist)')
+    p.set_defaults(func=_recover)
