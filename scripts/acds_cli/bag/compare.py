@@ -1,42 +1,32 @@
-"""Replay-regression: run ONE node alone against a bag's recorded inputs and compare its outputs.
+"""Replay-regression: run ONE node's stepper against a bag's recorded inputs and compare its outputs.
 
-The node under test runs as its own process in its own ROS domain with the
-parameters it was recorded with (``acds.params`` of the bag; or from
-``--scenario FILE``; ``--set name:=value`` overrides any). Its
-``graph_nodes`` is the recorded graph, so it waits for the same inputs; the
-player stands in for every other node: it publishes ``/clock`` and every
-recorded topic the node did not publish, step by step, never more than
-:data:`WINDOW` steps ahead of the node's outputs (flow control well inside
-the lockstep history depth of 1000). The node's outputs are then compared
-with the recorded ones topic by topic, step by step, field by field: floats
-within ``tolerance`` (absolute; 0 = bit-identical), everything else exactly.
-Outputs are the topics the recorder saw the node publish
-(``acds.publishers``); ``diagnostics`` is compared on the node's own status
-messages.
+The node under test is built exactly as its node process builds it — the same stepper, the
+parameters it was recorded with (``acds.params`` of the bag; or from ``--scenario FILE``;
+``--set name:=value`` overrides any) and the ports :mod:`acds_common.graph` declares for it —
+and fed, in this process, step by step, the values its declared inputs carry in the bag (the
+recorded outputs of the other nodes; absent sources stay absent, as in the recorded graph).
+It runs in lockstep by construction: step k fires once every input of step k is read from
+the bag's stream, with nothing timed and no DDS. Its outputs, encoded with the codec the
+nodes publish with, are compared with the recorded ones topic by topic, step by step, field
+by field: floats within ``tolerance`` (absolute; 0 = bit-identical), everything else exactly;
+``diagnostics`` on the node's own statuses. Live ground commands recorded on
+``ground/command`` are handed to the node before the step the recorder stamped them with.
 """
 
 from __future__ import annotations
 
 import math
 import os
-import signal
-import subprocess
 import sys
 import tempfile
-import threading
-import time
-from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
 from acds_common import topics
-from acds_common.lockstep import LOCKSTEP_QOS, TIME_OWNER
-from std_msgs.msg import String
+from acds_common.lockstep import TIME_OWNER
 
-from ..monitor import message_class
-from .player import Player, ros_env
 from .reader import Bag, iter_fields, open_bag
 from .writer import BagError, stamped, typestore
 
@@ -124,7 +114,6 @@ def node_parameters(bag: Bag, node: str, scenario: str | None = None,
         raise BagError(f'bag {bag.path}: no recorded parameters or scenario; give --scenario FILE')
     params.pop('total_steps', None)
     params.pop('real_time_factor', None)
-    params['use_sim_time'] = True
     params.update(sets or {})
     return {k: v for k, v in params.items() if v != []}
 
@@ -216,159 +205,84 @@ def compare_outputs(bag: Bag, node: str, outputs: list[str], new: dict[str, list
     return result
 
 
-class _NodeProcess:
-    """The node under test: one process, its output kept for error reports."""
-
-    def __init__(self, node: str, params_file: Path, env: dict[str, str]) -> None:
-        exe = Path(sys.executable).parent / node
-        if not exe.exists():
-            raise BagError(f'no node executable {exe} (is {node} a node of this workspace?)')
-        self.name = node
-        self.tail: deque[str] = deque(maxlen=20)
-        self.popen = subprocess.Popen([str(exe), '--ros-args', '--params-file', str(params_file)],
-                                      stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                      text=True, env=env, start_new_session=True)
-        self._reader = threading.Thread(target=self._read, daemon=True)
-        self._reader.start()
-
-    def _read(self) -> None:
-        assert self.popen.stdout is not None
-        for line in self.popen.stdout:
-            self.tail.append(line.rstrip('\n'))
-
-    def died(self) -> str | None:
-        code = self.popen.poll()
-        if code is None:
-            return None
-        self._reader.join(timeout=2.0)
-        return f'node {self.name} exited (code {code}) during the replay:\n' + '\n'.join(
-            f'    {line}' for line in self.tail)
-
-    def stop(self) -> None:
-        if self.popen.poll() is None:
-            try:
-                os.killpg(self.popen.pid, signal.SIGINT)
-                self.popen.wait(timeout=10.0)
-            except subprocess.TimeoutExpired:
-                os.killpg(self.popen.pid, signal.SIGKILL)
-                self.popen.wait()
-            except ProcessLookupError:
-                pass
-        if self.popen.stdout is not None:
-            self.popen.stdout.close()
-
-
 def run_compare(bag_path: Path | str, node: str, *, tolerance: float = 0.0, scenario: str | None = None,
-                sets: dict[str, Any] | None = None, ready_timeout_s: float = 30.0,
-                log: Any = None) -> CompareResult:
-    """Replay ``bag_path``'s inputs into ``node`` alone and compare its outputs (raises BagError on set-up)."""
-    from ..launcher import DomainLease
+                sets: dict[str, Any] | None = None, log: Any = None) -> CompareResult:
+    """Replay ``bag_path``'s inputs into ``node``'s stepper and compare its outputs (raises BagError on set-up)."""
+    from acds_common.cdr import Codec
+    from acds_common.graph import node_spec
+    from acds_common.parameters import ConfigError, normalize
+
+    from ..direct import stepper_class
 
     check_tolerance(tolerance)
     log = log or (lambda text: print(text, file=sys.stderr, flush=True))
     if node == TIME_OWNER:
-        raise BagError(f'{node} is the time owner: compare replays /clock into a non-owner node')
+        raise BagError(f'{node} is the time owner: compare replays the truth into a non-owner node')
     bag = open_bag(bag_path)
     dt_ns = bag.control_period_ns
     if not dt_ns or not bag.has(topics.CLOCK):
         raise BagError(f'bag {bag.path}: no /clock messages: nothing to step the node with')
-    outputs = outputs_of(bag, node)
-    if not [t for t in outputs if t != DIAGNOSTICS]:
-        raise BagError(f'bag {bag.path}: no recorded outputs of node {node} '
-                       f'(recorded publishers: {bag.info.get("publishers", "?").strip()})')
-    inputs = [t for t in bag.types if t not in outputs and t != DIAGNOSTICS and bag.has(t)]
-    params = node_parameters(bag, node, scenario, sets)
-    n_clock = bag.count(topics.CLOCK)
-    pacing = [t for t in outputs if t != DIAGNOSTICS and bag.count(t) >= n_clock - 2 and stamped(bag.types[t])]
-    last_step = {t: bag.stats()[t].last_ns // dt_ns for t in pacing}
-    tol_text = f'tolerance {tolerance:g}' if tolerance > 0 else 'bit-identical'
-    log(f'[compare] {node} alone against {bag.path}: {n_clock} steps; replaying {len(inputs)} topics; '
-        f'comparing {", ".join(outputs)} ({tol_text})')
-
-    lease = DomainLease()
-    work = Path(tempfile.mkdtemp(prefix=f'acds_compare_{node}_'))
-    params_file = work / 'params.yaml'
-    params_file.write_text(yaml.safe_dump({f'/acds/{node}': {'ros__parameters': params}}, sort_keys=True))
-    ros_env(lease.domain_id)
-    env = dict(os.environ, ROS_DOMAIN_ID=str(lease.domain_id), ROS_LOG_DIR=str(work / 'ros_log'),
-               RCUTILS_CONSOLE_OUTPUT_FORMAT='[{severity}] {message}', RCUTILS_COLORIZED_OUTPUT='0',
-               PYTHONUNBUFFERED='1')
-    player = proc = None
-    new: dict[str, list[tuple[int, bytes]]] = {t: [] for t in outputs}
-    progress = dict.fromkeys(pacing, -1)
-    lock = threading.Lock()
-    ready = threading.Event()
     try:
-        player = Player(bag, domain_id=lease.domain_id, select=inputs, name='acds_replay')
+        params = normalize(node, node_parameters(bag, node, scenario, sets))
+        spec = node_spec(node, params)
+        stepper = stepper_class(spec.stepper)(params, log=lambda level, text: log(f'[{node}] [{level}] {text}'))
+    except (ConfigError, KeyError, ValueError) as exc:
+        raise BagError(f'node {node}: {exc}') from None
+    ports = {topics.resolve(o.topic): o for o in spec.outputs}
+    outputs = sorted(t for t in ports if bag.has(t))
+    if not [t for t in outputs if t != DIAGNOSTICS]:
+        raise BagError(f'bag {bag.path}: no recorded outputs of node {node}')
+    present = set(params['graph_nodes'])
+    inputs = {topics.resolve(i.topic): Codec(topics.TYPES[i.topic]) for st in spec.stages for i in st.inputs
+              if i.source in present}
+    lacking = sorted(t for t in inputs if not bag.has(t))
+    if lacking:
+        raise BagError(f'bag {bag.path}: it has no {", ".join(lacking)}, which {node} reads')
+    commands = topics.resolve(topics.GROUND_COMMAND)
+    text = Codec(topics.TYPES[topics.GROUND_COMMAND])
+    tol_text = f'tolerance {tolerance:g}' if tolerance > 0 else 'bit-identical'
+    log(f'[compare] {node} alone against {bag.path}: {bag.count(topics.CLOCK)} steps; replaying '
+        f'{", ".join(sorted(inputs))}; comparing {", ".join(outputs)} ({tol_text})')
+    buffers: dict[str, dict[int, Any]] = {t: {} for t in inputs}
+    new: dict[str, list[tuple[int, bytes]]] = {t: [] for t in outputs}
+    codecs = {t: Codec(o.msg_type, o.frame_id, o.child_frame_id) for t, o in ports.items()}
+    last_clock = -1
+    max_lag = max((i.lag for st in spec.stages for i in st.inputs), default=0)
 
-        def on_output(topic: str, data: bytes) -> None:
-            with lock:
-                new[topic].append((len(new[topic]), data))
-                if topic in progress:
-                    progress[topic] = max(progress[topic], _stamp_step(data, dt_ns))
+    def fire(k: int) -> None:
+        for st in spec.stages:
+            values = {}
+            for i in st.inputs:
+                back, topic = k - i.lag, topics.resolve(i.topic)
+                if i.source not in present or back < 0:
+                    values[i.key] = None
+                elif back in buffers[topic]:
+                    values[i.key] = buffers[topic][back]
+                else:
+                    raise BagError(f'bag {bag.path}: no {topic} for step {back} ({node}.{st.name} of step {k} '
+                                   'needs it)')
+            for key, value in getattr(stepper, st.name)(k, k * dt_ns / 1e9, values).items():
+                topic = topics.resolve(spec.output(key).topic)
+                if topic not in new:
+                    continue
+                out = ports[topic]
+                for item in (value if out.many else (value,)):
+                    data = codecs[topic].encode((k + out.stamp_offset) * dt_ns, item)
+                    new[topic].append((codecs[topic].decode(data)[0] if codecs[topic].stamped else len(new[topic]),
+                                       data))
+        for buf in buffers.values():
+            buf.pop(k - max_lag, None)
 
-        for topic in outputs:
-            player.node.create_subscription(message_class(bag.types[topic]), topic,
-                                            lambda d, t=topic: on_output(t, d), LOCKSTEP_QOS, raw=True)
-        player.node.create_subscription(String, topics.READY,
-                                        lambda m: ready.set() if m.data == node else None, LOCKSTEP_QOS)
-        proc = _NodeProcess(node, params_file, env)
-        deadline = time.monotonic() + ready_timeout_s
-        while not ready.wait(0.05):
-            if (dead := proc.died()) is not None:
-                raise BagError(dead)
-            if time.monotonic() > deadline:
-                subs = player.node.get_subscriber_names_and_types_by_node(node, topics.NAMESPACE)
-                lacking = sorted(t for t, _ in subs if t not in player.publishers and t != topics.CLOCK)
-                raise BagError(f'node {node} never became ready in {ready_timeout_s:.0f} s'
-                               + (f': the bag has no {", ".join(lacking)}' if lacking else ''))
-
-        def before_step(t_ns: int) -> bool:
-            k = t_ns // dt_ns
-            while True:
-                with lock:
-                    behind = min(progress.values(), default=k)
-                if k - behind <= WINDOW:
-                    return True
-                if (dead := proc.died()) is not None:
-                    raise BagError(dead)
-                time.sleep(0.002)
-
-        player.play(before_step=before_step)
-        # wait for the node's outputs of every recorded step
-        timeout_s = float(params.get('input_timeout_s', 30.0))
-        last = time.monotonic()
-        seen = -1
-        while True:
-            with lock:
-                counts = sum(len(v) for v in new.values())
-                done = all(progress[t] >= last_step[t] for t in pacing)
-            if done:
-                break
-            if counts != seen:
-                seen, last = counts, time.monotonic()
-            if (dead := proc.died()) is not None:
-                raise BagError(dead)
-            if time.monotonic() - last > timeout_s:
-                break  # compared below: the missing step is named
-            time.sleep(0.01)
-        player.ack(5.0)
-        time.sleep(0.2)  # occasional outputs (diagnostics) of the last step
-    finally:
-        if proc is not None:
-            proc.stop()
-        if player is not None:
-            player.close()
-        lease.close()
-    with lock:
-        new_stamped = {t: [(_stamp_ns(d) if stamped(bag.types[t]) else i, d) for i, d in v] for t, v in new.items()}
-    return compare_outputs(bag, node, outputs, new_stamped, tolerance)
-
-
-def _stamp_ns(data: bytes) -> int:
-    from .writer import cdr_stamp_ns
-    return cdr_stamp_ns(data)
-
-
-def _stamp_step(data: bytes, dt_ns: int) -> int:
-    return _stamp_ns(data) // dt_ns
+    next_k = 0
+    for t_ns, group in bag.ordered([*inputs, topics.CLOCK, *([commands] if spec.ground_commands else [])]):
+        for topic, data in group:
+            if topic == commands:
+                stepper.receive_command(text.decode(data)[1])
+            elif topic == topics.CLOCK:
+                last_clock = t_ns // dt_ns
+            else:
+                buffers[topic][t_ns // dt_ns] = inputs[topic].decode(data)[1]
+        while next_k <= min(last_clock, t_ns // dt_ns):
+            fire(next_k)
+            next_k += 1
+    return compare_outputs(bag, node, outputs, new, tolerance)

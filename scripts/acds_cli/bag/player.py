@@ -21,13 +21,13 @@ from typing import Any
 
 import rclpy
 from acds_common import topics
+from acds_common.lockstep import message_class
 from rclpy.context import Context
 from rclpy.duration import Duration
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from ..monitor import message_class
 from .reader import Bag
 from .writer import BagError, offered_qos
 

@@ -17,11 +17,11 @@ from typing import Any
 import rclpy
 import yaml
 from acds_common import topics
+from acds_common.lockstep import message_class
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-from ..monitor import message_class
 from . import stop_on_signals
 from .player import ros_env
 from .writer import SKIP, BagError, BagWriter, RecordingSink, cdr_stamp_ns, check_target, stamped
