@@ -23,7 +23,8 @@ Outputs of step k:
   spin | attitude | direct_attitude | off, what the per-pass report integrates —, ``enabled``,
   ``selected_mode``, ``spin_direction``, ``signal_gauss``, ``spin_coil``, ``attitude_coil``,
   ``power_w``).
-* ``events``: every automatic turn-on/turn-off and every commanded mode change, with its sim time:
+* ``events``: every automatic turn-on/turn-off, every spin-mode turn-on the one-mode-per-perigee-pass rule
+  inhibits, and every commanded mode change, with its sim time:
   ``t=1234.50 turn_on sss_spin_idle->sss_spin_torquing: <why>``.
 * ``ground/ack``: every ground command accepted or refused, with the reason.
 * ``diagnostics``: every 20 steps, and at once (WARN) when an input is rejected.
@@ -60,7 +61,7 @@ from geometry_msgs.msg import Vector3Stamped
 from std_msgs.msg import String
 
 from ascs_mode_manager.spin_mechanizations import MECHANIZATIONS, Mechanization, coil_moments
-from ascs_mode_manager.sss_ascs import SssAscs, SssAscsConfig, SssOutput
+from ascs_mode_manager.sss_ascs import SssAscs, SssOutput, build_sss_ascs
 
 NODE = 'ascs_mode_manager'
 #: Body axis of the spin-plane magnetometer channel (fixed by the core's wiring).
@@ -98,9 +99,7 @@ class SssPart:
         p = node.sss
         self.mech = MECHANIZATIONS[p['mechanization']]
         self.scale_v_per_t = p['magnetometer_scale_v_per_g'] / GAUSS_T
-        self.ascs = SssAscs(SssAscsConfig(
-            polarity_level_t=p['polarity_level'], hold_time_constant_s=p['hold_time_constant_s'],
-            hold_release_fraction=p['hold_release_fraction'], spin_coil=self.mech.coil, bus_v=p['bus_v']))
+        self.ascs = build_sss_ascs(p)
         self.mode = 'sss_disabled'
         self.last_signal_t = 0.0
         node.add_output('moment', Vector3Stamped, topics.MOMENT_COMMAND)
