@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from acds_common.messages import diagnostic, mode_status
 from acds_common.scenario import load_scenario
-from acds_controller.controller_node import apply_command, build_dpa, coupling_matrix
+from acds_controller.configuration import build_dpa, coupling_matrix
+from acds_controller.controller_node import apply_command
 from acds_controller.magnetic_laws import ControllerError
 from diagnostic_msgs.msg import KeyValue
 

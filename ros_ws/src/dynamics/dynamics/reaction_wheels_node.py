@@ -18,7 +18,7 @@ from acds_common.messages import diagnostic, vec, vector3_stamped
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Vector3Stamped
 
-from dynamics.wheels_model import ReactionWheels, WheelsConfig
+from dynamics.configuration import build_wheels
 
 
 class ReactionWheelsNode(LockstepNode):
@@ -26,10 +26,7 @@ class ReactionWheelsNode(LockstepNode):
 
     def __init__(self) -> None:
         super().__init__('reaction_wheels')
-        p = self.section_params('wheels')
-        failed = p['failed_wheel'] if p['failed_wheel'] >= 0 else None
-        self.wheels = ReactionWheels(WheelsConfig(layout=p['layout'], failed_wheel=failed),
-                                     h0_body_nms=np.array(p['initial_momentum']))
+        self.wheels = build_wheels(self.section_params('wheels'))
         self.add_output('momentum', Vector3Stamped, topics.WHEEL_MOMENTUM)
         self.add_output('torque', Vector3Stamped, topics.WHEEL_TORQUE)
         self.add_output('diagnostics', DiagnosticArray, topics.DIAGNOSTICS)

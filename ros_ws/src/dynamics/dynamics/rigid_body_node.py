@@ -21,8 +21,8 @@ from geometry_msgs.msg import Vector3Stamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu, MagneticField
 
-from dynamics.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
-from dynamics.rigid_body_model import RigidBodyModel, Truth, inertia_tensor
+from dynamics.configuration import build_rigid_body
+from dynamics.rigid_body_model import Truth
 
 
 def run_complete(mode: DiagnosticArray | None) -> bool:
@@ -36,26 +36,7 @@ class RigidBodyNode(LockstepNode):
 
     def __init__(self) -> None:
         super().__init__('rigid_body')
-        sc = self.section_params('spacecraft')
-        orbit = self.section_params('orbit')
-        earth = self.section_params('earth')
-        sun = self.section_params('sun')
-        dyn = self.section_params('dynamics')
-        inertia = inertia_tensor(*sc['inertia']) * sc['inertia_scale']
-        self.model = RigidBodyModel(
-            inertia,
-            Orbit(OrbitConfig(
-                kind=orbit['kind'], inclination_rad=orbit['inclination'], raan_rad=orbit['raan'],
-                altitude_m=orbit['altitude'], arg_latitude0_rad=orbit['arg_latitude0'],
-                perigee_altitude_m=orbit['perigee_altitude'], apogee_radius_m=orbit['apogee_radius'],
-                arg_perigee_rad=orbit['arg_perigee'], mean_anomaly0_rad=orbit['mean_anomaly0'])),
-            TiltedDipoleField(EarthFieldConfig(
-                dipole_moment_am2=earth['dipole_moment'], tilt_rad=earth['dipole_tilt'],
-                dipole_longitude_rad=earth['dipole_longitude'], greenwich_angle0_rad=earth['greenwich_angle0'])),
-            Sun(SunConfig(right_ascension_rad=sun['right_ascension'], declination_rad=sun['declination'],
-                          eclipse=sun['eclipse'])),
-            gravity_gradient=dyn['gravity_gradient'], substeps=dyn['substeps'],
-            q0_body_to_eci=sc['initial_quaternion_xyzw'], omega0_body_rad_s=sc['initial_rates'])
+        self.model = build_rigid_body(*(self.section_params(s) for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics')))
         for key, msg_type, topic in (
                 ('odometry', Odometry, topics.TRUTH_ODOMETRY), ('b_body', MagneticField, topics.TRUTH_B_BODY),
                 ('sun_cosines', Vector3Stamped, topics.TRUTH_SUN_COSINES),
