@@ -185,7 +185,6 @@ class SssAscs:
         self.torquing_active = False
         self._hold_v = 0.0
         self._pass_mode = "off"
-        self._pass_start_s = math.nan
         #: Whether a perigee pass is in progress (module docstring: the un-gated copy of the hold circuit).
         self.perigee_pass = False
         self._perigee_v = 0.0
@@ -276,7 +275,6 @@ class SssAscs:
             active = False
         if active and not self.torquing_active:
             self._pass_mode = self.mode
-            self._pass_start_s = t
             events.append(Event(t, "turn_on", f"spin-plane magnetometer |B_y| = {abs(tesla_to_gauss(signal_t)):.4f} G"
                                               f" >= {tesla_to_gauss(cfg.polarity_level_t):.3f} G; {self.mode} mode"
                                               + (f" ({self.spin_direction})" if self.mode == "spin" else "")))
