@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 from acds_common.scenario import Scenario
-from acds_controller.controller_step import build_dpa
+from acds_controller.configuration import build_dpa
 from ascs_mode_manager.heao_part import build_core
 from dynamics.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
 from dynamics.rigid_body_model import RigidBodyModel, inertia_tensor

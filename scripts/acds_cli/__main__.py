@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import signal
 import subprocess
@@ -11,7 +10,18 @@ import sys
 import time
 from pathlib import Path
 
-from acds_common.scenario import ScenarioError, list_scenarios, load_scenario
+from acds_common.scenario import MAX_STEPS, ScenarioError, list_scenarios, load_scenario
+
+from .arguments import (
+    OneLineParser,
+    UsageError,
+    check_output_dir,
+    check_output_file,
+    positive_int,
+    positive_minutes,
+    real_time_factor,
+    step_count,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_SCENARIO = 'heao_b_acquisition'
@@ -46,14 +56,20 @@ def cmd_run(args: argparse.Namespace) -> int:
     """Run a scenario through the full process graph and print its summary."""
     from .launcher import GraphRun, LaunchError
     from .preflight import preflight
-    from .summary import print_tables
+    from .summary import print_tables, write_summary_json
 
     scenario = load_scenario(args.scenario or DEFAULT_SCENARIO)
     preflight(scenario)
     steps = args.steps
     if args.until_min is not None:
         steps = max(1, round(args.until_min * 60 / scenario.control_period_s))
+        if steps > MAX_STEPS:
+            raise UsageError(f'--until-min {args.until_min:g}: {steps:,} steps of {scenario.control_period_s} s, '
+                             f'more than the {MAX_STEPS:,} a run may have')
     run_dir = Path(args.run_dir or ROOT / 'runs' / f'{scenario.name}_{time.strftime("%Y%m%d_%H%M%S")}')
+    check_output_dir('--run-dir' if args.run_dir else 'run folder', run_dir)
+    if args.summary_json:
+        check_output_file('--summary-json', Path(args.summary_json))
     quiet = args.quiet
     echo = (lambda line: None) if quiet else None
     bag = None if args.no_record else Path(args.record) if args.record else run_dir / 'bag'
@@ -78,7 +94,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     _print_summary(summary)
     print_tables(summary)
     if args.summary_json:
-        Path(args.summary_json).write_text(json.dumps(summary, indent=2) + '\n')
+        write_summary_json(Path(args.summary_json), summary)
     if bag is not None:
         from .bag.plots import make_plots
         plots = make_plots(bag, bag.parent / 'plots')
@@ -129,20 +145,23 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The command-line surface (later verbs register here too)."""
-    parser = argparse.ArgumentParser(prog='acds', description='ACDS emulator: HEAO wheels+magnetics, SSS magnetic control.')
+    parser = OneLineParser(prog='acds', description='ACDS emulator: HEAO wheels+magnetics, SSS magnetic control.')
     sub = parser.add_subparsers(dest='verb', metavar='VERB', required=True)
 
     p = sub.add_parser('run', help='run a scenario through the full node graph (default: the main job)',
                        description='Run SCENARIO (a shipped name or a YAML path) through the full process graph.')
     p.add_argument('scenario', nargs='?', help=f'scenario name or path (default {DEFAULT_SCENARIO})')
     g = p.add_mutually_exclusive_group()
-    g.add_argument('--steps', type=_positive_int, help='number of control steps (default: the scenario duration)')
-    g.add_argument('--until-min', type=float, help='run until this sim time, minutes')
-    p.add_argument('--summary-json', metavar='PATH', help='write the summary as one JSON object')
-    p.add_argument('--record', metavar='PATH', help='record the run into this rosbag2 bag (default RUN_DIR/bag)')
-    p.add_argument('--no-record', action='store_true', help="don't record a bag (nor plot it)")
-    p.add_argument('--rtf', type=float, default=0.0, help='pace at this real-time factor (default: as fast as possible)')
-    p.add_argument('--run-dir', help='run folder (default runs/<scenario>_<time>)')
+    g.add_argument('--steps', type=step_count, help='number of control steps (default: the scenario duration)')
+    g.add_argument('--until-min', type=positive_minutes, help='run until this sim time, minutes (> 0)')
+    p.add_argument('--summary-json', metavar='PATH',
+                   help='write the summary as one JSON object (non-finite numbers as null)')
+    g = p.add_mutually_exclusive_group()
+    g.add_argument('--record', metavar='PATH', help='record the run into this rosbag2 bag (default RUN_DIR/bag)')
+    g.add_argument('--no-record', action='store_true', help="don't record a bag (nor plot it)")
+    p.add_argument('--rtf', type=real_time_factor, default=0.0,
+                   help='pace at this real-time factor (default 0: as fast as possible)')
+    p.add_argument('--run-dir', help='run folder (default runs/<scenario>_<time>); checked writable before the run')
     p.add_argument('--quiet', action='store_true', help="don't forward the nodes' output")
     p.set_defaults(func=cmd_run)
 
@@ -151,7 +170,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser('test', help='run the whole test suite (lint + pytest)',
                        description='Lint (ruff) and run every test (pytest). Extra args go to pytest.')
-    p.add_argument('--jobs', '-j', type=_positive_int, default=2, help='parallel test workers (default 2)')
+    p.add_argument('--jobs', '-j', type=positive_int, default=2, help='parallel test workers (default 2)')
     p.add_argument('pytest_args', nargs=argparse.REMAINDER, help='passed to pytest')
     p.set_defaults(func=cmd_test)
 
@@ -163,7 +182,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description='Print graph lockstep steps/s, a bare rclpy chain with the same hops, their ratio, '
                                    'and core-only dynamics steps/s.')
     p.add_argument('--json', action='store_true', help='last line: one JSON object')
-    p.add_argument('--steps', type=_positive_int, default=2000, help='steps per measurement (default 2000)')
+    p.add_argument('--steps', type=step_count, default=2000, help='steps per measurement (default 2000)')
     p.set_defaults(func=cmd_bench)
     for module in _verb_modules():
         module.register(sub)
@@ -180,13 +199,6 @@ def _verb_modules() -> list:
                                                                                   key=lambda m: m.name)]
 
 
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f'must be a positive integer, got {text}')
-    return value
-
-
 class Stopped(KeyboardInterrupt):
     """SIGTERM or SIGHUP (a closed terminal), raised in the main thread and handled like Ctrl-C."""
 
@@ -200,7 +212,7 @@ def _terminate(signum: int, _frame: object) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Parse the verb and run it; scenario errors are one line, exit 2.
+    """Parse the verb and run it; usage and scenario errors are one line, exit 2.
 
     SIGTERM and SIGHUP stop like Ctrl-C; a stopped verb exits 128 + the signal number
     (130 SIGINT, 143 SIGTERM, 129 SIGHUP), the shell convention.
@@ -217,6 +229,9 @@ def main(argv: list[str] | None = None) -> int:
         return args.func(args)
     except ScenarioError as exc:
         print(f'acds: scenario error: {exc}', file=sys.stderr)
+        return 2
+    except UsageError as exc:
+        print(f'acds {args.verb}: error: {exc}', file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
         signum = getattr(exc, 'signum', signal.SIGINT)

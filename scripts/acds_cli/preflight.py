@@ -1,21 +1,33 @@
-"""Pre-flight: check a scenario against the models' own physical validity before any process starts.
+"""Pre-flight: build every node's stepper in the launcher, exactly as the node builds it, before any process starts.
 
-The schema checks types, units and ranges; a model's core knows more (an
-inertia tensor must be positive definite and obey the triangle inequality).
-Running those checks here turns a node's start-up failure into one clear
-scenario error naming the key.
+The schema checks types, units and ranges; a model's core knows more (an inertia tensor
+must be positive definite and obey the triangle inequality, an apogee lies above the
+perigee, a ground-command schedule reads "T_S: command", the SSS polarity level is above
+zero, ...). The pre-flight writes the parameters the nodes will get, builds the graph
+declaration from them (one publisher per per-step topic, no lag-0 cycle) and constructs
+each node's stepper from its parameters — the very code a node process runs on start-up —
+turning the core's own exception (its builders name the scenario section or key) into one
+:class:`ScenarioError` line. The steppers built here are thrown away.
 """
 
 from __future__ import annotations
 
+from acds_common.graph import build_graph
+from acds_common.parameters import node_parameters, normalize
 from acds_common.scenario import Scenario, ScenarioError
 
 
 def preflight(scenario: Scenario) -> None:
-    """Raise ScenarioError naming the scenario key a core model rejects."""
-    from dynamics.rigid_body_model import inertia_tensor
+    """Raise ScenarioError naming the scenario section or key a node's stepper (its core model) rejects."""
+    from .direct import stepper_class
 
+    params = node_parameters(scenario, scenario.total_steps())
     try:
-        inertia_tensor(*scenario.get('spacecraft', 'inertia'))
+        graph = build_graph(params)
     except ValueError as exc:
-        raise ScenarioError(f'{scenario.path}: spacecraft.inertia: {exc}') from None
+        raise ScenarioError(f'{scenario.path}: nodes: {exc}') from None
+    for name, spec in graph.nodes.items():  # the scenario's order: the rigid body (inertia) first
+        try:
+            stepper_class(spec.stepper)(normalize(name, params[name]), log=lambda _level, _text: None)
+        except ValueError as exc:  # every package's exception is a ValueError with a message naming the key
+            raise ScenarioError(f'{scenario.path}: {exc} (the {name} model refuses it)') from None

@@ -10,12 +10,21 @@ change points), never the messages, so its memory does not grow with the run's l
 
 The truth digest is SHA-256 over, for each truth topic in sorted order, its name and the
 SHA-256 of its serialized messages in step order: equal data ⇒ equal digest, in either engine.
+
+JSON has no NaN or infinity, so :func:`summary_json` (every summary file:
+``run --summary-json``, ``sweep --json``) writes a non-finite number as
+``null`` — the summaries' "no value" (like a pass ripple with zero average
+torque) — and reports which keys it replaced, so the caller can say so; the
+text is written with ``allow_nan=False`` and is always strict JSON.
 """
 
 from __future__ import annotations
 
 import hashlib
+import json
 import math
+import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -187,6 +196,36 @@ class RunObserver:
         summary['truth_messages'] = self.truth_messages
         summary['truth_digest'] = self.truth_digest()
         return summary
+
+
+def _finite(value: Any, where: str, replaced: list[str]) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        replaced.append(where or '(top level)')
+        return None
+    if isinstance(value, dict):
+        return {k: _finite(v, f'{where}.{k}' if where else str(k), replaced) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v, f'{where}[{i}]', replaced) for i, v in enumerate(value)]
+    return value
+
+
+def summary_json(obj: Any) -> tuple[str, list[str]]:
+    """Strict JSON text of a summary (or a list of them) with every non-finite number written as ``null``,
+    and the keys that were replaced (e.g. ``passes[0].ripple_pct``)."""
+    replaced: list[str] = []
+    text = json.dumps(_finite(obj, '', replaced), indent=2, allow_nan=False) + '\n'
+    return text, replaced
+
+
+def write_summary_json(path: Path, obj: Any) -> None:
+    """Write :func:`summary_json` of ``obj`` to ``path`` (creating its folders); say on stderr which
+    non-finite values became null."""
+    text, replaced = summary_json(obj)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    if replaced:
+        print(f'[acds] {path}: non-finite value(s) written as null (JSON has no NaN/Infinity): {", ".join(replaced)}',
+              file=sys.stderr)
 
 
 def print_tables(summary: dict[str, Any]) -> None:

@@ -25,7 +25,7 @@ from typing import Any
 
 import yaml
 from acds_common import topics
-from acds_common.lockstep import TIME_OWNER
+from acds_common.graph import TIME_OWNER
 
 from .reader import Bag, iter_fields, open_bag
 from .writer import BagError, stamped, typestore

@@ -4,7 +4,8 @@ Each scenario runs in its own subprocess (``python -m acds_cli run NAME --quiet
 --summary-json FILE``), so every run has its own rclpy contexts and its own ROS domain
 (the launcher leases one per run). ``table-4-7`` stands for the eleven acquisition cases
 of Table 4-7. ``--json`` writes the list of summary objects (a failed run appears as
-``{"scenario": NAME, "error": "..."}``).
+``{"scenario": NAME, "error": "..."}``; non-finite numbers as null). Every scenario is
+loaded and pre-flighted, and every option checked, before the first run starts.
 """
 
 from __future__ import annotations
@@ -19,6 +20,8 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
+
+from ..arguments import check_output_file, positive_int, positive_minutes
 
 #: Shorthands for scenario lists.
 GROUPS = {
@@ -84,9 +87,13 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     """Run the scenarios, ``--jobs`` at a time; print the table; write ``--json``."""
     from acds_common.scenario import load_scenario
 
+    from ..preflight import preflight
+
     names = expand(args.scenarios)
     for name in names:
-        load_scenario(name)  # fail fast (exit 2, one line) on a bad name before anything runs
+        preflight(load_scenario(name))  # fail fast (exit 2, one line) on a bad scenario before anything runs
+    if args.json:
+        check_output_file('--json', Path(args.json))
     extra = ['--until-min', str(args.until_min)] if args.until_min is not None else []
     t0 = time.monotonic()
     with tempfile.TemporaryDirectory(prefix='acds_sweep_') as tmp:
@@ -97,7 +104,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     print(table(summaries))
     print(f'\n[sweep] {len(names)} run(s) in {time.monotonic() - t0:.0f} s wall', file=sys.stderr)
     if args.json:
-        Path(args.json).write_text(json.dumps(summaries, indent=2) + '\n')
+        from ..summary import write_summary_json
+        write_summary_json(Path(args.json), summaries)
     return 0 if all('error' not in s for s in summaries) else 1
 
 
@@ -107,7 +115,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description='Run each SCENARIO through the full graph in its own process and ROS domain, '
                                    f'--jobs at a time, and print one table. Groups: {", ".join(GROUPS)}.')
     p.add_argument('scenarios', nargs='+', metavar='SCENARIO', help='scenario names or paths, or a group name')
-    p.add_argument('--jobs', '-j', type=int, default=2, help='runs at a time (default 2)')
-    p.add_argument('--json', metavar='PATH', help='write the list of summary objects as JSON')
-    p.add_argument('--until-min', type=float, help='cap every run at this sim time, minutes')
+    p.add_argument('--jobs', '-j', type=positive_int, default=2, help='runs at a time (default 2)')
+    p.add_argument('--json', metavar='PATH', help='write the list of summary objects as JSON (non-finite as null)')
+    p.add_argument('--until-min', type=positive_minutes, help='cap every run at this sim time, minutes (> 0)')
     p.set_defaults(func=cmd_sweep)

@@ -265,5 +265,16 @@ class Graph:
 
 
 def build_graph(params_by_node: dict[str, dict[str, Any]]) -> Graph:
-    """The graph of the given nodes (name → its parameters), in the given order."""
-    return Graph({name: node_spec(name, params) for name, params in params_by_node.items()})
+    """The graph of the given nodes (name → its parameters), in the given order.
+
+    Raises ValueError when a per-step topic would have two publishers (the lockstep needs one
+    message per step per topic) or when lag-0 inputs form a cycle.
+    """
+    graph = Graph({name: node_spec(name, params) for name, params in params_by_node.items()})
+    for _spec, out in graph.outputs():
+        publishers = graph.publisher_of(out.topic)
+        if out.every_step and len(publishers) > 1:
+            raise ValueError(f'{topics.resolve(out.topic)} would be published by {" and ".join(publishers)}; '
+                             'a per-step topic has one publisher')
+    graph.firing_order()
+    return graph

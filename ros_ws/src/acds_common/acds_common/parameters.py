@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from acds_common.graph import MONITOR_NAME, TIME_OWNER
-from acds_common.scenario import NODE_SECTIONS, REQUIRED, SCHEMA, Scenario
+from acds_common.scenario import MAX_STEPS, NODE_SECTIONS, REQUIRED, SCHEMA, Scenario
 
 
 class ConfigError(ValueError):
@@ -51,11 +51,13 @@ LOCKSTEP: tuple[ParamSpec, ...] = (
               'fails', 's', 0.1, 3600.0),
     ParamSpec('seed', 'int', 1, 'scenario random seed (deterministic noise streams)', '', 0, 2**31 - 1),
 )
+#: Fastest pacing a run may ask for (``real_time_factor``; 0 = as fast as possible).
+MAX_REAL_TIME_FACTOR = 1e6
 #: Parameters of the time owner only.
 TIME_OWNER_ONLY: tuple[ParamSpec, ...] = (
-    ParamSpec('total_steps', 'int', REQUIRED, 'number of control steps to run', '', 1, 10**9),
+    ParamSpec('total_steps', 'int', REQUIRED, 'number of control steps to run', '', 1, MAX_STEPS),
     ParamSpec('real_time_factor', 'float', 0.0, 'pace sim time at this multiple of wall time (0: as fast as '
-              'possible)', '', 0.0, 1e6),
+              'possible)', '', 0.0, MAX_REAL_TIME_FACTOR),
 )
 
 

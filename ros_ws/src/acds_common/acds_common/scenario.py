@@ -4,7 +4,20 @@ A scenario is a YAML file (``scenarios/<name>.yaml``). Quantities carry their
 unit in the key, e.g. ``altitude_nmi: 225`` or ``inertia_slug_ft2: [...]``;
 each field accepts a small set of units and is converted to SI here, the one
 place where seed units meet SI (spec header "Units"). ``extends: <name>``
-starts from another scenario and overrides keys (deep merge).
+starts from another scenario and overrides keys (deep merge); a relative
+``extends`` (a bare name or a path) is looked up first beside the extending
+file, then among the shipped scenarios.
+
+Reading is strict, and every problem is one :class:`ScenarioError` line naming
+the file and the key: the file must be UTF-8 YAML text; a key given twice in
+one mapping (at any level) is refused; exponent floats without a dot
+(``2.25e2``, ``1e5``, ``-3E-2``) are numbers, as in YAML 1.2; every number has
+a physical range; ``name`` becomes a folder name, so it is limited to letters,
+digits, ``_ - .`` (not starting with ``.``); quaternions must be normalisable;
+``nodes`` must hold the time owner ``rigid_body`` and no node twice; a run has
+at most :data:`MAX_STEPS` steps. A model's own checks (inertia positive
+definite, apogee above perigee, ...) are the cores' and run in the launcher
+before any process starts (``scripts/acds_cli/preflight.py``).
 
 The schema is the single source of truth: node parameter names
 (``<section>_<field>_<si unit>``), types, defaults, ranges and descriptions
@@ -16,6 +29,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,6 +37,7 @@ from typing import Any
 import yaml
 
 from acds_common import units as u
+from acds_common.graph import TIME_OWNER
 
 
 class ScenarioError(ValueError):
@@ -31,6 +46,14 @@ class ScenarioError(ValueError):
 
 REQUIRED = object()
 _DEG = math.pi / 180.0
+#: Most control steps one run may have (the time owner's ``total_steps`` bound).
+MAX_STEPS = 10**9
+#: A scenario file larger than this is not a scenario (guards against reading a device or a data file).
+MAX_SCENARIO_BYTES = 1 << 20
+#: A quaternion shorter than this cannot be normalised to an attitude (the rigid body's own limit).
+MIN_QUATERNION_NORM = 1e-6
+#: ``name`` is used as a run-folder name: letters, digits, ``_ - .``, not starting with ``.``, ≤ 100 characters.
+SAFE_NAME = re.compile(r'[A-Za-z0-9_-][A-Za-z0-9_.-]{0,99}')
 
 
 @dataclass(frozen=True)
@@ -46,6 +69,9 @@ class Field:
     hi: float | None = None
     choices: tuple[str, ...] = ()
     length: int | None = None
+    pattern: re.Pattern[str] | None = None  # 'str': the whole value must match
+    unique: bool = False  # 'strs': no entry twice
+    quaternion: bool = False  # 'floats' (x, y, z, w): must be normalisable
 
     def param_name(self, section: str, name: str) -> str:
         """The ROS parameter name this key becomes."""
@@ -71,7 +97,7 @@ TIME = {'s': 1.0, 'min': 60.0}
 #: Every key a scenario may hold, by section ('' is the top level).
 SCHEMA: dict[str, dict[str, Field]] = {
     '': {
-        'name': Field('str', 'scenario name (the file stem)'),
+        'name': Field('str', 'scenario name (the file stem; names the run folder)', pattern=SAFE_NAME),
         'description': Field('str', 'one line: what this scenario shows'),
         'seed': Field('int', 'random seed for every noise stream', 1, lo=0, hi=2**31 - 1),
         'control_period': _q('lockstep control period Δt (the DPA cycle)', 0.5, 's', TIME, lo=1e-3, hi=60.0),
@@ -79,18 +105,19 @@ SCHEMA: dict[str, dict[str, Field]] = {
                        {**TIME, 'orbits': float('nan')}, lo=0.0, hi=30 * 86400.0),
         'nodes': Field('strs', 'nodes of the graph', ['rigid_body', 'reaction_wheels'],
                        choices=('rigid_body', 'reaction_wheels', 'magnetometer_sim', 'em_driver',
-                                'acds_controller', 'ascs_mode_manager')),
+                                'acds_controller', 'ascs_mode_manager'), unique=True),
         'input_timeout': _q('wall time a node may wait for an input', 30.0, 's', TIME, lo=0.5, hi=3600.0),
     },
     'spacecraft': {
         'inertia': _q('inertia [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (Table 4-1; products Ixy = ∫xy dm, '
-                      'tensor I = [[Ixx,−Ixy,−Ixz],…])', REQUIRED, 'kg_m2', INERTIA, length=6),
+                      'tensor I = [[Ixx,−Ixy,−Ixz],…]; |each| ≤ 1e9 kg·m², the ISS is ~1e8)', REQUIRED, 'kg_m2',
+                      INERTIA, length=6, lo=-1e9, hi=1e9),
         'inertia_scale': Field('float', 'multiplies the whole tensor (Table 4-7 case 3: 2/3)', 1.0,
                                lo=0.01, hi=100.0),
         'initial_rates': _q('initial body rates ω0 (x, y, z)', [0.0, 0.0, 0.0], 'rad_s', RATE, length=3,
                             lo=-1.0, hi=1.0),
         'initial_quaternion_xyzw': Field('floats', 'initial attitude q body→ECI, scalar last',
-                                         [0.0, 0.0, 0.0, 1.0], length=4, lo=-1.0, hi=1.0),
+                                         [0.0, 0.0, 0.0, 1.0], length=4, lo=-1.0, hi=1.0, quaternion=True),
     },
     'orbit': {
         'kind': Field('str', 'circular or elliptical (Kepler)', 'circular', choices=('circular', 'elliptical')),
@@ -202,7 +229,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
                              choices=('heao_a', 'heao_b', 'heao_b_preliminary')),
         'scan_rate': _q('celestial scan rate about z', 0.03 * 2 * math.pi / 60, 'rad_s', RATE, lo=0.0, hi=0.1),
         'target_quaternion_xyzw': Field('floats', 'cruise target attitude q body→ECI', [0.0, 0.0, 0.0, 1.0],
-                                        length=4, lo=-1.0, hi=1.0),
+                                        length=4, lo=-1.0, hi=1.0, quaternion=True),
         'lead_time_s': Field('float', 'lead law: wheel command → momentum lead time, s', 500.0, lo=0.0, hi=1e5),
         'adc_bits': Field('int', 'transfer assembly ADC width, bits', 10, lo=8, hi=24),
         'telemetry_every': Field('int', 'DPA/TA telemetry on diagnostics every N steps (and at every event)',
@@ -322,24 +349,92 @@ def list_scenarios() -> list[tuple[str, str]]:
     return out
 
 
-def _read_yaml(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:
+class _ScenarioLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, strict where a scenario needs it.
+
+    A key given twice in one mapping (at any level) is an error, not a silent
+    override. Exponent floats without a dot (``2.25e2``, ``1e5``, ``-3E-2``) are
+    floats, as in YAML 1.2 (PyYAML's YAML 1.1 rule needs a dot and a signed
+    exponent); anything else that is not a number stays a string.
+    """
+
+    def construct_mapping(self, node: yaml.Node, deep: bool = False) -> dict[Any, Any]:
+        if isinstance(node, yaml.MappingNode):
+            first: dict[Any, yaml.Mark] = {}
+            for key_node, _ in node.value:
+                if key_node.tag == 'tag:yaml.org,2002:merge':
+                    continue
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    seen = first.get(key)
+                except TypeError:  # unhashable: the base constructor says so
+                    continue
+                if seen is not None:
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f'duplicate key {key!r} (first given on line {seen.line + 1})',
+                        key_node.start_mark)
+                first[key] = key_node.start_mark
+        return super().construct_mapping(node, deep=deep)
+
+
+_ScenarioLoader.add_implicit_resolver(
+    'tag:yaml.org,2002:float', re.compile(r'^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$'),
+    list('-+0123456789.'))
+
+
+def _read_text(path: Path) -> str:
+    """The text of a scenario file, or one ScenarioError saying why it is not one."""
     if not path.exists():
-        known = ', '.join(n for n, _ in ((p.stem, '') for p in sorted(SCENARIO_DIR.glob('*.yaml'))))
+        known = ', '.join(p.stem for p in sorted(SCENARIO_DIR.glob('*.yaml')))
         raise ScenarioError(f'scenario {path} not found (shipped: {known})')
-    if path in chain:
+    if path.is_dir():
+        raise ScenarioError(f'{path}: is a directory, not a scenario file (give a YAML file or a shipped name)')
+    if not path.is_file():
+        raise ScenarioError(f'{path}: is not a regular file (a scenario is a YAML text file)')
+    try:
+        size = path.stat().st_size
+        if size > MAX_SCENARIO_BYTES:
+            raise ScenarioError(f'{path}: {size} bytes is too large for a scenario (limit {MAX_SCENARIO_BYTES})')
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ScenarioError(f'{path}: cannot be read: {exc.strerror or exc}') from None
+    if b'\0' in data:
+        raise ScenarioError(f'{path}: is a binary file, not YAML text (NUL byte at offset {data.index(0)})')
+    try:
+        return data.decode('utf-8-sig')
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f'{path}: is not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); '
+                            'a scenario is a UTF-8 YAML file') from None
+
+
+def _extends_path(base: Any, child: Path) -> Path:
+    """Where ``extends: base`` of ``child`` points: an absolute path as given; a relative path or a bare
+    name first beside ``child``, then among the shipped scenarios."""
+    if not isinstance(base, str) or not base.strip():
+        raise ScenarioError(f'{child}: extends: expected a scenario name or a path, got {base!r}')
+    rel = Path(base if Path(base).suffix in ('.yaml', '.yml') else f'{base}.yaml')
+    candidates = [rel] if rel.is_absolute() else [child.parent / rel, SCENARIO_DIR / rel]
+    for candidate in candidates:
+        if candidate.exists():
+            return candidate
+    raise ScenarioError(f'{child}: extends: {base!r} not found (looked for {" and ".join(map(str, candidates))})')
+
+
+def _read_yaml(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:
+    text = _read_text(path)
+    if path.resolve() in chain:
         raise ScenarioError(f'{path}: "extends" loops back on itself')
     try:
-        data = yaml.safe_load(path.read_text())
+        data = yaml.load(text, Loader=_ScenarioLoader)  # a SafeLoader subclass
     except yaml.YAMLError as exc:
         mark = getattr(exc, 'problem_mark', None)
         where = f' line {mark.line + 1}, column {mark.column + 1}' if mark else ''
         raise ScenarioError(f'{path}:{where} is not valid YAML: {getattr(exc, "problem", exc)}') from None
     if not isinstance(data, dict):
         raise ScenarioError(f'{path}: a scenario is a mapping of keys, got {type(data).__name__}')
-    base_name = data.pop('extends', None)
-    if base_name is None:
+    if 'extends' not in data:
         return data
-    base = _read_yaml(scenario_path(str(base_name)), (*chain, path))
+    base = _read_yaml(_extends_path(data.pop('extends'), path), (*chain, path.resolve()))
     for key, value in data.items():
         if isinstance(value, dict) and isinstance(base.get(key), dict):
             merged = dict(base[key])
@@ -364,50 +459,78 @@ def _stem(section: str, key: str) -> str:
     return key
 
 
+def _show(v: Any) -> str:
+    """``repr(v)``, shortened when huge (a 400-digit integer is named by its length)."""
+    text = repr(v)
+    if len(text) <= 40:
+        return text
+    if isinstance(v, int):
+        return f'an integer with {len(str(abs(v)))} digits ({text[:8]}…)'
+    return f'{text[:36]}…'
+
+
 def _check_value(where: str, f: Field, value: Any, factor: float) -> Any:
+    def out_of_range(v: Any) -> ScenarioError:
+        def bound(b: float | None, none: str) -> str:
+            return none if b is None else str(int(b)) if f.kind == 'int' else f'{b / factor:g}'
+        lo, hi = bound(f.lo, '-inf'), bound(f.hi, 'inf')
+        return ScenarioError(f'{where}: {_show(v)} is out of range [{lo}, {hi}]')
+
     def number(v: Any) -> float:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise ScenarioError(f'{where}: expected a number, got {v!r}')
-        x = float(v) * factor
+            raise ScenarioError(f'{where}: expected a number, got {_show(v)}')
+        try:
+            x = float(v) * factor
+        except OverflowError:  # an integer beyond any float
+            raise out_of_range(v) from None
         if not math.isfinite(x):
-            raise ScenarioError(f'{where}: {v!r} is not a finite number')
+            raise ScenarioError(f'{where}: {_show(v)} is not a finite number')
         if (f.lo is not None and x < f.lo) or (f.hi is not None and x > f.hi):
-            lo = f.lo / factor if f.lo is not None else None
-            hi = f.hi / factor if f.hi is not None else None
-            raise ScenarioError(f'{where}: {v!r} is out of range [{lo:g}, {hi:g}]')
+            raise out_of_range(v)
         return x
 
     if f.kind == 'float':
         return number(value)
     if f.kind == 'int':
         if isinstance(value, bool) or not isinstance(value, int):
-            raise ScenarioError(f'{where}: expected an integer, got {value!r}')
-        return int(number(value))
+            raise ScenarioError(f'{where}: expected an integer, got {_show(value)}')
+        if (f.lo is not None and value < f.lo) or (f.hi is not None and value > f.hi):
+            raise out_of_range(value)
+        return value
     if f.kind == 'bool':
         if not isinstance(value, bool):
-            raise ScenarioError(f'{where}: expected true or false, got {value!r}')
+            raise ScenarioError(f'{where}: expected true or false, got {_show(value)}')
         return value
     if f.kind == 'str':
         if not isinstance(value, str):
-            raise ScenarioError(f'{where}: expected a string, got {value!r}')
+            raise ScenarioError(f'{where}: expected a string, got {_show(value)}')
         if f.choices and value not in f.choices:
-            raise ScenarioError(f'{where}: {value!r} is not one of {", ".join(f.choices)}')
+            raise ScenarioError(f'{where}: {_show(value)} is not one of {", ".join(f.choices)}')
+        if f.pattern is not None and not f.pattern.fullmatch(value):
+            raise ScenarioError(f'{where}: {_show(value)} is not a safe folder name (letters, digits, _ - . only, '
+                                'not starting with ".", at most 100 characters)')
         return value
     if not isinstance(value, list):
-        raise ScenarioError(f'{where}: expected a list, got {value!r}')
+        raise ScenarioError(f'{where}: expected a list, got {_show(value)}')
     if f.length is not None and len(value) != f.length:
         raise ScenarioError(f'{where}: expected {f.length} values, got {len(value)}')
     if f.kind == 'strs':
-        if not f.choices:
-            bad = [v for v in value if not isinstance(v, str)]
-            if bad:
-                raise ScenarioError(f'{where}: expected strings, got {bad[0]!r}')
-            return list(value)
-        bad = [v for v in value if v not in f.choices]
+        bad = [v for v in value if not isinstance(v, str) or (f.choices and v not in f.choices)]
+        if bad and not f.choices:
+            raise ScenarioError(f'{where}: expected strings, got {_show(bad[0])}')
         if bad:
-            raise ScenarioError(f'{where}: unknown {", ".join(map(str, bad))} (known: {", ".join(f.choices)})')
+            raise ScenarioError(f'{where}: unknown {", ".join(map(_show, bad))} (known: {", ".join(f.choices)})')
+        twice = sorted({v for v in value if value.count(v) > 1})
+        if f.unique and twice:
+            raise ScenarioError(f'{where}: {", ".join(twice)} listed more than once')
         return list(value)
-    return [number(v) for v in value]
+    numbers = [number(v) for v in value]
+    if f.quaternion:
+        norm = math.sqrt(sum(x * x for x in numbers))
+        if norm < MIN_QUATERNION_NORM:
+            raise ScenarioError(f'{where}: {_show(value)} has norm {norm:g}: not an attitude quaternion '
+                                f'(it cannot be normalised; |q| must be at least {MIN_QUATERNION_NORM:g})')
+    return numbers
 
 
 def _validate_section(path: Path, section: str, given: dict[str, Any]) -> dict[str, Any]:
@@ -445,21 +568,31 @@ def _validate_section(path: Path, section: str, given: dict[str, Any]) -> dict[s
     return out
 
 
+def _check_graph(path: Path, sc: Scenario) -> None:
+    """Checks across keys: the node list can run, and the run has a bounded number of steps."""
+    if TIME_OWNER not in sc.get('', 'nodes'):
+        raise ScenarioError(f'{path}: nodes: {TIME_OWNER} is missing (it owns sim time; every graph has it)')
+    steps = round(sc.duration_s() / sc.control_period_s)
+    if steps > MAX_STEPS:
+        raise ScenarioError(f'{path}: duration / control_period give {steps:,} steps, more than the {MAX_STEPS:,} '
+                            'a run may have (shorten duration_* or lengthen control_period_*)')
+
+
 def load_scenario(name_or_path: str) -> Scenario:
     """Read, merge (``extends``), validate and convert a scenario; raise ScenarioError on any problem."""
     path = scenario_path(name_or_path)
     data = _read_yaml(path)
-    unknown = sorted(k for k, v in data.items() if isinstance(v, dict) and k not in SCHEMA)
-    if unknown:
-        raise ScenarioError(f'{path}: unknown section "{unknown[0]}" (sections: {", ".join(s for s in SCHEMA if s)})')
-    values = {'': _validate_section(path, '', {k: v for k, v in data.items() if not isinstance(v, dict)})}
-    for section in SCHEMA:
-        if section:
-            given = data.get(section, {})
-            if not isinstance(given, dict):
-                raise ScenarioError(f'{path}: "{section}" must be a mapping')
-            values[section] = _validate_section(path, section, given)
+    sections = [s for s in SCHEMA if s]
+    for key, value in data.items():
+        if isinstance(value, dict) and key not in SCHEMA:
+            raise ScenarioError(f'{path}: unknown section "{key}" (sections: {", ".join(sections)})')
+        if key in sections and not isinstance(value, dict):
+            raise ScenarioError(f'{path}: "{key}" must be a mapping of keys, got {_show(value)}')
+    values = {'': _validate_section(path, '', {k: v for k, v in data.items() if k not in sections})}
+    for section in sections:
+        values[section] = _validate_section(path, section, data.get(section, {}))
     sc = Scenario(values['']['name'], path, values, data)
     if path.parent == SCENARIO_DIR and sc.name != path.stem:
         raise ScenarioError(f'{path}: name "{sc.name}" differs from the file name "{path.stem}"')
+    _check_graph(path, sc)
     return sc

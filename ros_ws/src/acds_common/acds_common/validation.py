@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+
 import numpy as np
 
 
@@ -16,3 +19,17 @@ def finite_vector3(name: str, value: object, error: type[Exception] = ValueError
     if not np.all(np.isfinite(arr)):
         raise error(f'{name} must be finite, got {arr.tolist()}')
     return arr
+
+
+@contextmanager
+def scenario_key(key: str, error: type[Exception]) -> Iterator[None]:
+    """Re-raise an ``error`` raised inside as ``error('<key>: <message>')``.
+
+    Builders that turn scenario sections into a core wrap each part in this, so a
+    model's own check names the scenario section or key it came from (the node's
+    start-up error and the launcher's pre-flight line say the same).
+    """
+    try:
+        yield
+    except error as exc:
+        raise error(f'{key}: {exc}') from None

@@ -96,3 +96,11 @@ def test_extends_replaces_a_top_level_duration_given_in_another_unit(tmp_path):
     write(tmp_path, BASE.replace('duration_s: 10', 'duration_orbits: 3'), 'base.yaml')
     sc = load_scenario(write(tmp_path, f'extends: {tmp_path / "base.yaml"}\nname: c\nduration_min: 2\n', 'c.yaml'))
     assert sc.duration_s() == pytest.approx(120.0)
+
+
+def test_every_number_in_the_schema_has_a_physical_range():
+    """A number without bounds lets 1e300 through to the models (issue 9 §6: NaN in the summary)."""
+    unbounded = [f'{s}.{n}' for s, fields in SCHEMA.items() for n, f in fields.items()
+                 if f.kind in ('float', 'int', 'floats') and not (f.lo is not None and f.hi is not None
+                                                                 and math.isfinite(f.lo) and math.isfinite(f.hi))]
+    assert unbounded == []

@@ -9,7 +9,8 @@ from acds_common.coupling import coupling_from_section
 from acds_common.messages import WARN, diagnostic, mode_status
 from acds_common.parameters import normalize
 from acds_common.scenario import load_scenario
-from acds_controller.controller_step import ControllerStep, apply_command, build_dpa
+from acds_controller.configuration import build_dpa
+from acds_controller.controller_step import ControllerStep, apply_command
 from acds_controller.magnetic_laws import ControllerError
 
 

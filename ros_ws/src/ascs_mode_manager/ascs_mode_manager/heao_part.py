@@ -30,8 +30,10 @@ import numpy as np
 from acds_common.cdr import Status
 from acds_common.dpa_commands import GAIN_LIMITS, LAW_CHOICES
 from acds_common.messages import MODE_STATUS, OK, WARN, diagnostic, vec
+from acds_common.validation import scenario_key
 
 from ascs_mode_manager.heao_modes import CRUISE_MODES, HeaoModeConfig, HeaoModeManager, Transition
+from ascs_mode_manager.spin_mechanizations import AscsError
 
 
 def event_text(tr: Transition) -> str:
@@ -68,7 +70,8 @@ class HeaoPart:
     def __init__(self, host: Any) -> None:
         self.host = host
         m = host.modes
-        self.core = build_core(m)
+        with scenario_key('modes', AscsError):
+            self.core = build_core(m)
         self.stop_at_capture = m['stop_at_capture']
         self.run_complete = False
 

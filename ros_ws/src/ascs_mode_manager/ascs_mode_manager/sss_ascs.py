@@ -35,14 +35,30 @@ Command grammar (case-insensitive, whitespace-separated)::
     sss direct_attitude on | sss direct_attitude off
     sss attitude_polarity plus | sss attitude_polarity minus     (extension: sign of the attitude dipole)
 
-A mode change, or Direct Attitude on during a spin-mode pass, is refused while torquing is active on a
-pass (spin and attitude mode are never both active on one perigee pass).
+The flight rule (seed 001, "The attitude mode"): "The spin mode and attitude mode will not both be activated
+on a single perigee pass." It holds per *perigee pass*, not per activation:
+
+* Perigee pass: the span over which the spin-plane signal keeps reaching the polarity-sensing level. The
+  core follows it with a second copy of the time-constant circuit fed by the comparator *whether or not the
+  system is enabled* (its state ``perigee_pass``): the pass starts at the first step at which ``|s| ≥ L``
+  and ends at the first step at which the comparator has not fired for the hold time RC·ln(1/release_fraction)
+  — the same condition that ends a torquing pass ("no polarity detection for … s (hold released)"). So a
+  disable/enable cycle, or a turn-off by command, does not end the perigee pass; the signal staying below the
+  level for the hold time does. Inside a perigee the gaps between detections are at most one revolution,
+  shorter than the hold, so one perigee is one pass; the next perigee, an orbit later, is a new one.
+* On a perigee pass the core records the modes that have been active: spin once a spin-mode torquing pass
+  has been on, attitude once the attitude coil has been energised (automatic attitude mode or Direct
+  Attitude). Then, until that perigee pass ends: ``sss mode <the other one>`` is refused, ``sss
+  direct_attitude on`` is refused after spin, and a spin-mode turn-on after the attitude coil (possible only
+  through Direct Attitude, which may be switched off mid-pass) is inhibited (event ``inhibited``). Each
+  refusal says why and when the perigee pass ends.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from acds_common.units import GAUSS_T, nm_to_dyne_cm, rad_s_to_rpm, tesla_to_gauss
@@ -50,13 +66,15 @@ from acds_common.units import GAUSS_T, nm_to_dyne_cm, rad_s_to_rpm, tesla_to_gau
 from ascs_mode_manager.spin_mechanizations import (
     ATTITUDE_COIL,
     BUS_V,
+    MECHANIZATIONS,
     SPIN_COIL,
     AscsError,
     Coil,
     polarity,
 )
 
-__all__ = ["AscsError", "CommandResult", "Event", "PassAccumulator", "SssAscs", "SssAscsConfig", "SssOutput"]
+__all__ = ["AscsError", "CommandResult", "Event", "PassAccumulator", "SssAscs", "SssAscsConfig", "SssOutput",
+           "build_sss_ascs"]
 
 _MODES = ("spin", "attitude")
 _PASS_MODES = ("spin", "attitude", "direct_attitude")
@@ -107,6 +125,19 @@ class SssAscsConfig:
         return self.hold_time_constant_s * math.log(1.0 / self.hold_release_fraction)
 
 
+def build_sss_ascs(sss: dict[str, Any]) -> SssAscs:
+    """The subsystem the scenario's ``sss`` section describes (SI values; the mechanization sets the spin coil).
+
+    The mode-manager node and the launcher's pre-flight both build it here.
+    """
+    if sss["mechanization"] not in MECHANIZATIONS:
+        raise AscsError(f"mechanization {sss['mechanization']!r} unknown; known: {', '.join(MECHANIZATIONS)}")
+    return SssAscs(SssAscsConfig(
+        polarity_level_t=sss["polarity_level"], hold_time_constant_s=sss["hold_time_constant_s"],
+        hold_release_fraction=sss["hold_release_fraction"], spin_coil=MECHANIZATIONS[sss["mechanization"]].coil,
+        bus_v=sss["bus_v"]))
+
+
 @dataclass(frozen=True)
 class CommandResult:
     """Outcome of a ground command: accepted or refused, and why."""
@@ -117,7 +148,8 @@ class CommandResult:
 
 @dataclass(frozen=True)
 class Event:
-    """An automatic turn-on/turn-off (kind 'turn_on' | 'turn_off') at sim time t_s (s)."""
+    """An automatic turn-on/turn-off (kind 'turn_on' | 'turn_off'), or a spin-mode turn-on withheld by the
+    one-mode-per-perigee-pass rule (kind 'inhibited'), at sim time t_s (s)."""
 
     t_s: float
     kind: str
@@ -127,8 +159,8 @@ class Event:
 @dataclass(frozen=True)
 class SssOutput:
     """One step of the subsystem: constant-level drive commands −1/0/+1 per coil, the pass state, the
-    events of this step, the steady-state dipole in body axes (A·m²), the bus power (W) and the pass mode
-    ('spin' | 'attitude' | 'direct_attitude' | 'off')."""
+    events of this step (turn_on, turn_off, inhibited), the steady-state dipole in body axes (A·m²), the
+    bus power (W) and the pass mode ('spin' | 'attitude' | 'direct_attitude' | 'off')."""
 
     spin_coil: int
     attitude_coil: int
@@ -153,11 +185,23 @@ class SssAscs:
         self.torquing_active = False
         self._hold_v = 0.0
         self._pass_mode = "off"
-        self._pass_start_s = math.nan
+        #: Whether a perigee pass is in progress (module docstring: the un-gated copy of the hold circuit).
+        self.perigee_pass = False
+        self._perigee_v = 0.0
+        #: Modes active so far on the current perigee pass → sim time each first was (s).
+        self._perigee_modes: dict[str, float] = {}
+        self._spin_inhibited = False
 
-    def _refuse_during_pass(self, text: str, what: str) -> CommandResult:
-        return CommandResult(False, f"refused '{text}': it would {what} during a {self._pass_mode}-mode pass "
-                                    f"(torquing active since t={self._pass_start_s:.1f} s); wait until turn-off")
+    def _already_on_this_pass(self, mode: str) -> str:
+        """Why ``mode`` having been active on this perigee pass forbids the other one ('' if it was not)."""
+        if not self.perigee_pass or mode not in self._perigee_modes:
+            return ""
+        cfg = self.config
+        article = "an" if mode == "attitude" else "a"
+        return (f"this perigee pass already had {article} {mode}-mode pass (from t={self._perigee_modes[mode]:.1f} s), and "
+                "spin and attitude mode are never both active on one perigee pass; the perigee pass ends once the "
+                f"spin-plane signal has stayed below {tesla_to_gauss(cfg.polarity_level_t):.3f} G "
+                f"for {cfg.hold_time_s:.1f} s")
 
     def command(self, text: str, t_s: float) -> CommandResult:
         """Apply a ground command (grammar in the module docstring) at sim time ``t_s`` (s)."""
@@ -175,8 +219,10 @@ class SssAscs:
                                        f"{'armed' if self.enabled else 'inhibited'}")
         if verb == "mode" and len(args) == 1 and args[0] in _MODES:
             wanted = args[0]
-            if wanted != self.mode and self.torquing_active and self._pass_mode in _MODES:
-                return self._refuse_during_pass(text, f"activate {wanted} mode")
+            other = "spin" if wanted == "attitude" else "attitude"
+            why = self._already_on_this_pass(other) if wanted != self.mode else ""
+            if why:
+                return CommandResult(False, f"refused '{text}': {why}")
             self.mode = wanted
             return CommandResult(True, f"mode {wanted} selected")
         if verb in ("spin_up", "despin") and not args:
@@ -184,8 +230,9 @@ class SssAscs:
             return CommandResult(True, f"spin direction {verb}")
         if verb == "direct_attitude" and len(args) == 1 and args[0] in ("on", "off"):
             turn_on = args[0] == "on"
-            if turn_on and self.torquing_active and self._pass_mode == "spin":
-                return self._refuse_during_pass(text, "energise the attitude coil")
+            why = self._already_on_this_pass("spin") if turn_on else ""
+            if why:
+                return CommandResult(False, f"refused '{text}': {why}")
             self.direct_attitude = turn_on
             return CommandResult(True, f"direct attitude {args[0]}: attitude coil "
                                        f"{'on from the main bus' if turn_on else 'back to automatic control'}")
@@ -206,15 +253,28 @@ class SssAscs:
         b = _vector3("b_sensed_t", b_sensed_t)
         cfg = self.config
         signal_t = float(b[1])
-        comparator = polarity(signal_t, cfg.polarity_level_t) if self.enabled else 0
-        self._hold_v = 1.0 if comparator != 0 else self._hold_v * math.exp(-dt / cfg.hold_time_constant_s)
+        detected = polarity(signal_t, cfg.polarity_level_t)
+        decay = math.exp(-dt / cfg.hold_time_constant_s)
+        self._perigee_v = 1.0 if detected != 0 else self._perigee_v * decay
+        self.perigee_pass = self._perigee_v > cfg.hold_release_fraction
+        if not self.perigee_pass:
+            self._perigee_modes.clear()
+            self._spin_inhibited = False
+        comparator = detected if self.enabled else 0
+        self._hold_v = 1.0 if comparator != 0 else self._hold_v * decay
         if not self.enabled:
             self._hold_v = 0.0
         active = self.enabled and self._hold_v > cfg.hold_release_fraction
         events: list[Event] = []
+        if self.direct_attitude and self.perigee_pass:
+            self._perigee_modes.setdefault("attitude", t)
+        if active and self.mode == "spin" and "attitude" in self._perigee_modes:
+            if not self._spin_inhibited:
+                events.append(Event(t, "inhibited", f"spin mode not activated: {self._already_on_this_pass('attitude')}"))
+                self._spin_inhibited = True
+            active = False
         if active and not self.torquing_active:
             self._pass_mode = self.mode
-            self._pass_start_s = t
             events.append(Event(t, "turn_on", f"spin-plane magnetometer |B_y| = {abs(tesla_to_gauss(signal_t)):.4f} G"
                                               f" >= {tesla_to_gauss(cfg.polarity_level_t):.3f} G; {self.mode} mode"
                                               + (f" ({self.spin_direction})" if self.mode == "spin" else "")))
@@ -232,6 +292,10 @@ class SssAscs:
             spin_cmd = comparator if self.spin_direction == "spin_up" else -comparator
         elif active:
             att_cmd = self.attitude_polarity
+        if self.perigee_pass and active and self._pass_mode == "spin":
+            self._perigee_modes.setdefault("spin", t)
+        if self.perigee_pass and att_cmd != 0:
+            self._perigee_modes.setdefault("attitude", t)
         dipole = np.array([spin_cmd * cfg.spin_coil.peak_moment_am2(cfg.bus_v), 0.0,
                            att_cmd * cfg.attitude_coil.peak_moment_am2(cfg.bus_v)])
         power = cfg.bus_v * (abs(spin_cmd) * cfg.spin_coil.current_a(cfg.bus_v)

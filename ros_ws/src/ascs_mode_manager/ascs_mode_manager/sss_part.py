@@ -23,7 +23,8 @@ Outputs of step k:
   spin | attitude | direct_attitude | off, what the per-pass report integrates —, ``enabled``,
   ``selected_mode``, ``spin_direction``, ``signal_gauss``, ``spin_coil``, ``attitude_coil``,
   ``power_w``).
-* ``events``: every automatic turn-on/turn-off and every commanded mode change, with its sim time:
+* ``events``: every automatic turn-on/turn-off, every spin-mode turn-on the one-mode-per-perigee-pass rule
+  inhibits, and every commanded mode change, with its sim time:
   ``t=1234.50 turn_on sss_spin_idle->sss_spin_torquing: <why>``.
 * ``ground/ack``: every ground command accepted or refused, with the reason.
 * ``diagnostics``: every 20 steps, and at once (WARN) when an input is rejected.
@@ -54,9 +55,10 @@ import numpy as np
 from acds_common.cdr import Status
 from acds_common.messages import OK, WARN, diagnostic, vec, vector3
 from acds_common.units import GAUSS_T, tesla_to_gauss
+from acds_common.validation import scenario_key
 
-from ascs_mode_manager.spin_mechanizations import MECHANIZATIONS, Mechanization, coil_moments
-from ascs_mode_manager.sss_ascs import SssAscs, SssAscsConfig, SssOutput
+from ascs_mode_manager.spin_mechanizations import MECHANIZATIONS, AscsError, Mechanization, coil_moments
+from ascs_mode_manager.sss_ascs import SssAscs, SssOutput, build_sss_ascs
 
 NODE = 'ascs_mode_manager'
 #: Body axis of the spin-plane magnetometer channel (fixed by the core's wiring).
@@ -94,9 +96,8 @@ class SssPart:
         p = host.sss_params
         self.mech = MECHANIZATIONS[p['mechanization']]
         self.scale_v_per_t = p['magnetometer_scale_v_per_g'] / GAUSS_T
-        self.ascs = SssAscs(SssAscsConfig(
-            polarity_level_t=p['polarity_level'], hold_time_constant_s=p['hold_time_constant_s'],
-            hold_release_fraction=p['hold_release_fraction'], spin_coil=self.mech.coil, bus_v=p['bus_v']))
+        with scenario_key('sss', AscsError):
+            self.ascs = build_sss_ascs(p)
         self.mode = 'sss_disabled'
         self.last_signal_t = 0.0
 

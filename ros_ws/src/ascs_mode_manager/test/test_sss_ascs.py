@@ -96,7 +96,7 @@ def test_exclusivity_spin_pass_refuses_attitude_mode() -> None:
     assert ascs.torquing_active
     result = ascs.command("sss mode attitude", 10.0)
     assert not result.accepted
-    assert "attitude mode during a spin-mode pass" in result.reason and "wait until turn-off" in result.reason
+    assert "already had a spin-mode pass" in result.reason and "stayed below 0.075 G for 20.8 s" in result.reason
     assert ascs.mode == "spin"
     refused = ascs.command("sss direct_attitude on", 10.0)
     assert not refused.accepted and "spin-mode pass" in refused.reason
@@ -105,6 +105,65 @@ def test_exclusivity_spin_pass_refuses_attitude_mode() -> None:
     assert [e.kind for o in outs for e in o.events] == ["turn_off"]
     assert ascs.command("sss mode attitude", 50.0).accepted
     assert ascs.mode == "attitude"
+
+
+def test_one_mode_per_perigee_pass_survives_disable_mode_change_enable() -> None:
+    """Seed 001: "The spin mode and attitude mode will not both be activated on a single perigee pass" — per
+    perigee pass, not per activation: disable → mode attitude → enable mid-pass must not start an attitude pass."""
+    ascs = _enabled("spin")
+    outs, _ = _run(ascs, lambda t: 0.3, 0.0, 10.0)
+    assert ascs.torquing_active and outs[-1].mode == "spin"
+    assert ascs.command("sss disable", 10.0).accepted
+    outs, _ = _run(ascs, lambda t: 0.3, 10.0, 5.0)
+    assert [e.kind for o in outs for e in o.events] == ["turn_off"] and not ascs.torquing_active
+    assert ascs.perigee_pass  # the field still reaches the level: same perigee pass
+    refused = ascs.command("sss mode attitude", 15.0)
+    assert not refused.accepted and ascs.mode == "spin"
+    assert "already had a spin-mode pass (from t=0.0 s)" in refused.reason
+    assert "never both active on one perigee pass" in refused.reason and "below 0.075 G for 20.8 s" in refused.reason
+    da = ascs.command("sss direct_attitude on", 15.0)
+    assert not da.accepted and "spin-mode pass" in da.reason and not ascs.direct_attitude
+    assert ascs.command("sss enable", 15.0).accepted  # re-enabled: still spin mode, the one this pass had
+    outs, _ = _run(ascs, lambda t: 0.3, 15.0, 30.0)
+    assert all(o.attitude_coil == 0 and o.mode in ("spin", "off") for o in outs)
+    assert [e.kind for o in outs for e in o.events] == ["turn_on"] and "spin mode" in outs[0].events[0].detail
+    # The pass ends: below the level for the hold time (disabled or not). The next perigee may be attitude.
+    assert ascs.command("sss disable", 45.0).accepted
+    _run(ascs, lambda t: 0.05, 45.0, 30.0)
+    assert not ascs.perigee_pass
+    assert ascs.command("sss mode attitude", 75.0).accepted and ascs.command("sss enable", 75.0).accepted
+    outs, _ = _run(ascs, lambda t: 0.3, 75.0, 20.0)
+    assert [e.kind for o in outs for e in o.events] == ["turn_on"] and outs[-1].mode == "attitude"
+    assert all(o.spin_coil == 0 for o in outs) and outs[-1].attitude_coil == 1
+
+
+def test_perigee_pass_follows_the_signal_not_the_enable() -> None:
+    ascs = SssAscs()  # never enabled: no torquing, but the pass is still tracked
+    outs, _ = _run(ascs, lambda t: 0.3, 0.0, 10.0)
+    assert ascs.perigee_pass and not any(o.torquing_active for o in outs)
+    states = []
+    for t in 10.0 + DT * np.arange(int(30.0 / DT)):
+        ascs.step(float(t), DT, _field(0.05, float(t)))
+        states.append((float(t), ascs.perigee_pass))
+    last_detection = max(t for t in DT * np.arange(int(10.0 / DT)) if abs(_field(0.3, t)[1]) >= 0.075 * GAUSS_T)
+    end = next(t for t, on in states if not on)
+    assert end - last_detection == pytest.approx(ascs.config.hold_time_s, abs=DT + 1e-9)
+
+
+def test_spin_mode_is_inhibited_after_direct_attitude_on_the_same_perigee_pass() -> None:
+    ascs = _enabled("spin")
+    assert ascs.command("sss direct_attitude on", 0.0).accepted
+    outs, _ = _run(ascs, lambda t: 0.3, 0.0, 10.0)
+    assert all(o.attitude_coil == 1 and o.spin_coil == 0 for o in outs)
+    assert [e.kind for o in outs for e in o.events] == ["inhibited"]
+    assert "spin mode not activated: this perigee pass already had an attitude-mode pass" in outs[0].events[0].detail
+    assert ascs.command("sss direct_attitude off", 10.0).accepted
+    outs, _ = _run(ascs, lambda t: 0.3, 10.0, 30.0)  # same perigee pass: the spin coil stays off
+    assert all(o.spin_coil == 0 and o.attitude_coil == 0 and not o.torquing_active for o in outs)
+    assert not [e for o in outs for e in o.events]
+    _run(ascs, lambda t: 0.05, 40.0, 30.0)  # the pass ends; the next perigee is a spin-mode pass
+    outs, _ = _run(ascs, lambda t: 0.3, 70.0, 10.0)
+    assert [e.kind for o in outs for e in o.events] == ["turn_on"] and any(o.spin_coil != 0 for o in outs)
 
 
 def test_direct_attitude_energises_attitude_coil_without_enable() -> None:

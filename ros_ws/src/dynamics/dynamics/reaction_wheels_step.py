@@ -16,17 +16,10 @@ import numpy as np
 from acds_common.messages import WARN, diagnostic, vec, vector3
 from acds_common.stepper import Stepper
 
-from dynamics.wheels_model import ReactionWheels, WheelsConfig
+from dynamics.configuration import build_wheels
 
 #: Wheel telemetry on ``diagnostics`` every this many steps.
 TELEMETRY_EVERY = 20
-
-
-def build_wheels(w: dict[str, Any]) -> ReactionWheels:
-    """The wheel assembly from the scenario's ``wheels`` section (SI values)."""
-    failed = w['failed_wheel'] if w['failed_wheel'] >= 0 else None
-    return ReactionWheels(WheelsConfig(layout=w['layout'], failed_wheel=failed),
-                          h0_body_nms=np.array(w['initial_momentum']))
 
 
 class ReactionWheelsStep(Stepper):

@@ -16,33 +16,13 @@ from typing import Any
 import numpy as np
 from acds_common import topics
 from acds_common.cdr import OdometryValue
-from acds_common.inertia import inertia_tensor
 from acds_common.messages import MODE_STATUS, magnetic_field, status_value, vec, vector3
 from acds_common.stepper import StepError, Stepper
 
-from dynamics.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
-from dynamics.rigid_body_model import RigidBodyModel, Truth
+from dynamics.configuration import build_rigid_body
+from dynamics.rigid_body_model import Truth
 
 _ZERO_COV = (0.0,) * 9
-
-
-def build_model(sc: dict[str, Any], orbit: dict[str, Any], earth: dict[str, Any], sun: dict[str, Any],
-                dyn: dict[str, Any]) -> RigidBodyModel:
-    """The rigid body in its orbit and environment from the scenario's sections (SI values)."""
-    return RigidBodyModel(
-        inertia_tensor(*sc['inertia']) * sc['inertia_scale'],
-        Orbit(OrbitConfig(
-            kind=orbit['kind'], inclination_rad=orbit['inclination'], raan_rad=orbit['raan'],
-            altitude_m=orbit['altitude'], arg_latitude0_rad=orbit['arg_latitude0'],
-            perigee_altitude_m=orbit['perigee_altitude'], apogee_radius_m=orbit['apogee_radius'],
-            arg_perigee_rad=orbit['arg_perigee'], mean_anomaly0_rad=orbit['mean_anomaly0'])),
-        TiltedDipoleField(EarthFieldConfig(
-            dipole_moment_am2=earth['dipole_moment'], tilt_rad=earth['dipole_tilt'],
-            dipole_longitude_rad=earth['dipole_longitude'], greenwich_angle0_rad=earth['greenwich_angle0'])),
-        Sun(SunConfig(right_ascension_rad=sun['right_ascension'], declination_rad=sun['declination'],
-                      eclipse=sun['eclipse'])),
-        gravity_gradient=dyn['gravity_gradient'], substeps=dyn['substeps'],
-        q0_body_to_eci=sc['initial_quaternion_xyzw'], omega0_body_rad_s=sc['initial_rates'])
 
 
 def run_complete(mode: Any) -> bool:
@@ -73,7 +53,7 @@ class RigidBodyStep(Stepper):
     def __init__(self, params: dict[str, Any], log: Any = None) -> None:
         super().__init__(params, log)
         self.total_steps: int = params['total_steps']
-        self.model = build_model(*(self.section(s) for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics')))
+        self.model = build_rigid_body(*(self.section(s) for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics')))
         self._wheel_h = np.zeros(3)
 
     def start(self) -> dict[str, Any]:

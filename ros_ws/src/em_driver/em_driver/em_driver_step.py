@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from acds_common.messages import ERROR, OK, WARN, diagnostic, mode_status, vec, vector3
 from acds_common.stepper import Stepper
+from acds_common.validation import scenario_key
 
 from em_driver.bridge_switch import EmDriverError
 from em_driver.configuration import build_assembly, parse_command
@@ -34,7 +35,8 @@ class EmDriverStep(Stepper):
     def __init__(self, params: dict[str, Any], log: Any = None) -> None:
         super().__init__(params, log)
         self.cfg = self.section('em_driver')
-        self.assembly = build_assembly(self.cfg)
+        with scenario_key('em_driver', EmDriverError):
+            self.assembly = build_assembly(self.cfg)
         self.source = self.cfg['command_source']
         self._failure_pending = self.cfg['failure'] != 'none'
         self._alarms = np.zeros(3, dtype=bool)

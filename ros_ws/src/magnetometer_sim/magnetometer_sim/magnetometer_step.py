@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from acds_common.messages import ERROR, OK, WARN, diagnostic, field, magnetic_field, mode_status, vec, vector3
 from acds_common.stepper import Stepper
+from acds_common.validation import scenario_key
 
 from magnetometer_sim.configuration import build_magnetometer, parse_command
 from magnetometer_sim.fluxgate import MagnetometerError, MagnetometerReading
@@ -34,7 +35,8 @@ class MagnetometerStep(Stepper):
     def __init__(self, params: dict[str, Any], log: Any = None) -> None:
         super().__init__(params, log)
         self.cfg = self.section('magnetometer')
-        self.mag = build_magnetometer(self.cfg, self.seed)
+        with scenario_key('magnetometer', MagnetometerError):
+            self.mag = build_magnetometer(self.cfg, self.seed)
         self._fault_pending = self.cfg['fault'] != 'none'
         self._b_true = np.zeros(3)
         self._dipole = np.zeros(3)

@@ -1,0 +1,57 @@
+"""Scenario sections → the transfer assembly and DPA cores (pure, no rclpy).
+
+The controller stepper receives the ``spacecraft``, ``controller`` and
+``magnetometer`` scenario sections as SI values ({field: value}, see
+``acds_common.scenario.SCHEMA``) and builds its cores here; the launcher's
+pre-flight builds the same stepper before any process starts.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from acds_common.coupling import coupling_from_section
+from acds_common.inertia import inertia_tensor
+from acds_common.validation import scenario_key
+
+from acds_controller.dpa import Dpa, DpaConfig
+from acds_controller.magnetic_laws import ControllerError
+from acds_controller.transfer_assembly import TransferAssembly
+from acds_controller.wheel_laws import HEAO_A_ACQUISITION, HEAO_B_ACQUISITION, HEAO_B_ACQUISITION_PRELIMINARY
+
+__all__ = ['WHEEL_GAIN_SETS', 'build_dpa']
+
+#: Scenario ``controller.wheel_gains`` → Table 4-2 acquisition gain set.
+WHEEL_GAIN_SETS = {'heao_a': HEAO_A_ACQUISITION, 'heao_b': HEAO_B_ACQUISITION,
+                   'heao_b_preliminary': HEAO_B_ACQUISITION_PRELIMINARY}
+
+
+def build_dpa(sc: dict[str, Any], c: dict[str, Any], mag: dict[str, Any]) -> tuple[TransferAssembly, Dpa]:
+    """Transfer assembly and DPA from the scenario's spacecraft, controller and magnetometer sections (SI).
+
+    The coupling compensation subtracts exactly the Δ the magnetometer is built with
+    (:func:`acds_common.coupling.coupling_from_section`). A core's refusal names the section.
+    """
+    with scenario_key('controller', ControllerError):
+        return _build(sc, c, mag)
+
+
+def _build(sc: dict[str, Any], c: dict[str, Any], mag: dict[str, Any]) -> tuple[TransferAssembly, Dpa]:
+    ta = TransferAssembly(adc_bits=c['adc_bits'])
+    dpa = Dpa(DpaConfig(
+        inertia_kg_m2=inertia_tensor(*sc['inertia']) * sc['inertia_scale'],
+        acquisition_law=c['acquisition_law'], unloading_law=c['unloading_law'],
+        acquisition_gain_study=c['acquisition_gain_per_s_g2'],
+        bdot_gain_study=c['bdot_gain_ft_lb_s_per_g2'],
+        unloading_gain_mode_1b_study=c['unloading_gain_mode_1b_per_s_g2'],
+        unloading_gain_scan_study=c['unloading_gain_scan_per_s_g2'],
+        unloading_gain_point_study=c['unloading_gain_point_per_s_g2'],
+        max_moment_am2=c['max_moment_am2'],
+        coupling_compensation=c['coupling_compensation'],
+        coupling_delta_t_per_am2=coupling_from_section(mag),
+        wheel_gains_acquisition=WHEEL_GAIN_SETS[c['wheel_gains']],
+        scan_rate_rad_s=c['scan_rate'],
+        target_q_body_to_eci=np.array(c['target_quaternion_xyzw']),
+        lead_time_s=c['lead_time_s']))
+    return ta, dpa

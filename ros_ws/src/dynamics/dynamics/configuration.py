@@ -1,0 +1,65 @@
+"""Scenario sections → the dynamics cores (pure, no rclpy).
+
+The steppers of ``rigid_body`` and ``reaction_wheels`` receive their scenario
+sections as SI values ({field: value}, see ``acds_common.scenario.SCHEMA``) and
+build their models here; the launcher's pre-flight builds the same steppers
+before any process starts, so a model's own check (inertia positive definite
+and physical, apogee above perigee, a normalisable attitude, a wheel failure
+only on the 4-wheel cluster, ...) fails there first. Each error names the
+scenario section or key it came from.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from acds_common.inertia import InertiaError, inertia_tensor
+from acds_common.validation import scenario_key
+
+from dynamics.environment import (
+    DynamicsError,
+    EarthFieldConfig,
+    Orbit,
+    OrbitConfig,
+    Sun,
+    SunConfig,
+    TiltedDipoleField,
+)
+from dynamics.rigid_body_model import RigidBodyModel
+from dynamics.wheels_model import ReactionWheels, WheelsConfig
+
+__all__ = ['build_rigid_body', 'build_wheels']
+
+
+def build_rigid_body(spacecraft: dict[str, Any], orbit: dict[str, Any], earth: dict[str, Any], sun: dict[str, Any],
+                     dynamics: dict[str, Any]) -> RigidBodyModel:
+    """The rigid body in its orbit and environment from the scenario's five sections (spec §3)."""
+    with scenario_key('spacecraft.inertia', InertiaError):
+        inertia = inertia_tensor(*spacecraft['inertia']) * spacecraft['inertia_scale']
+    with scenario_key('orbit', DynamicsError):
+        orbit_model = Orbit(OrbitConfig(
+            kind=orbit['kind'], inclination_rad=orbit['inclination'], raan_rad=orbit['raan'],
+            altitude_m=orbit['altitude'], arg_latitude0_rad=orbit['arg_latitude0'],
+            perigee_altitude_m=orbit['perigee_altitude'], apogee_radius_m=orbit['apogee_radius'],
+            arg_perigee_rad=orbit['arg_perigee'], mean_anomaly0_rad=orbit['mean_anomaly0']))
+    with scenario_key('earth', DynamicsError):
+        field = TiltedDipoleField(EarthFieldConfig(
+            dipole_moment_am2=earth['dipole_moment'], tilt_rad=earth['dipole_tilt'],
+            dipole_longitude_rad=earth['dipole_longitude'], greenwich_angle0_rad=earth['greenwich_angle0']))
+    with scenario_key('sun', DynamicsError):
+        sun_model = Sun(SunConfig(right_ascension_rad=sun['right_ascension'], declination_rad=sun['declination'],
+                                  eclipse=sun['eclipse']))
+    with scenario_key('spacecraft', DynamicsError):  # initial attitude and rates (substeps: schema-checked)
+        return RigidBodyModel(inertia, orbit_model, field, sun_model,
+                              gravity_gradient=dynamics['gravity_gradient'], substeps=dynamics['substeps'],
+                              q0_body_to_eci=spacecraft['initial_quaternion_xyzw'],
+                              omega0_body_rad_s=spacecraft['initial_rates'])
+
+
+def build_wheels(wheels: dict[str, Any]) -> ReactionWheels:
+    """The wheel cluster from the scenario's ``wheels`` section (spec §4); ``failed_wheel`` −1 means none."""
+    with scenario_key('wheels', DynamicsError):
+        failed = wheels['failed_wheel'] if wheels['failed_wheel'] >= 0 else None
+        return ReactionWheels(WheelsConfig(layout=wheels['layout'], failed_wheel=failed),
+                              h0_body_nms=np.array(wheels['initial_momentum']))
