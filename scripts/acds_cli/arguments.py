@@ -18,6 +18,7 @@ from typing import NoReturn
 from acds_common.parameters import MAX_REAL_TIME_FACTOR
 from acds_common.scenario import MAX_STEPS
 
+
 class UsageError(Exception):
     """A command-line option cannot work (the message names it); the verb exits 2 before anything starts."""
 
