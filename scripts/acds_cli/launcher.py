@@ -30,6 +30,7 @@ from acds_common.lockstep import LAUNCHER_PID_ENV
 from acds_common.parameters import node_parameters
 from acds_common.scenario import Scenario
 
+from . import shm
 from .monitor import RunMonitor
 from .summary import RunObserver
 
@@ -115,6 +116,20 @@ class DomainLease:
         raise LaunchError(f'no free ROS domain in {DOMAIN_RANGE.start}..{DOMAIN_RANGE.stop - 1}: '
                           f'too many runs at once (locks in {DOMAIN_LOCK_DIR})')
 
+    @staticmethod
+    def held(domain: int) -> bool:
+        """Whether a run (or a child of one) holds ``domain`` now."""
+        path = DOMAIN_LOCK_DIR / f'domain_{domain}.lock'
+        if not path.exists():
+            return False
+        with open(path, 'a') as fh:
+            try:
+                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                return True
+            fcntl.flock(fh, fcntl.LOCK_UN)
+            return False
+
     @property
     def fd(self) -> int:
         """The lock file's descriptor (children inherit it, and with it the lease)."""
@@ -155,6 +170,9 @@ class GraphRun:
         self.graph: Graph | None = None
         self.observer: RunObserver | None = None
         self.processes: dict[str, NodeProcess] = {}
+        self._shm_before: set[str] | None = None
+        #: Zombie shared-memory files of this run's killed processes, removed when it stopped.
+        self.shm_removed: list[str] = []
         self.lease: DomainLease | None = None
         self.monitor: RunMonitor | None = None
         self._t0 = 0.0
@@ -193,6 +211,7 @@ class GraphRun:
             except BagError as exc:
                 raise LaunchError(str(exc)) from None
         self.run_dir.mkdir(parents=True, exist_ok=True)
+        self._shm_before = shm.snapshot()
         self.lease = DomainLease()
         (self.run_dir / 'domain_id').write_text(f'{self.lease.domain_id}\n')
         (self.run_dir / 'scenario.yaml').write_text(yaml.safe_dump(self.scenario.raw, sort_keys=False))
@@ -335,3 +354,6 @@ class GraphRun:
         if self.lease is not None:
             self.lease.close()
             self.lease = None
+        if self._shm_before is not None:  # what this run's killed processes left in /dev/shm
+            self.shm_removed = shm.clean_run(self._shm_before)
+            self._shm_before = None

@@ -107,9 +107,9 @@ def domain():
     """A ROS domain of our own for ``play`` (so playback never reaches another run's graph)."""
     from acds_cli.launcher import DomainLease
 
-    lease = DomainLease()
-    yield lease.domain_id
+    lease = DomainLease()  # a domain no run holds now; released, since play refuses a domain a run holds
     lease.close()
+    yield lease.domain_id
 
 
 def verb_args(verb: str, bag: Path, tmp_path: Path, domain: int) -> list[str]:

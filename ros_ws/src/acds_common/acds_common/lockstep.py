@@ -484,6 +484,16 @@ class LockstepNode(Node):
                 parts.append('nodes not ready: ' + ', '.join(absent))
             self.fail('graph never became ready: ' + '; '.join(parts))
 
+    def may_exit(self) -> bool:
+        """Whether a finished node may leave: the time owner first waits (at most ``input_timeout_s``) until the
+        run monitor has acknowledged a step, so its /clock reader is matched and the final flush reaches it
+        (a run of a few steps can otherwise end before discovery has matched the monitor's readers)."""
+        if not self.done:
+            return False
+        if not self.time_owner or MONITOR_NAME not in self.graph_nodes or self._monitor_acked >= 0:
+            return True
+        return time.monotonic() - self._last_progress > self.input_timeout_s
+
     def fail(self, message: str) -> None:
         """Record a fatal lockstep failure; the main loop reports it and exits non-zero."""
         if self.failure is None:
@@ -526,7 +536,7 @@ def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
         from rclpy.experimental import EventsExecutor
         executor = EventsExecutor()
         executor.add_node(node)
-        while not node.done and node.failure is None and stop['signal'] is None and not node.orphaned:
+        while not node.may_exit() and node.failure is None and stop['signal'] is None and not node.orphaned:
             executor.spin_once(timeout_sec=0.1)
         node.check_parent()  # a parent-death SIGTERM: nobody is left to flush to
         if node.orphaned:

@@ -271,7 +271,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
 
 #: Which scenario sections each node receives as parameters.
 NODE_SECTIONS: dict[str, tuple[str, ...]] = {
-    'rigid_body': ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics'),
+    'rigid_body': ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics', 'em_driver', 'wheels'),
     'reaction_wheels': ('wheels',),
     'magnetometer_sim': ('magnetometer',),
     'em_driver': ('em_driver',),

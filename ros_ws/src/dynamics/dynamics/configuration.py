@@ -11,6 +11,7 @@ scenario section or key it came from.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -29,7 +30,7 @@ from dynamics.environment import (
 from dynamics.rigid_body_model import RigidBodyModel
 from dynamics.wheels_model import ReactionWheels, WheelsConfig
 
-__all__ = ['build_rigid_body', 'build_wheels']
+__all__ = ['ActuatorLimits', 'actuator_limits', 'build_rigid_body', 'build_wheels']
 
 
 def build_rigid_body(spacecraft: dict[str, Any], orbit: dict[str, Any], earth: dict[str, Any], sun: dict[str, Any],
@@ -63,3 +64,26 @@ def build_wheels(wheels: dict[str, Any]) -> ReactionWheels:
         failed = wheels['failed_wheel'] if wheels['failed_wheel'] >= 0 else None
         return ReactionWheels(WheelsConfig(layout=wheels['layout'], failed_wheel=failed),
                               h0_body_nms=np.array(wheels['initial_momentum']))
+
+
+@dataclass(frozen=True)
+class ActuatorLimits:
+    """The most the actuators can physically give per body axis: dipole (A·m²) and wheel momentum (N·m·s)."""
+
+    dipole_am2: np.ndarray
+    wheel_momentum_nms: np.ndarray
+
+
+def actuator_limits(em_driver: dict[str, Any], wheels: dict[str, Any]) -> ActuatorLimits:
+    """Physical bounds of the actuator inputs of the rigid body (issue 9 §3: nothing injected beyond them).
+
+    Dipole per axis: both windings (active and standby) carrying the full bus current E/R, with no
+    transistor drop — more than any drive can make (spec §6), so only a value from outside the graph
+    exceeds it. Wheel momentum per axis: every wheel at its capacity along that axis, Σ_j |a_ij|·H_j
+    (the single-axis maximum; Table 4-6's box is what every axis holds at once).
+    """
+    per_amp = np.asarray(em_driver['coil_moment_per_amp_am2'], dtype=float)
+    i_max = em_driver['supply_v'] / np.asarray(em_driver['coil_resistance_ohm'], dtype=float)
+    cluster = build_wheels(wheels)
+    axes = np.abs(cluster.wheel_axes_body())
+    return ActuatorLimits(2.0 * per_amp * i_max, axes @ cluster.wheel_capacities_nms())

@@ -5,8 +5,9 @@ outputs of step k (the em_driver's step-average achieved dipole, the wheels' mom
 h(t_k) and rate ḣ over [t_k, t_k+1]; absent nodes mean zero) and the step's ``mode``,
 integrates t_k → t_k+1 and returns the truth of step k + 1. The run ends after step k
 when the total step count is reached or when the ``mode`` of step k carries
-``run_complete: true`` (stop at acquisition capture). A non-finite actuator input fails
-the run naming the topic and the step.
+``run_complete: true`` (stop at acquisition capture). A non-finite actuator input, or one
+beyond what the hardware can produce (:func:`~dynamics.configuration.actuator_limits`),
+fails the run naming the topic and the step.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from acds_common.cdr import OdometryValue
 from acds_common.messages import MODE_STATUS, magnetic_field, status_value, vec, vector3
 from acds_common.stepper import StepError, Stepper
 
-from dynamics.configuration import build_rigid_body
+from dynamics.configuration import actuator_limits, build_rigid_body
 from dynamics.rigid_body_model import Truth
 
 _ZERO_COV = (0.0,) * 9
@@ -54,6 +55,7 @@ class RigidBodyStep(Stepper):
         super().__init__(params, log)
         self.total_steps: int = params['total_steps']
         self.model = build_rigid_body(*(self.section(s) for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics')))
+        self.limits = actuator_limits(self.section('em_driver'), self.section('wheels'))
         self._wheel_h = np.zeros(3)
 
     def start(self) -> dict[str, Any]:
@@ -70,6 +72,15 @@ class RigidBodyStep(Stepper):
             if not np.all(np.isfinite(value)):
                 raise StepError(f'non-finite {topics.resolve(topic)} at step {k}: {value.tolist()}; '
                                 'the physics cannot go on')
+        dt = self.control_period_s
+        for topic, value, limit, unit in (
+                (topics.DIPOLE_AVG, dipole, self.limits.dipole_am2, 'A·m²'),
+                (topics.WHEEL_MOMENTUM, h, self.limits.wheel_momentum_nms, 'N·m·s'),
+                (topics.WHEEL_TORQUE, h + hdot * dt, self.limits.wheel_momentum_nms, 'N·m·s at the step end')):
+            if np.any(np.abs(value) > limit * (1.0 + 1e-9)):
+                raise StepError(f'{topics.resolve(topic)} at step {k} gives {value.tolist()} {unit}, beyond what '
+                                f'the hardware can produce (±{limit.tolist()} per axis): not from this graph\'s '
+                                'actuators; the run stops')
         self.model.advance(self.control_period_s, dipole, h, hdot)
         self._wheel_h = h + hdot * self.control_period_s
         return truth_outputs(self.model.truth(self._wheel_h))

@@ -1,0 +1,64 @@
+"""Fast DDS shared-memory files a run leaves in /dev/shm, and removing the zombies among them.
+
+A participant keeps its SHM segments (``fastrtps_<16 hex>``) and ports (``fastrtps_port<N>``,
+semaphore ``sem.fastrtps_port<N>_mutex``) with lock files beside them (``…_el`` / ``…_sl``)
+that it holds with ``flock`` while it lives. A SIGKILLed process cannot remove its files; the
+kernel releases its locks, so "lock file free" means "zombie" (what ``fastdds shm clean`` decides;
+a port file without any lock file is left alone: a live participant may still use it).
+:func:`clean_run` removes the
+zombies among the entries that appeared while a run went (a snapshot taken at its start), so
+it never touches a file another live process holds, nor one that was there before the run.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import os
+import re
+from pathlib import Path
+
+SHM_DIR = Path('/dev/shm')
+_LOCK = re.compile(r'^(fastrtps_(?:port\d{1,5}|[0-9a-z]{16}))_(el|sl)$')
+
+
+def snapshot(shm_dir: Path = SHM_DIR) -> set[str]:
+    """Names of the Fast DDS entries present now."""
+    try:
+        return {n for n in os.listdir(shm_dir) if 'fastrtps_' in n}
+    except FileNotFoundError:
+        return set()
+
+
+def _held(path: Path) -> bool:
+    try:
+        with open(path, 'ab') as fh:
+            try:
+                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                return True
+            fcntl.flock(fh, fcntl.LOCK_UN)
+            return False
+    except OSError:
+        return True  # cannot even open it: leave it alone
+
+
+def clean_run(before: set[str], shm_dir: Path = SHM_DIR) -> list[str]:
+    """Remove the zombie segments and ports created since ``before``; return the names removed."""
+    new = snapshot(shm_dir) - before
+    removed: list[str] = []
+    for name in sorted(new):
+        m = _LOCK.match(name)
+        if m is None or _held(shm_dir / name):
+            continue
+        base = m.group(1)
+        victims = [name, base, f'{base}_el', f'{base}_sl']
+        if base.startswith('fastrtps_port'):
+            victims.append(f'sem.{base}_mutex')
+        for victim in dict.fromkeys(victims):
+            if victim in new:
+                try:
+                    (shm_dir / victim).unlink()
+                    removed.append(victim)
+                except OSError:
+                    pass
+    return removed

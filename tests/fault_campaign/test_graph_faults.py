@@ -1,0 +1,169 @@
+"""Fault campaign, issue 9 §2–§5 and §7: who is blamed, intruders, impossible actuator values, shared memory,
+ground-command bursts, bounded launcher memory.
+
+Each case is what a hostile but fair user does to a running graph; each must end loudly (or not at all),
+never with different results and exit 0.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from acds_cli import shm
+from acds_cli.launcher import LaunchError
+from acds_cli.testing import wait_for_messages
+from acds_common import topics
+from acds_common.cdr import Codec
+from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS, message_class
+from acds_common.scenario import load_scenario
+from rclpy.context import Context
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _short_timeout(name: str, seconds: float = 3.0):
+    sc = load_scenario(name)
+    sc.values['']['input_timeout'] = seconds
+    return sc
+
+
+def test_a_hung_controller_is_named_as_the_node_whose_outputs_stopped(launch_graph):
+    with launch_graph(_short_timeout('heao_b_acquisition'), steps=100000) as graph:
+        wait_for_messages(graph, topics.CLOCK, 20)
+        pid = graph.processes['acds_controller'].popen.pid
+        os.kill(pid, signal.SIGSTOP)
+        try:
+            with pytest.raises(LaunchError) as err:
+                graph.wait()
+        finally:
+            os.kill(pid, signal.SIGCONT)
+    assert str(err.value).startswith('acds_controller stopped at step'), str(err.value)
+
+
+class _Intruder:
+    """A foreign ROS node on the run's domain (ROS 2 has no authentication by default)."""
+
+    def __init__(self, domain: int, topic: str) -> None:
+        import rclpy
+        from rclpy.node import Node
+
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain)
+        self.node = Node('intruder', namespace=topics.NAMESPACE, context=self.context)
+        self.codec = Codec(topics.TYPES[topic], 'body')
+        self.pub = self.node.create_publisher(message_class(topics.TYPES[topic]), topic, LOCKSTEP_QOS)
+
+    def publish(self, t_ns: int, value) -> None:
+        self.pub.publish(self.codec.encode(t_ns, value))
+
+    def close(self) -> None:
+        import rclpy
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.context)
+
+
+@pytest.mark.parametrize('topic', [topics.WHEEL_TORQUE, topics.DIPOLE_AVG])
+def test_an_intruding_publisher_fails_the_run_naming_topic_and_node(launch_graph, topic):
+    sc = 'free_tumble_heao_b' if topic == topics.WHEEL_TORQUE else 'magnetics_bench_heao_b'
+    with launch_graph(sc, steps=100000) as graph:
+        wait_for_messages(graph, topics.CLOCK, 20)
+        intruder = _Intruder(graph.lease.domain_id, topic)
+        try:
+            future = (graph.monitor.clock_step + 5) * 500_000_000
+            intruder.publish(future, (1e5, 0.0, 0.0))  # finite, for a step the graph has not computed yet
+            with pytest.raises(LaunchError) as err:
+                graph.wait()
+        finally:
+            intruder.close()
+    text = str(err.value)
+    assert topics.resolve(topic) in text and ('intruder' in text or 'second message for step' in text), text
+
+
+def test_an_actuator_value_beyond_the_hardware_stops_the_physics(launch_graph):
+    """A real driver never trips the bound (commanded far beyond its saturation it gives what the supply
+    can drive); a value from outside the graph does, naming topic and step."""
+    from acds_common.parameters import node_parameters, normalize
+    from acds_common.stepper import StepError
+    from dynamics.rigid_body_step import RigidBodyStep
+
+    sc = load_scenario('magnetics_bench_heao_b')
+    sc.values['em_driver']['coil_max_moment_am2'] = [1e5, 2062.0, 2062.0]  # let the x command through unclipped
+    sc.values['em_driver']['bench_command'] = [9e4, 0.0, 0.0]
+    with launch_graph(sc, steps=200) as graph:
+        assert graph.wait().steps == 200
+
+    params = normalize('rigid_body', node_parameters(load_scenario('free_tumble_heao_b'), 10)['rigid_body'])
+    body = RigidBodyStep(params, log=lambda *_: None)
+    body.start()
+    inputs = {'dipole': (1e5, 0.0, 0.0), 'wheel_h': None, 'wheel_hdot': None, 'mode': None}
+    with pytest.raises(StepError, match=r'/acds/em_driver/dipole_avg at step 0 .* beyond what the hardware'):
+        body.integrate(0, 0.0, inputs)
+    inputs = {'dipole': None, 'wheel_h': (0.0, 0.0, 500.0), 'wheel_hdot': None, 'mode': None}
+    with pytest.raises(StepError, match=r'/acds/wheels/momentum at step 0 .* beyond what the hardware'):
+        body.integrate(0, 0.0, inputs)
+
+
+def test_play_refuses_a_domain_a_running_graph_holds(launch_graph, tmp_path):
+    from acds_cli.bag.writer import BagWriter
+
+    bag = tmp_path / 'bag'
+    writer = BagWriter(bag, 'mcap', {'control_period_s': '0.5'})
+    writer.write(topics.CLOCK, Codec(topics.TYPES[topics.CLOCK]).encode(0))
+    writer.close()
+    with launch_graph('free_tumble_heao_b', steps=100000) as graph:
+        wait_for_messages(graph, topics.CLOCK, 5)
+        out = subprocess.run([sys.executable, '-m', 'acds_cli', 'play', str(bag), '--domain',
+                              str(graph.lease.domain_id), '--wait', '0'], cwd=ROOT, capture_output=True, text=True,
+                             timeout=120, env={**os.environ, 'PYTHONPATH': str(ROOT / 'scripts')})
+    assert out.returncode == 2 and 'belongs to a running graph' in out.stderr, out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1
+
+
+def test_a_killed_node_leaves_no_zombie_shared_memory(launch_graph):
+    before = shm.snapshot()
+    with launch_graph('free_tumble_heao_b', steps=100000) as graph:
+        wait_for_messages(graph, topics.CLOCK, 20)
+        os.kill(graph.processes['reaction_wheels'].popen.pid, signal.SIGKILL)
+        with pytest.raises(LaunchError):
+            graph.wait()
+    assert shm.clean_run(before) == [], 'the launcher left zombie segments of its killed node'
+
+
+def test_a_burst_of_a_thousand_ground_commands_is_answered_in_full(launch_graph):
+    from std_msgs.msg import String
+
+    with launch_graph('heao_b_acquisition', steps=100000) as graph:
+        wait_for_messages(graph, topics.MODE, 5)
+        pub = graph.monitor.node.create_publisher(String, topics.GROUND_COMMAND, COMMAND_QOS)
+        mon = graph.monitor
+        if not mon.wait_for(lambda: pub.get_subscription_count() > 0, 30.0):
+            pytest.fail('the mode manager never subscribed to ground/command')
+        for i in range(1000):
+            pub.publish(String(data=f'gain unloading_gain_point {0.001 * (i % 900):.3f}'))
+        answered = mon.wait_for(lambda: mon.count(topics.GROUND_ACK) >= 1000, 120.0)
+        acks = [m.data for m in mon.messages(topics.GROUND_ACK)]
+    assert answered, f'{len(acks)} of 1000 commands answered'
+    assert len(acks) == 1000 and all(a.startswith(('accepted', 'refused')) for a in acks)
+
+
+def _peak_rss_kib(tmp_path: Path, steps: int) -> int:
+    """Peak RSS of an ``acds run`` of ``steps`` steps (the launcher and its monitor), KiB."""
+    script = ('import resource, sys; from acds_cli.__main__ import main; code = main(sys.argv[1:]); '
+              'print("RSS", resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr); sys.exit(code)')
+    out = subprocess.run([sys.executable, '-c', script, 'run', 'free_tumble_heao_b', '--steps', str(steps),
+                          '--no-record', '--quiet', '--run-dir', str(tmp_path / f'run_{steps}')],
+                         cwd=ROOT, capture_output=True, text=True, timeout=900,
+                         env={**os.environ, 'PYTHONPATH': str(ROOT / 'scripts')})
+    assert out.returncode == 0, out.stderr[-2000:]
+    return int(next(line for line in out.stderr.splitlines() if line.startswith('RSS')).split()[1])
+
+
+@pytest.mark.slow
+def test_launcher_memory_does_not_grow_with_the_run_length(tmp_path):
+    short, long = _peak_rss_kib(tmp_path, 1_000), _peak_rss_kib(tmp_path, 30_000)
+    assert long < 1.5 * short, f'peak RSS {short} KiB for 1,000 steps, {long} KiB for 30,000'
