@@ -11,7 +11,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / 'scripts'))
 os.environ.setdefault('ROS_LOG_DIR', str(ROOT / 'runs' / 'ros_log'))
 
-pytest_plugins = ['acds_cli.testing']
+pytest_plugins = ['acds_runtime.testing']
 
 
 @pytest.fixture

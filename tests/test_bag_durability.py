@@ -14,9 +14,9 @@ from pathlib import Path
 import pytest
 from acds_cli.bag.reader import open_bag, unfinished
 from acds_cli.bag.recover import recover_bag
-from acds_cli.bag.writer import ABS_TYPES, cdr_stamp_ns, stamped
-from acds_cli.testing import wait_for_messages
 from acds_common import topics
+from acds_runtime.bag.writer import ABS_TYPES, cdr_stamp_ns, stamped
+from acds_runtime.testing import wait_for_messages
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -14,10 +14,10 @@ import rclpy
 from acds_cli.bag.compare import run_compare
 from acds_cli.bag.player import Player
 from acds_cli.bag.reader import open_bag
-from acds_cli.launcher import DomainLease, GraphRun
 from acds_common import topics
 from acds_common.lockstep import LOCKSTEP_QOS
 from acds_common.scenario import load_scenario
+from acds_runtime.launcher import DomainLease, GraphRun
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
@@ -72,7 +72,7 @@ def test_compare_fails_naming_step_topic_and_field_when_a_parameter_changes(reco
 
 
 def test_compare_refuses_what_it_cannot_replay(recorded):
-    from acds_cli.bag.writer import BagError
+    from acds_runtime.bag.writer import BagError
     with pytest.raises(BagError, match='time owner'):
         run_compare(recorded, 'rigid_body', log=lambda _t: None)
     with pytest.raises(BagError, match='has no node em_driver'):  # not in the recorded graph

@@ -6,10 +6,10 @@ import os
 import signal
 
 import pytest
-from acds_cli.launcher import LaunchError
-from acds_cli.testing import alive, stream_digests, wait_for_messages
 from acds_common import topics
 from acds_common.scenario import load_scenario
+from acds_runtime.launcher import LaunchError
+from acds_runtime.testing import alive, stream_digests, wait_for_messages
 
 STEPS = 120
 

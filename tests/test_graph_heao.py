@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import time
 
-from acds_cli.testing import stream_digests, wait_for_messages
 from acds_common import topics
 from acds_common.lockstep import COMMAND_QOS
 from acds_common.scenario import load_scenario
+from acds_runtime.testing import stream_digests, wait_for_messages
 from std_msgs.msg import String
 
 NODES = {'rigid_body', 'reaction_wheels', 'magnetometer_sim', 'em_driver', 'acds_controller', 'ascs_mode_manager'}

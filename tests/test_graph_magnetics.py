@@ -61,8 +61,8 @@ def _kv(status: Any) -> dict[str, str]:
 @pytest.fixture(scope='module')
 def bench_run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     """One 60-step bench run with a custom coupling, a residual field and a bias-shift fault at step 20."""
-    from acds_cli.launcher import GraphRun
-    from acds_cli.testing import alive
+    from acds_runtime.launcher import GraphRun
+    from acds_runtime.testing import alive
 
     sc = load_scenario('magnetics_bench_heao_b')
     mag = sc.values['magnetometer']

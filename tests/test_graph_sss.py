@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import time
 
-from acds_cli.testing import wait_for_messages
 from acds_common import topics
 from acds_common.lockstep import COMMAND_QOS
+from acds_runtime.testing import wait_for_messages
 from std_msgs.msg import String
 
 

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from acds_cli.summaries.heao import acquisition_times, saturated, transitions
 from acds_cli.verbs.sweep import GROUPS, expand, table
+from acds_runtime.summaries.heao import acquisition_times, saturated, transitions
 
 
 def _history(modes: list[tuple[float, str, bool]]) -> list[tuple[float, str, str, bool]]:

@@ -54,9 +54,9 @@ class Progress:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """Run a scenario through the full process graph and print its summary."""
-    from .launcher import GraphRun, LaunchError
-    from .preflight import preflight
-    from .summary import print_tables, write_summary_json
+    from acds_runtime.launcher import GraphRun, LaunchError
+    from acds_runtime.preflight import preflight
+    from acds_runtime.summary import print_tables, write_summary_json
 
     scenario = load_scenario(args.scenario or DEFAULT_SCENARIO)
     preflight(scenario)

@@ -1,11 +1,18 @@
-"""``acds bench``: measured speed, printed (never asserted in tests).
+"""``acds bench``: measured speed of what users run, printed (never asserted in tests), one run.
 
-1. graph: full-graph lockstep steps/s of ``free_tumble_heao_b`` (every node its own process);
-2. bare chain: a ring of the same number of plain rclpy processes passing one message
-   around (same QoS, same executor) — cycles/s, the ceiling the lockstep could reach;
-3. core: ``RigidBodyModel.advance`` steps/s with no ROS at all.
-``hops`` is the number of processes one step passes through sequentially (the
-graph's node count). Steady-state rates exclude start-up (discovery).
+1. graph: the six-node ``heao_b_acquisition`` (every node its own process, recording on),
+   steady-state lockstep steps/s after the first 10 % of the steps, CPU ms per step of
+   every node process and of the launcher (its run monitor and recorder), and the
+   deliveries per step (each message published × the subscriptions that receive it);
+2. bare ring: as many plain rclpy processes as the graph has nodes, passing one message
+   around (same QoS, same EventsExecutor) — cycles/s, the ceiling a lockstep could reach;
+3. direct engine: the same scenario's steppers in one process (``--engine direct``);
+4. kernel: the rigid body + environment (``RigidBodyModel.advance`` + ``truth``) alone at
+   the scenario's control period and substeps.
+
+``--json`` prints one object with the keys ``graph_steps_per_s``, ``bare_chain_steps_per_s``,
+``ratio``, ``hops``, ``deliveries_per_step``, ``direct_steps_per_s``, ``core_steps_per_s``,
+``cores`` (and ``cpu_ms_per_step``, ``load_average``).
 """
 
 from __future__ import annotations
@@ -13,37 +20,68 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
-SCENARIO = 'free_tumble_heao_b'
+SCENARIO = 'heao_b_acquisition'
 
 
-def graph_rate(steps: int) -> tuple[float, int]:
-    """Steady-state lockstep steps/s of the scenario's graph (steps after the first 10 %)."""
+def _cpu_s(pid: int) -> float:
+    """User + system CPU seconds of a live process (from /proc)."""
+    fields = Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def _self_cpu_s() -> float:
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+def graph_rate(steps: int) -> dict[str, Any]:
+    """Steady-state steps/s, CPU ms/step per process and deliveries/step of the recorded six-node graph."""
+    from acds_common import topics
     from acds_common.scenario import load_scenario
-
-    from .launcher import GraphRun
+    from acds_runtime.launcher import GraphRun
 
     sc = load_scenario(SCENARIO)
-    marks: dict[int, float] = {}
     skip = steps // 10
+    marks: dict[str, Any] = {}
+    work = Path(tempfile.mkdtemp(prefix='acds_bench_'))
+    graph = GraphRun(sc, work / 'run', steps=steps, echo=lambda _l: None, record=work / 'bag')
+
+    def sample() -> dict[str, float]:
+        cpu = {name: _cpu_s(p.popen.pid) for name, p in graph.processes.items()}
+        cpu['launcher (monitor + recorder)'] = _self_cpu_s()
+        return cpu
 
     def progress(k: int, _total: int, wall: float) -> None:
-        if k in (skip, steps):
-            marks[k] = wall
+        if k == skip:
+            marks['t0'], marks['cpu0'] = wall, sample()
+        elif k == steps - 1 and 't1' not in marks:
+            marks['t1'], marks['cpu1'] = wall, sample()
+            mon = graph.monitor
+            assert mon is not None
+            subs = {name: mon.node.count_subscribers(name) for name in [*mon.topics, topics.CLOCK]}
+            marks['deliveries'] = sum(mon.count(name) * n for name, n in subs.items()) / max(1, k)
 
-    run_dir = Path(os.environ.get('TMPDIR', '/tmp')) / f'acds_bench_{os.getpid()}'
-    with GraphRun(sc, run_dir, steps=steps, echo=lambda _l: None, progress=progress) as graph:
+    graph.progress = progress
+    with graph:
         graph.wait()
-    return (steps - skip) / (marks[steps] - marks[skip]), len(sc.get('', 'nodes'))
+    span = steps - 1 - skip
+    wall = marks['t1'] - marks['t0']
+    cpu = {name: 1e3 * (marks['cpu1'][name] - marks['cpu0'][name]) / span for name in marks['cpu0']}
+    return {'steps_per_s': span / wall, 'cpu_ms_per_step': cpu, 'deliveries_per_step': marks['deliveries'],
+            'hops': len(graph.processes)}
 
 
 def bare_chain_rate(hops: int, cycles: int) -> float:
-    """Cycles/s of a ring of ``hops`` rclpy processes relaying one message."""
-    from .launcher import FASTDDS_PROFILE, DomainLease
+    """Cycles/s of a ring of ``hops`` rclpy processes relaying one message (the graph's QoS and executor)."""
+    from acds_runtime.launcher import FASTDDS_PROFILE, DomainLease
 
     lease = DomainLease()
     env = dict(os.environ, ROS_DOMAIN_ID=str(lease.domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
@@ -63,41 +101,53 @@ def bare_chain_rate(hops: int, cycles: int) -> float:
     return float(out.strip().splitlines()[-1])
 
 
+def direct_rate(steps: int) -> float:
+    """Steps/s of the direct engine on the scenario (no recording)."""
+    from acds_common.scenario import load_scenario
+    from acds_runtime.direct import DirectRun
+
+    result = DirectRun(load_scenario(SCENARIO), steps=steps).run()
+    return result.steps / result.wall_seconds
+
+
 def core_rate(steps: int) -> float:
-    """Steps/s of the rigid-body core alone (same scenario, no ROS)."""
+    """Steps/s of the rigid body + environment kernel alone (the scenario's body, orbit, field, substeps)."""
     import numpy as np
     from acds_common.scenario import load_scenario
-    from dynamics.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
-    from dynamics.rigid_body_model import RigidBodyModel, inertia_tensor
+    from dynamics.configuration import build_rigid_body
 
     sc = load_scenario(SCENARIO)
-    o = sc.values['orbit']
-    model = RigidBodyModel(
-        inertia_tensor(*sc.get('spacecraft', 'inertia')),
-        Orbit(OrbitConfig(kind='circular', altitude_m=o['altitude'], inclination_rad=o['inclination'])),
-        TiltedDipoleField(EarthFieldConfig()), Sun(SunConfig()),
-        substeps=sc.get('dynamics', 'substeps'), omega0_body_rad_s=sc.get('spacecraft', 'initial_rates'))
-    zero = np.zeros(3)
+    model = build_rigid_body(*(sc.values[s] for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics')))
+    dipole, zero = np.array([100.0, -50.0, 20.0]), np.zeros(3)
+    dt = sc.control_period_s
     t0 = time.perf_counter()
     for _ in range(steps):
-        model.advance(sc.control_period_s, zero, zero, zero)
+        model.advance(dt, dipole, zero, zero)
         model.truth(zero)
     return steps / (time.perf_counter() - t0)
 
 
 def main(args: argparse.Namespace) -> int:
-    """Run the three measurements and print them (``--json``: last line one JSON object)."""
-    graph, hops = graph_rate(args.steps)
-    bare = bare_chain_rate(hops, args.steps)
-    core = core_rate(min(args.steps, 2000))
-    result = {'graph_steps_per_s': round(graph, 1), 'bare_chain_steps_per_s': round(bare, 1),
-              'ratio': round(graph / bare, 3), 'core_steps_per_s': round(core, 1), 'hops': hops,
-              'cores': os.cpu_count()}
-    print(f'full-graph lockstep ({SCENARIO}, {hops} processes + monitor): {graph:10.1f} steps/s')
-    print(f'bare rclpy chain ({hops} hops per cycle):                      {bare:10.1f} cycles/s')
-    print(f'ratio graph / bare chain:                                  {graph / bare:10.3f}')
-    print(f'rigid-body core only (no ROS):                             {core:10.1f} steps/s')
-    print(f'machine cores: {os.cpu_count()}')
+    """Run the measurements and print them (``--json``: last line one JSON object)."""
+    graph = graph_rate(args.steps)
+    bare = bare_chain_rate(graph['hops'], args.steps)
+    direct = direct_rate(max(args.steps, 5000))
+    core = core_rate(max(args.steps, 5000))
+    result = {'graph_steps_per_s': round(graph['steps_per_s'], 1), 'bare_chain_steps_per_s': round(bare, 1),
+              'ratio': round(graph['steps_per_s'] / bare, 3), 'hops': graph['hops'],
+              'deliveries_per_step': round(graph['deliveries_per_step'], 2),
+              'direct_steps_per_s': round(direct, 1), 'core_steps_per_s': round(core, 1), 'cores': os.cpu_count(),
+              'cpu_ms_per_step': {k: round(v, 3) for k, v in graph['cpu_ms_per_step'].items()},
+              'load_average': [round(x, 2) for x in os.getloadavg()]}
+    print(f'six-node graph ({SCENARIO}, recording on):    {graph["steps_per_s"]:10.1f} steps/s')
+    for name, ms in graph['cpu_ms_per_step'].items():
+        print(f'    CPU {name:34s} {ms:8.3f} ms/step')
+    print(f'deliveries per step:                              {graph["deliveries_per_step"]:10.2f}')
+    print(f'bare rclpy ring ({graph["hops"]} processes):                 {bare:10.1f} cycles/s')
+    print(f'ratio graph / bare ring:                          {graph["steps_per_s"] / bare:10.3f}')
+    print(f'direct engine (one process, no DDS):              {direct:10.1f} steps/s')
+    print(f'rigid body + environment kernel:                  {core:10.1f} steps/s')
+    print(f'machine: {os.cpu_count()} cores, load average {", ".join(f"{x:.2f}" for x in os.getloadavg())}')
     if args.json:
         print(json.dumps(result))
     return 0

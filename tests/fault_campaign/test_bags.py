@@ -2,7 +2,7 @@
 
 Every case runs the user command (``python -m acds_cli VERB``) or the library
 call it makes, and compares the folder's listing and file hashes before and
-after. Bags are written by a real :class:`~acds_cli.bag.writer.BagWriter` in a
+after. Bags are written by a real :class:`~acds_runtime.bag.writer.BagWriter` in a
 child process that either closes them or dies without closing (``os._exit``:
 what a SIGKILL leaves), except the live-recording case, which records a real
 graph run.
@@ -20,8 +20,8 @@ from pathlib import Path
 
 import pytest
 import yaml
-from acds_cli.testing import wait_for_messages
 from acds_common import topics
+from acds_runtime.testing import wait_for_messages
 
 ROOT = Path(__file__).resolve().parents[2]
 BAG_VERBS = ('info', 'play', 'plot', 'compare')
@@ -37,7 +37,7 @@ EVENTS = topics.resolve(topics.EVENTS)
 #: die without closing it. Prints {"flushed": {topic: n}, "child": pid}.
 WRITER = r'''
 import json, os, subprocess, sys
-from acds_cli.bag import writer as bw
+from acds_runtime.bag import writer as bw
 from acds_common import topics
 from rosbags.typesys.stores.ros2_jazzy import (builtin_interfaces__msg__Time as Time, geometry_msgs__msg__Vector3 as V3,
     geometry_msgs__msg__Vector3Stamped as V3S, rosgraph_msgs__msg__Clock as Clock, std_msgs__msg__Header as Header,
@@ -105,7 +105,7 @@ def acds(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
 @pytest.fixture
 def domain():
     """A ROS domain of our own for ``play`` (so playback never reaches another run's graph)."""
-    from acds_cli.launcher import DomainLease
+    from acds_runtime.launcher import DomainLease
 
     lease = DomainLease()  # a domain no run holds now; released, since play refuses a domain a run holds
     lease.close()
@@ -192,7 +192,7 @@ def test_what_is_not_a_bag_is_one_line_and_nothing_changes(tmp_path, folder_stat
 
 def test_truncated_metadata_says_what_is_wrong(tmp_path):
     from acds_cli.bag.reader import open_bag
-    from acds_cli.bag.writer import BagError
+    from acds_runtime.bag.writer import BagError
 
     bag = _truncated_metadata(tmp_path)
     with pytest.raises(BagError) as err:
@@ -330,7 +330,7 @@ def test_recover_refuses_what_would_touch_the_source(tmp_path, folder_state):
 # ---- 3. a bag being recorded is recognised, and not disturbed -------------------------------------------------
 
 def test_a_bag_being_recorded_is_refused_in_one_line(tmp_path, folder_state, domain):
-    from acds_cli.bag.writer import BagWriter
+    from acds_runtime.bag.writer import BagWriter
 
     bag = tmp_path / 'live'
     writer = BagWriter(bag, 'mcap', {'scenario_name': 'fault_campaign'})
@@ -362,7 +362,7 @@ def test_a_dead_recorders_lock_file_does_not_look_like_a_recording(tmp_path, fol
         assert proc.returncode == 0 and f'bag {bag} was not closed' in proc.stderr, proc.stderr
         assert folder_state(bag) == before
         assert (bag / 'acds_recording.lock').exists(), 'the dead writer left its lock file'
-        from acds_cli.bag.recording import being_recorded
+        from acds_runtime.bag.recording import being_recorded
         assert not being_recorded(bag)
     finally:
         os.kill(got['child'], signal.SIGKILL)

@@ -14,13 +14,13 @@ import sys
 from pathlib import Path
 
 import pytest
-from acds_cli import shm
-from acds_cli.launcher import LaunchError
-from acds_cli.testing import wait_for_messages
 from acds_common import topics
 from acds_common.cdr import Codec
 from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS, message_class
 from acds_common.scenario import load_scenario
+from acds_runtime import shm
+from acds_runtime.launcher import LaunchError
+from acds_runtime.testing import wait_for_messages
 from rclpy.context import Context
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -109,7 +109,7 @@ def test_an_actuator_value_beyond_the_hardware_stops_the_physics(launch_graph):
 
 
 def test_play_refuses_a_domain_a_running_graph_holds(launch_graph, tmp_path):
-    from acds_cli.bag.writer import BagWriter
+    from acds_runtime.bag.writer import BagWriter
 
     bag = tmp_path / 'bag'
     writer = BagWriter(bag, 'mcap', {'control_period_s': '0.5'})

@@ -34,8 +34,8 @@ class NodeWouldStart(AssertionError):
 @pytest.fixture(autouse=True)
 def tripwire(monkeypatch):
     """No graph may start and no sweep run may be spawned; the handler ``main`` installs is put back."""
-    from acds_cli import launcher
     from acds_cli.verbs import sweep
+    from acds_runtime import launcher
 
     def refuse_start(self):
         raise NodeWouldStart(f'GraphRun.start reached for {self.scenario.name} (run folder {self.run_dir})')
@@ -297,7 +297,7 @@ def test_sweep_preflights_every_scenario_before_the_first_run(capsys, tmp_path):
 # ---- summaries never carry NaN or Infinity ------------------------------------------------------------------------
 
 def test_summary_json_writes_non_finite_numbers_as_null_and_says_so(capsys, tmp_path):
-    from acds_cli.summary import summary_json, write_summary_json
+    from acds_runtime.summary import summary_json, write_summary_json
 
     summary = {'scenario': 's', 'momentum_drift_rel': math.nan, 'final_rates_deg_s': [0.1, math.inf, -math.inf],
                'passes': [{'mode': 'spin', 'ripple_pct': np.float64('nan'), 'energy_j': 2.0}]}

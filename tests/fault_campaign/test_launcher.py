@@ -45,7 +45,7 @@ def _start_run(tmp_path: Path, scenario: str = 'free_tumble_heao_b') -> tuple[su
 
 
 def _domain_locked(run_dir: Path) -> bool:
-    from acds_cli.launcher import DOMAIN_LOCK_DIR
+    from acds_runtime.launcher import DOMAIN_LOCK_DIR
 
     domain = int((run_dir / 'domain_id').read_text())
     with open(DOMAIN_LOCK_DIR / f'domain_{domain}.lock', 'w') as fh:

@@ -26,9 +26,9 @@ from typing import Any
 import yaml
 from acds_common import topics
 from acds_common.graph import TIME_OWNER
+from acds_runtime.bag.writer import BagError, stamped, typestore
 
 from .reader import Bag, iter_fields, open_bag
-from .writer import BagError, stamped, typestore
 
 #: How many steps the player may run ahead of the node's outputs.
 WINDOW = 100
@@ -211,8 +211,7 @@ def run_compare(bag_path: Path | str, node: str, *, tolerance: float = 0.0, scen
     from acds_common.cdr import Codec
     from acds_common.graph import node_spec
     from acds_common.parameters import ConfigError, normalize
-
-    from ..direct import stepper_class
+    from acds_runtime.direct import stepper_class
 
     check_tolerance(tolerance)
     log = log or (lambda text: print(text, file=sys.stderr, flush=True))

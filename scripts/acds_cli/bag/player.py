@@ -16,12 +16,13 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import closing
-from pathlib import Path
 from typing import Any
 
 import rclpy
 from acds_common import topics
 from acds_common.lockstep import message_class
+from acds_runtime.bag.writer import BagError, offered_qos
+from acds_runtime.launcher import FASTDDS_PROFILE
 from rclpy.context import Context
 from rclpy.duration import Duration
 from rclpy.executors import SingleThreadedExecutor
@@ -29,11 +30,9 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from .reader import Bag
-from .writer import BagError, offered_qos
 
 #: Wait for acknowledgements after this many /clock steps (well inside the history depth of 1000).
 ACK_EVERY_STEPS = 100
-FASTDDS_PROFILE = Path(__file__).resolve().parents[1] / 'fastdds_profile.xml'
 
 
 def ros_env(domain_id: int | None) -> None:
@@ -88,7 +87,7 @@ class Player:
             wanted.add(topics.CLOCK)  # /clock always goes with the data
         self.topics = wanted
         self.remap = remap or {}
-        from ..launcher import DomainLease
+        from acds_runtime.launcher import DomainLease
         target = domain_id if domain_id is not None else int(os.environ.get('ROS_DOMAIN_ID', '0') or 0)
         if DomainLease.held(target):
             raise BagError(f'domain {target} belongs to a running graph (acds run): playing into it would inject '

@@ -21,9 +21,9 @@ from typing import Any
 import numpy as np
 import yaml
 from acds_common import topics, units
+from acds_runtime.bag.writer import check_out_dir, typestore
 
 from .reader import Bag, open_bag
-from .writer import check_out_dir, typestore
 
 AXES = (('x', 'roll'), ('y', 'pitch'), ('z', 'yaw'))
 

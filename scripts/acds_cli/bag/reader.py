@@ -32,11 +32,11 @@ from typing import Any
 
 import yaml
 from acds_common import topics
+from acds_runtime.bag.recording import LOCK_FILE, being_recorded
+from acds_runtime.bag.writer import RUN_INFO_FILE, BagError, typestore
 from rosbags.rosbag2 import Reader
 
-from .recording import LOCK_FILE, being_recorded
 from .salvage import UnclosedMcap, committed_view
-from .writer import RUN_INFO_FILE, BagError, typestore
 
 CLOCK = topics.CLOCK
 #: Storage file suffix → rosbag2 storage name.

@@ -18,13 +18,13 @@ import rclpy
 import yaml
 from acds_common import topics
 from acds_common.lockstep import message_class
+from acds_runtime.bag.writer import SKIP, BagError, BagWriter, RecordingSink, cdr_stamp_ns, check_target, stamped
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
 from . import stop_on_signals
 from .player import ros_env
-from .writer import SKIP, BagError, BagWriter, RecordingSink, cdr_stamp_ns, check_target, stamped
 
 COMMAND_TOPICS = {topics.resolve(topics.GROUND_COMMAND), topics.resolve(topics.GROUND_ACK)}
 

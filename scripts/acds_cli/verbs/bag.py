@@ -18,10 +18,11 @@ def _record(args: argparse.Namespace) -> int:
 
 
 def _play(args: argparse.Namespace) -> int:
+    from acds_runtime.bag.writer import BagError
+
     from ..bag import stop_on_signals
     from ..bag.player import Player, check_rate, parse_remaps
     from ..bag.reader import open_bag
-    from ..bag.writer import BagError
 
     stop = stop_on_signals()
     try:
@@ -46,8 +47,9 @@ def _play(args: argparse.Namespace) -> int:
 
 
 def _compare(args: argparse.Namespace) -> int:
+    from acds_runtime.bag.writer import BagError
+
     from ..bag.compare import EXIT_DIFFERENT, EXIT_ERROR, EXIT_SAME, check_tolerance, parse_sets, run_compare
-    from ..bag.writer import BagError
 
     try:
         check_tolerance(args.tolerance)
@@ -61,8 +63,9 @@ def _compare(args: argparse.Namespace) -> int:
 
 
 def _plot(args: argparse.Namespace) -> int:
+    from acds_runtime.bag.writer import BagError
+
     from ..bag.plots import make_plots
-    from ..bag.writer import BagError
 
     try:
         paths = make_plots(args.bag, args.out)
@@ -77,8 +80,9 @@ def _plot(args: argparse.Namespace) -> int:
 
 
 def _info(args: argparse.Namespace) -> int:
+    from acds_runtime.bag.writer import BagError
+
     from ..bag.info import bag_info
-    from ..bag.writer import BagError
 
     try:
         print(bag_info(args.bag, scenario=not args.no_scenario))
@@ -89,8 +93,9 @@ def _info(args: argparse.Namespace) -> int:
 
 
 def _recover(args: argparse.Namespace) -> int:
+    from acds_runtime.bag.writer import BagError
+
     from ..bag.recover import recover_bag
-    from ..bag.writer import BagError
 
     try:
         src, copy = recover_bag(args.src, args.dest)

@@ -86,8 +86,7 @@ def table(summaries: list[dict[str, Any]]) -> str:
 def cmd_sweep(args: argparse.Namespace) -> int:
     """Run the scenarios, ``--jobs`` at a time; print the table; write ``--json``."""
     from acds_common.scenario import load_scenario
-
-    from ..preflight import preflight
+    from acds_runtime.preflight import preflight
 
     names = expand(args.scenarios)
     for name in names:
@@ -104,7 +103,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     print(table(summaries))
     print(f'\n[sweep] {len(names)} run(s) in {time.monotonic() - t0:.0f} s wall', file=sys.stderr)
     if args.json:
-        from ..summary import write_summary_json
+        from acds_runtime.summary import write_summary_json
         write_summary_json(Path(args.json), summaries)
     return 0 if all('error' not in s for s in summaries) else 1
 

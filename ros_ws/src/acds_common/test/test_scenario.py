@@ -33,7 +33,8 @@ def test_units_convert_to_si_and_defaults_fill_in(tmp_path):
     assert sc.total_steps() == 20
     params = sc.node_parameters('rigid_body')
     assert params['orbit_altitude_m'] == pytest.approx(333360.0)
-    assert set(params) == {f.param_name(s, n) for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics')
+    assert set(params) == {f.param_name(s, n) for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics', 'em_driver',
+                                                      'wheels')
                            for n, f in SCHEMA[s].items()}
 
 

@@ -7,7 +7,7 @@ every stage in :meth:`~acds_common.graph.Graph.firing_order` (each lag-0 input p
 before its consumer fires; the time owner closes the step), handing each stage the values its
 inputs carry for step k − lag. Values never leave memory unless a bag is recorded; then each
 message is encoded with the same codec the nodes publish with, so the bag holds the same bytes.
-The run summary is the same streaming :class:`~acds_cli.summary.RunObserver` the run monitor
+The run summary is the same streaming :class:`~acds_runtime.summary.RunObserver` the run monitor
 feeds, given values instead of bytes (and the bytes of the truth topics, for the digest).
 """
 

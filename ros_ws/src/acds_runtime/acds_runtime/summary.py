@@ -3,7 +3,7 @@
 A :class:`RunObserver` is fed every message of a run — serialized bytes by the run monitor
 (per-process graph) or values by the direct engine — decodes only the topics its summary
 modules read, joins them by step and hands complete steps, in step order, to each module in
-``acds_cli/summaries/`` (``Accumulator(scenario)`` with ``step(k, values)``, ``event(topic,
+``acds_runtime/summaries/`` (``Accumulator(scenario)`` with ``step(k, values)``, ``event(topic,
 value)`` and ``contribute(summary)``). It keeps only what the summaries keep (running peaks,
 change points), never the messages, so its memory does not grow with the run's length.
 ``print_tables`` lets each module print its tables.

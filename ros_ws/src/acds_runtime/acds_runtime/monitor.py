@@ -3,7 +3,7 @@
 It subscribes, as serialized CDR (``raw=True``), to every output the graph declares
 (:mod:`acds_common.graph`) and to ``/clock``; it never deserializes what it only records.
 Each message goes to the recorder (a bag writer) and to the run's streaming summary
-(:class:`~acds_cli.summary.RunObserver`, which decodes only the topics it reads); nothing
+(:class:`~acds_runtime.summary.RunObserver`, which decodes only the topics it reads); nothing
 is kept in memory unless ``keep`` asks for it (tests), so a run's memory does not grow with
 its length. It acknowledges every :data:`~acds_common.graph.MONITOR_ACK_EVERY`-th ``/clock``
 step, so the time owner never runs more than :data:`~acds_common.graph.MONITOR_LAG` steps

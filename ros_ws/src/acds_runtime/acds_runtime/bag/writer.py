@@ -11,7 +11,7 @@ at most the last second of messages; the bag it leaves has no index and no
 changing it, up to its last complete chunk, and
 :func:`acds_cli.bag.recover.recover_bag` writes a repaired copy (the
 ``ros2 bag reindex`` equivalent). While it is open, the writer holds the bag
-folder's recording lock (:mod:`acds_cli.bag.recording`).
+folder's recording lock (:mod:`acds_runtime.bag.recording`).
 """
 
 from __future__ import annotations
@@ -203,7 +203,7 @@ class BagWriter:
     """Thread-safe raw-CDR bag writer: connections added on a topic's first message.
 
     From construction to :meth:`close` it holds the bag folder's recording lock
-    (:mod:`acds_cli.bag.recording`), so readers can tell a bag being recorded
+    (:mod:`acds_runtime.bag.recording`), so readers can tell a bag being recorded
     from one whose recorder died.
     """
 

@@ -2,7 +2,7 @@
 
 ``launch_graph`` starts a scenario's processes in their own ROS domain (so
 parallel tests never cross-talk), gives the test the running
-:class:`~acds_cli.launcher.GraphRun` and its :class:`RunMonitor`, and on exit
+:class:`~acds_runtime.launcher.GraphRun` and its :class:`RunMonitor`, and on exit
 stops every process and asserts that none is left behind. Waits are on
 messages, with timeouts that name what is missing.
 """
