@@ -11,6 +11,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -126,11 +127,15 @@ def test_play_refuses_a_domain_a_running_graph_holds(launch_graph, tmp_path):
 
 def test_a_killed_node_leaves_no_zombie_shared_memory(launch_graph):
     before = shm.snapshot()
-    with launch_graph('free_tumble_heao_b', steps=100000) as graph:
+    with launch_graph('free_tumble_heao_b', steps=1_000_000) as graph:
         wait_for_messages(graph, topics.CLOCK, 20)
+        started = time.monotonic()  # the cleaner spares files younger than MIN_AGE_S: let the node's age
+        graph.monitor.wait_for(lambda: time.monotonic() - started > shm.MIN_AGE_S + 1.0, shm.MIN_AGE_S + 2.0)
         os.kill(graph.processes['reaction_wheels'].popen.pid, signal.SIGKILL)
         with pytest.raises(LaunchError):
             graph.wait()
+        mine = shm.snapshot() - before
+    assert mine, 'the run created no shared-memory files: nothing was checked'
     assert shm.clean_run(before) == [], 'the launcher left zombie segments of its killed node'
 
 

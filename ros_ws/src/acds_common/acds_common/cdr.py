@@ -11,7 +11,9 @@ Layout: XCDR1 little endian (encapsulation ``00 01 00 00``), primitives aligned 
 size relative to the start of the payload, strings as uint32 length (with the NUL) +
 bytes + NUL, sequences as uint32 count + elements. Padding bytes are written as zeros,
 so equal values always give equal bytes (rclpy's own serializer leaves whatever was in
-memory in the padding). A header's ``frame_id`` is fixed per topic (:class:`Codec`).
+memory in the padding), and the payload is zero-padded to a multiple of 4 bytes, as Fast DDS
+pads it on the wire: what a subscriber takes, and so what the recorder writes, is byte for
+byte what :meth:`Codec.encode` returns. A header's ``frame_id`` is fixed per topic (:class:`Codec`).
 
 Value of each message type (SI, the frame names of :mod:`acds_common.frames`):
 
@@ -134,7 +136,13 @@ class Codec:
         self._head = _header(frame_id)
         # Offset (in the payload) where the body after the header starts, before its alignment.
         self._body_offset = 8 + len(self._head)
-        self.encode, self.decode = _TYPES[msg_type](self)
+        encode, self.decode = _TYPES[msg_type](self)
+
+        def padded(t_ns: int, value: Any = None) -> bytes:
+            data = encode(t_ns, value)
+            pad = -len(data) % 4
+            return data + bytes(pad) if pad else data
+        self.encode = padded
 
     def __repr__(self) -> str:
         return f'Codec({self.msg_type!r}, frame_id={self.frame_id!r})'

@@ -288,6 +288,8 @@ class GraphRun:
             raise LaunchError(self.bag_writer.error)
         if self.monitor is not None and self.monitor.intrusion:
             raise LaunchError(f'data from outside the graph: {self.monitor.intrusion}; the run is not valid')
+        if self.monitor is not None and self.monitor.failure:
+            raise LaunchError(self.monitor.failure)
 
     def _death_report(self, proc: NodeProcess, code: int) -> str:
         if proc.reader is not None:
@@ -309,7 +311,8 @@ class GraphRun:
         wall = time.monotonic() - self._t0
         mon = self.monitor
         if not mon.wait_for(lambda: mon.clock_step >= 0, timeout_s=10.0):
-            raise LaunchError('run monitor received no /clock at all')
+            self._check_health()
+            raise LaunchError('run monitor received no /clock at all (its /clock reader never matched rigid_body)')
         final = mon.clock_step
         if not mon.wait_for(lambda: mon.complete_through(final), timeout_s=10.0):
             late = {t: k for t, k in mon.last_steps().items() if k < final}

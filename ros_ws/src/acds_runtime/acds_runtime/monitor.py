@@ -65,6 +65,8 @@ class RunMonitor:
         self.keep = keep
         self.observer = observer
         self.intrusion: str | None = None
+        #: Set when the monitor itself failed (its thread stopped); the launcher fails the run with it.
+        self.failure: str | None = None
         self._on_clock = on_clock
         self._lock = threading.Lock()
         self.clock_step = -1
@@ -103,14 +105,19 @@ class RunMonitor:
 
     # ---- spinning -----------------------------------------------------------------------------------
     def _spin(self) -> None:
-        while not self._stop.is_set() and self.context.ok():
-            self._executor.spin_once(timeout_sec=0.05)
-            now = time.monotonic()
-            if not self.ready:
-                self._announce_when_matched()
-            elif now - self._last_check > PUBLISHER_CHECK_PERIOD_S:
-                self._last_check = now
-                self._check_publishers(now)
+        try:
+            while not self._stop.is_set() and self.context.ok():
+                self._executor.spin_once(timeout_sec=0.05)
+                now = time.monotonic()
+                if not self.ready:
+                    self._announce_when_matched()
+                elif now - self._last_check > PUBLISHER_CHECK_PERIOD_S:
+                    self._last_check = now
+                    self._check_publishers(now)
+        except Exception as exc:  # noqa: BLE001 (never a silent death of the observer: the launcher reports it)
+            import traceback
+            traceback.print_exc()
+            self.failure = f'the run monitor stopped: {type(exc).__name__}: {exc}'
 
     def _announce_when_matched(self) -> None:
         per_step = [name for name, st in self.topics.items() if st.every_step]

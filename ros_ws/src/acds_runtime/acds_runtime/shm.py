@@ -7,7 +7,8 @@ kernel releases its locks, so "lock file free" means "zombie" (what ``fastdds sh
 a port file without any lock file is left alone: a live participant may still use it).
 :func:`clean_run` removes the
 zombies among the entries that appeared while a run went (a snapshot taken at its start), so
-it never touches a file another live process holds, nor one that was there before the run.
+it never touches a file another live process holds, one that was there before the run, nor one
+created in the last :data:`MIN_AGE_S` seconds (a participant starting up right now).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from __future__ import annotations
 import fcntl
 import os
 import re
+import time
 from pathlib import Path
 
 SHM_DIR = Path('/dev/shm')
@@ -42,13 +44,25 @@ def _held(path: Path) -> bool:
         return True  # cannot even open it: leave it alone
 
 
+#: A lock file younger than this may belong to a participant that is still being created (its file
+#: exists before it locks it): never a zombie yet.
+MIN_AGE_S = 5.0
+
+
+def _young(path: Path) -> bool:
+    try:
+        return time.time() - path.stat().st_mtime < MIN_AGE_S
+    except OSError:
+        return True
+
+
 def clean_run(before: set[str], shm_dir: Path = SHM_DIR) -> list[str]:
     """Remove the zombie segments and ports created since ``before``; return the names removed."""
     new = snapshot(shm_dir) - before
     removed: list[str] = []
     for name in sorted(new):
         m = _LOCK.match(name)
-        if m is None or _held(shm_dir / name):
+        if m is None or _young(shm_dir / name) or _held(shm_dir / name):
             continue
         base = m.group(1)
         victims = [name, base, f'{base}_el', f'{base}_sl']
