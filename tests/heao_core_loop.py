@@ -15,10 +15,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from acds_common.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
 from acds_common.scenario import Scenario
 from acds_controller.configuration import build_dpa
 from ascs_mode_manager.heao_part import build_core
-from dynamics.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
 from dynamics.rigid_body_model import RigidBodyModel, inertia_tensor
 from dynamics.wheels_model import ReactionWheels, WheelsConfig
 from em_driver.configuration import build_assembly

@@ -23,9 +23,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from acds_common import units
+from acds_common.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
 from acds_controller.b_cross_omega import detumble_gain, detumble_moment
 from acds_controller.magnetic_laws import saturate
-from dynamics.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
 from dynamics.rigid_body_model import RigidBodyModel, inertia_tensor
 from em_driver.torque_rod import TorqueRodAssembly
 from em_driver.torque_rod_design import DesignRequest, design_torque_rod

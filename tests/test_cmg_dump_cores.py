@@ -20,6 +20,7 @@ import math
 import numpy as np
 import pytest
 from acds_common import units
+from acds_common.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
 from acds_controller.cmg_dump import (
     CmgDumpLaw,
     DumpLawConfig,
@@ -41,7 +42,6 @@ from dynamics.disturbances import (
     seed_disturbance,
     workshop_inertia_kg_m2,
 )
-from dynamics.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
 from dynamics.rigid_body_model import RigidBodyModel, dcm_to_quat
 
 INCLINATION = math.radians(35.0)

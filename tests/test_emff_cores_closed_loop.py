@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from acds_common.environment import EarthFieldConfig, Orbit, OrbitConfig, TiltedDipoleField
 from acds_controller.formation_control import (
     AttitudeLaw,
     ControlledVehicle,
@@ -23,7 +24,6 @@ from acds_controller.formation_control import (
     SpinUpLaw,
     steady_spin_dipole_product_am4,
 )
-from dynamics.environment import EarthFieldConfig, Orbit, OrbitConfig, TiltedDipoleField
 from dynamics.formation import (
     EMFFORCE_WHEEL_MAX_TORQUE_NM,
     Coil,

@@ -212,7 +212,7 @@ def test_a_model_check_fails_before_any_process_starts(capsys, tmp_path, text, f
     ('magnetometer_sim', 'magnetometer_sim.magnetometer_step', 'build_magnetometer',
      'magnetometer_sim.fluxgate.MagnetometerError', 'magnetometer'),
     ('em_driver', 'em_driver.em_driver_step', 'build_assembly', 'em_driver.bridge_switch.EmDriverError', 'em_driver'),
-    ('rigid_body', 'dynamics.rigid_body_step', 'build_rigid_body', 'dynamics.environment.DynamicsError', ''),
+    ('rigid_body', 'dynamics.rigid_body_step', 'build_rigid_body', 'dynamics.errors.DynamicsError', ''),
     ('acds_controller', 'acds_controller.controller_step', 'build_dpa', 'acds_controller.magnetic_laws.ControllerError',
      ''),
 ])

@@ -40,7 +40,7 @@ import numpy as np
 from acds_common.dipole_field import MU0_OVER_4PI, dipole_force_n, dipole_torque_nm, unit_perpendicular
 from acds_common.units import MU0
 
-from dynamics.environment import DynamicsError, finite_float, finite_vector3
+from dynamics.errors import DynamicsError, finite_float, finite_vector3
 
 #: Default current elements per loop: for the table geometries at s/d ≥ 1.5 the wrench is converged to
 #: better than 1e-9 relative (see ``converged_loop_wrench`` and test_biot_savart).

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from acds_common import units
 
-from dynamics.environment import DynamicsError, finite_float, finite_vector3
+from dynamics.errors import DynamicsError, finite_float, finite_vector3
 
 #: |ΔH_CMG| capacity of the present CMG system, N·m·s (§5 footnote: "nearly 12000 ft-lb-sec").
 SEED_CAPACITY_NMS = units.ftlbs_to_nms(12000.0)

@@ -15,18 +15,19 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from acds_common.inertia import InertiaError, inertia_tensor
-from acds_common.validation import scenario_key
-
-from dynamics.environment import (
-    DynamicsError,
+from acds_common.environment import (
     EarthFieldConfig,
+    EnvironmentModelError,
     Orbit,
     OrbitConfig,
     Sun,
     SunConfig,
     TiltedDipoleField,
 )
+from acds_common.inertia import InertiaError, inertia_tensor
+from acds_common.validation import scenario_key
+
+from dynamics.errors import DynamicsError
 from dynamics.rigid_body_model import RigidBodyModel
 from dynamics.wheels_model import ReactionWheels, WheelsConfig
 
@@ -38,17 +39,17 @@ def build_rigid_body(spacecraft: dict[str, Any], orbit: dict[str, Any], earth: d
     """The rigid body in its orbit and environment from the scenario's five sections (spec §3)."""
     with scenario_key('spacecraft.inertia', InertiaError):
         inertia = inertia_tensor(*spacecraft['inertia']) * spacecraft['inertia_scale']
-    with scenario_key('orbit', DynamicsError):
+    with scenario_key('orbit', EnvironmentModelError):
         orbit_model = Orbit(OrbitConfig(
             kind=orbit['kind'], inclination_rad=orbit['inclination'], raan_rad=orbit['raan'],
             altitude_m=orbit['altitude'], arg_latitude0_rad=orbit['arg_latitude0'],
             perigee_altitude_m=orbit['perigee_altitude'], apogee_radius_m=orbit['apogee_radius'],
             arg_perigee_rad=orbit['arg_perigee'], mean_anomaly0_rad=orbit['mean_anomaly0']))
-    with scenario_key('earth', DynamicsError):
+    with scenario_key('earth', EnvironmentModelError):
         field = TiltedDipoleField(EarthFieldConfig(
             dipole_moment_am2=earth['dipole_moment'], tilt_rad=earth['dipole_tilt'],
             dipole_longitude_rad=earth['dipole_longitude'], greenwich_angle0_rad=earth['greenwich_angle0']))
-    with scenario_key('sun', DynamicsError):
+    with scenario_key('sun', EnvironmentModelError):
         sun_model = Sun(SunConfig(right_ascension_rad=sun['right_ascension'], declination_rad=sun['declination'],
                                   eclipse=sun['eclipse']))
     with scenario_key('spacecraft', DynamicsError):  # initial attitude and rates (substeps: schema-checked)

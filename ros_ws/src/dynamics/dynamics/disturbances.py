@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 from acds_common import units
 
-from dynamics.environment import DynamicsError, finite_float, finite_vector3
+from dynamics.errors import DynamicsError, finite_float, finite_vector3
 
 #: Second Workshop principal moments of inertia I_x, I_y, I_z, slug-ft² (§5, "calculated by W. W. Hough").
 WORKSHOP_INERTIA_SLUG_FT2 = (634_400.0, 4_112_900.0, 4_220_600.0)

@@ -24,7 +24,7 @@ Seed 004 (MIT SSL / Lockheed Martin EMFF final review, 2003). What is modelled, 
   Newton's third law applied pairwise (F_A = −F_B, τ_A = −τ_B − r_AB × F_B) so the internal wrenches
   conserve momentum exactly at any segment count.
 * The Earth's field (``hill`` frame, optional, an injected callable b_eci(r_eci_m, t_s) → T such as
-  ``dynamics.environment.TiltedDipoleField.b_eci``): torque μ × B on every dipole and the force
+  ``acds_common.environment.TiltedDipoleField.b_eci``): torque μ × B on every dipole and the force
   ∇(μ·B) by central differences of the callable (step ``EARTH_GRADIENT_STEP_FRACTION``·|r|) —
   slide 30: "an insignificant disturbance force, but a very significant disturbance torque"; the
   force is computed and applied, not dropped. Gravity-gradient torque on each vehicle is optional
@@ -71,9 +71,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from acds_common import units
 from acds_common.dipole_field import cross3, dipole_pair_wrench
+from acds_common.environment import Orbit
 
 from dynamics import biot_savart
-from dynamics.environment import DynamicsError, Orbit, finite_float, finite_vector3
+from dynamics.errors import DynamicsError, finite_float, finite_vector3
 from dynamics.rigid_body_model import DEFAULT_SUBSTEPS, gravity_gradient_torque_nm, inertia_tensor, quat_to_dcm
 
 #: Frames of relative motion (see the module docstring).

@@ -20,18 +20,11 @@ from dataclasses import dataclass
 
 import numpy as np
 from acds_common import units
+from acds_common.environment import Orbit, Sun, TiltedDipoleField, sun_frame_dcm
+from acds_common.environment import ecliptic_normal_eci as default_ecliptic_normal_eci
 from acds_common.inertia import InertiaError, inertia_tensor
 
-from dynamics.environment import (
-    DynamicsError,
-    Orbit,
-    Sun,
-    TiltedDipoleField,
-    finite_float,
-    finite_vector3,
-    sun_frame_dcm,
-)
-from dynamics.environment import ecliptic_normal_eci as default_ecliptic_normal_eci
+from dynamics.errors import DynamicsError, finite_float, finite_vector3
 
 #: Default RK4 substeps per ``advance`` call (0.1 s substeps at the 0.5 s HEAO control period).
 DEFAULT_SUBSTEPS = 5

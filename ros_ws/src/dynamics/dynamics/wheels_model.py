@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from acds_common import units
 
-from dynamics.environment import DynamicsError, finite_float, finite_vector3
+from dynamics.errors import DynamicsError, finite_float, finite_vector3
 
 #: Drive saturation voltage, V (seed 002 §4.2.2).
 V_SAT_V = 17.1

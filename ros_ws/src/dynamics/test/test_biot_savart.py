@@ -24,7 +24,7 @@ from dynamics.biot_savart import (
     row_error,
     wrench,
 )
-from dynamics.environment import DynamicsError
+from dynamics.errors import DynamicsError
 
 R_OUTER, R_INNER = 0.375, 0.345  # EMFFORCE coil radii, m (slide 71)
 NI = 100 * 100.0  # 100 wraps at 100 A (slides 71, 73)

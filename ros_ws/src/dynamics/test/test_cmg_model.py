@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from acds_common import units
 from dynamics.cmg_model import SEED_CAPACITY_NMS, CmgConfig, ControlMomentGyros
-from dynamics.environment import DynamicsError
+from dynamics.errors import DynamicsError
 from hypothesis import given, settings
 from hypothesis import strategies as st
 

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 from acds_common import units
+from acds_common.environment import Orbit, OrbitConfig
 from dynamics.disturbances import (
     MODE_GEOMETRY,
     SEED_BIAS_MOMENTUM_FTLBS,
@@ -17,7 +18,7 @@ from dynamics.disturbances import (
     seed_disturbance,
     workshop_inertia_kg_m2,
 )
-from dynamics.environment import DynamicsError, Orbit, OrbitConfig
+from dynamics.errors import DynamicsError
 from dynamics.rigid_body_model import gravity_gradient_torque_nm
 from hypothesis import given, settings
 from hypothesis import strategies as st

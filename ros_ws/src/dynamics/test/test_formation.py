@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pytest
 from acds_common.dipole_field import dipole_force_n
+from acds_common.environment import EarthFieldConfig, Orbit, OrbitConfig, TiltedDipoleField
 from acds_common.units import NMI_M
-from dynamics.environment import DynamicsError, EarthFieldConfig, Orbit, OrbitConfig, TiltedDipoleField
+from dynamics.errors import DynamicsError
 from dynamics.formation import (
     EMFFORCE_COIL_RADII_M,
     EMFFORCE_MASS_KG,

@@ -7,9 +7,7 @@ import math
 import numpy as np
 import pytest
 from acds_common import units
-from acds_common.inertia import InertiaError
-from dynamics.environment import (
-    DynamicsError,
+from acds_common.environment import (
     EarthFieldConfig,
     Orbit,
     OrbitConfig,
@@ -20,6 +18,8 @@ from dynamics.environment import (
     rot_x,
     sun_frame_dcm,
 )
+from acds_common.inertia import InertiaError
+from dynamics.errors import DynamicsError
 from dynamics.rigid_body_model import (
     DEFAULT_SUBSTEPS,
     HEAO_A_INERTIA_SLUG_FT2,

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 from acds_common import units
-from dynamics.environment import DynamicsError
+from dynamics.errors import DynamicsError
 from dynamics.wheels_model import (
     DEFAULT_TORQUE_GAIN_NM_PER_V2,
     DEFAULT_WHEEL_CAPACITY_NMS,

@@ -1,5 +1,8 @@
 """Environment: Keplerian orbit, tilted-dipole Earth field, Sun and the sun-pointed frame (spec §3).
 
+Shared: the dynamics propagates the spacecraft in it, and on-board software that predicts the field
+along the coming orbit (the AAP minimum-energy dump law, seed 000 eq. 3) uses the same models.
+
 Frames. ECI: inertial, x to the vernal equinox, z to the celestial north pole. ECEF: rotates about
 ECI z at ``units.EARTH_RATE_RAD_S``; its x axis (Greenwich meridian) is at the Earth rotation
 angle ``greenwich_angle0_rad + EARTH_RATE_RAD_S * t`` from ECI x.
@@ -14,6 +17,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
 from acds_common import units, validation
 
 #: Mean obliquity of the ecliptic, rad (spec §3).
@@ -32,21 +36,21 @@ _KEPLER_TOL_RAD = 1e-14
 _KEPLER_MAX_ITER = 60
 
 
-class DynamicsError(ValueError):
-    """Invalid input to the dynamics package (orbit, field, sun, body or wheel parameters)."""
+class EnvironmentModelError(ValueError):
+    """Invalid orbit, field or sun parameters (the message names the parameter)."""
 
 
 def finite_float(name: str, value: float) -> float:
-    """Return ``value`` as a finite float or raise DynamicsError naming ``name``."""
+    """Return ``value`` as a finite float or raise EnvironmentModelError naming ``name``."""
     value = float(value)
     if not math.isfinite(value):
-        raise DynamicsError(f"{name} must be a finite number, got {value!r}")
+        raise EnvironmentModelError(f"{name} must be a finite number, got {value!r}")
     return value
 
 
 def finite_vector3(name: str, value: object) -> np.ndarray:
-    """Return ``value`` as a finite float 3-vector or raise DynamicsError naming ``name``."""
-    return validation.finite_vector3(name, value, DynamicsError)
+    """Return ``value`` as a finite float 3-vector or raise EnvironmentModelError naming ``name``."""
+    return validation.finite_vector3(name, value, EnvironmentModelError)
 
 
 def rot_z(angle_rad: float) -> np.ndarray:
@@ -86,20 +90,20 @@ class OrbitConfig:
 
     def __post_init__(self) -> None:
         if self.kind not in ("circular", "elliptical"):
-            raise DynamicsError(f"OrbitConfig.kind must be 'circular' or 'elliptical', got {self.kind!r}")
+            raise EnvironmentModelError(f"OrbitConfig.kind must be 'circular' or 'elliptical', got {self.kind!r}")
         for name in ("inclination_rad", "raan_rad", "altitude_m", "arg_latitude0_rad", "perigee_altitude_m",
                      "apogee_radius_m", "arg_perigee_rad", "mean_anomaly0_rad"):
             finite_float(f"OrbitConfig.{name}", getattr(self, name))
         if not 0.0 <= self.inclination_rad <= math.pi:
-            raise DynamicsError(f"OrbitConfig.inclination_rad must be in [0, pi], got {self.inclination_rad}")
+            raise EnvironmentModelError(f"OrbitConfig.inclination_rad must be in [0, pi], got {self.inclination_rad}")
         if self.kind == "circular" and self.altitude_m <= 0.0:
-            raise DynamicsError(f"OrbitConfig.altitude_m must be > 0 m, got {self.altitude_m}")
+            raise EnvironmentModelError(f"OrbitConfig.altitude_m must be > 0 m, got {self.altitude_m}")
         if self.kind == "elliptical":
             if self.perigee_altitude_m <= 0.0:
-                raise DynamicsError(
+                raise EnvironmentModelError(
                     f"OrbitConfig.perigee_altitude_m must be > 0 m, got {self.perigee_altitude_m}")
             if self.apogee_radius_m < units.EARTH_RADIUS_M + self.perigee_altitude_m:
-                raise DynamicsError(
+                raise EnvironmentModelError(
                     "OrbitConfig.apogee_radius_m is geocentric and must be >= the perigee radius "
                     f"{units.EARTH_RADIUS_M + self.perigee_altitude_m} m, got {self.apogee_radius_m}")
 
@@ -112,7 +116,7 @@ def solve_kepler(mean_anomaly_rad: float, eccentricity: float) -> float:
     for every M and every e < 1.
     """
     if not 0.0 <= eccentricity < 1.0:
-        raise DynamicsError(f"eccentricity must be in [0, 1), got {eccentricity}")
+        raise EnvironmentModelError(f"eccentricity must be in [0, 1), got {eccentricity}")
     m = math.remainder(mean_anomaly_rad, 2.0 * math.pi)  # in [-pi, pi]
     # f(E) = E - e sin E - m is increasing; root lies in [m - e, m + e] ∩ [-pi, pi].
     lo, hi = max(-math.pi, m - eccentricity), min(math.pi, m + eccentricity)
@@ -198,10 +202,10 @@ class EarthFieldConfig:
         for name in ("dipole_moment_am2", "tilt_rad", "dipole_longitude_rad", "greenwich_angle0_rad"):
             finite_float(f"EarthFieldConfig.{name}", getattr(self, name))
         if self.dipole_moment_am2 <= 0.0:
-            raise DynamicsError(
+            raise EnvironmentModelError(
                 f"EarthFieldConfig.dipole_moment_am2 must be > 0 A·m², got {self.dipole_moment_am2}")
         if not 0.0 <= self.tilt_rad <= math.pi / 2:
-            raise DynamicsError(f"EarthFieldConfig.tilt_rad must be in [0, pi/2], got {self.tilt_rad}")
+            raise EnvironmentModelError(f"EarthFieldConfig.tilt_rad must be in [0, pi/2], got {self.tilt_rad}")
 
 
 class TiltedDipoleField:
@@ -231,7 +235,7 @@ class TiltedDipoleField:
         r = np.asarray(r_eci_m, dtype=float)
         rn = math.sqrt(float(r @ r))
         if not rn > 0.0 or not math.isfinite(rn):
-            raise DynamicsError(f"field point must be finite and away from the Earth's centre, got {r}")
+            raise EnvironmentModelError(f"field point must be finite and away from the Earth's centre, got {r}")
         rhat = r / rn
         m_hat = -self.dipole_axis_eci(t_s)
         return (self._k / rn ** 3) * (3.0 * float(m_hat @ rhat) * rhat - m_hat)
@@ -270,7 +274,7 @@ class SunConfig:
         finite_float("SunConfig.right_ascension_rad", self.right_ascension_rad)
         finite_float("SunConfig.declination_rad", self.declination_rad)
         if abs(self.declination_rad) > math.pi / 2:
-            raise DynamicsError(
+            raise EnvironmentModelError(
                 f"SunConfig.declination_rad must be in [-pi/2, pi/2], got {self.declination_rad}")
 
     @classmethod
@@ -324,7 +328,7 @@ def sun_frame_dcm(sun_eci_unit: np.ndarray, ecliptic_normal_eci: np.ndarray) -> 
     y = np.cross(n, z)
     norm_y = np.linalg.norm(y)
     if norm_y < 1e-9:
-        raise DynamicsError("sun direction is parallel to the ecliptic normal: sun frame undefined")
+        raise EnvironmentModelError("sun direction is parallel to the ecliptic normal: sun frame undefined")
     y = y / norm_y
     x = np.cross(y, z)
     return np.vstack([x, y, z])

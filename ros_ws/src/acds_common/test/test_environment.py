@@ -1,4 +1,4 @@
-"""Tests of dynamics.environment: orbits, tilted dipole, sun, sun-pointed frame (spec §3)."""
+"""Tests of acds_common.environment: orbits, tilted dipole, sun, sun-pointed frame (spec §3)."""
 
 from __future__ import annotations
 
@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 from acds_common import units
-from dynamics.environment import (
+from acds_common.environment import (
     OBLIQUITY_RAD,
-    DynamicsError,
     EarthFieldConfig,
+    EnvironmentModelError,
     Orbit,
     OrbitConfig,
     Sun,
@@ -88,11 +88,11 @@ def test_field_rotates_with_one_sidereal_day_period() -> None:
 
 
 def test_field_rejects_bad_inputs() -> None:
-    with pytest.raises(DynamicsError):
+    with pytest.raises(EnvironmentModelError):
         EarthFieldConfig(dipole_moment_am2=float("nan"))
-    with pytest.raises(DynamicsError):
+    with pytest.raises(EnvironmentModelError):
         EarthFieldConfig(dipole_moment_am2=-1.0)
-    with pytest.raises(DynamicsError):
+    with pytest.raises(EnvironmentModelError):
         TiltedDipoleField(EarthFieldConfig()).b_eci(np.zeros(3), 0.0)
 
 
@@ -156,15 +156,15 @@ def test_kepler_solver_residual(mean_anomaly: float, ecc: float) -> None:
 
 
 def test_orbit_config_validation() -> None:
-    with pytest.raises(DynamicsError, match="kind"):
+    with pytest.raises(EnvironmentModelError, match="kind"):
         OrbitConfig(kind="hyperbolic")
-    with pytest.raises(DynamicsError, match="apogee"):
+    with pytest.raises(EnvironmentModelError, match="apogee"):
         OrbitConfig(kind="elliptical", apogee_radius_m=units.EARTH_RADIUS_M)
-    with pytest.raises(DynamicsError):
+    with pytest.raises(EnvironmentModelError):
         OrbitConfig(altitude_m=float("inf"))
-    with pytest.raises(DynamicsError):
+    with pytest.raises(EnvironmentModelError):
         OrbitConfig(inclination_rad=4.0)
-    with pytest.raises(DynamicsError):
+    with pytest.raises(EnvironmentModelError):
         solve_kepler(0.1, 1.0)
 
 
@@ -188,7 +188,7 @@ def test_eclipse_cylindrical_shadow() -> None:
     assert not lit.present(np.array([-r, 0.0, 0.0]), 0.0)
     assert lit.present(np.array([-r, 0.0, 1.01 * units.EARTH_RADIUS_M]), 0.0)
     assert Sun(SunConfig(eclipse=False)).present(np.array([-r, 0.0, 0.0]), 0.0)
-    with pytest.raises(DynamicsError):
+    with pytest.raises(EnvironmentModelError):
         SunConfig(declination_rad=2.0)
 
 

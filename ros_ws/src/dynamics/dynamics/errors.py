@@ -1,0 +1,25 @@
+"""The dynamics package's exception and input checks (rigid body, wheels, CMGs, formation)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from acds_common import validation
+
+
+class DynamicsError(ValueError):
+    """Invalid input to the dynamics package (body, wheel, CMG or formation parameters)."""
+
+
+def finite_float(name: str, value: float) -> float:
+    """Return ``value`` as a finite float or raise DynamicsError naming ``name``."""
+    value = float(value)
+    if not math.isfinite(value):
+        raise DynamicsError(f"{name} must be a finite number, got {value!r}")
+    return value
+
+
+def finite_vector3(name: str, value: object) -> np.ndarray:
+    """Return ``value`` as a finite float 3-vector or raise DynamicsError naming ``name``."""
+    return validation.finite_vector3(name, value, DynamicsError)
