@@ -82,8 +82,7 @@ def test_compare_refuses_what_it_cannot_replay(recorded):
 def test_player_clock_drives_a_use_sim_time_node(recorded):
     bag = open_bag(recorded)
     clock = [t for _, t, _ in bag.messages([topics.CLOCK])]
-    lease = DomainLease()  # pick a domain no run holds, then free it: play refuses a domain a run holds
-    lease.close()
+    lease = DomainLease()
     context = Context()
     rclpy.init(context=context, domain_id=lease.domain_id)
     node = Node('listener', namespace=topics.NAMESPACE, context=context,
@@ -116,6 +115,7 @@ def test_player_clock_drives_a_use_sim_time_node(recorded):
         spin.join()
         node.destroy_node()
         rclpy.try_shutdown(context=context)
+        lease.close()
     assert [s for s, _ in seen] == [t for _, t, _ in bag.messages([topics.WHEEL_MOMENTUM])]
     assert len(clock) == STEPS + 1 and clock[-1] == STEPS * 500_000_000
     now = [n for _, n in seen]

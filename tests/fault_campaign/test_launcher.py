@@ -63,18 +63,23 @@ def test_sigkilled_launcher_takes_its_nodes_within_two_seconds(tmp_path):
     assert len(pids) == 2
     held, free = pids  # one node is kept stopped: it must keep the domain leased until it exits
     os.kill(held, signal.SIGSTOP)
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
-    deadline = time.monotonic() + 2.0
-    while free in _node_pids(run_dir) and time.monotonic() < deadline:
-        time.sleep(0.05)  # polling the process table, not synchronising the graph
-    assert free not in _node_pids(run_dir), 'a node outlived its SIGKILLed launcher by more than 2 s'
-    assert _domain_locked(run_dir), 'the domain was released while a child of the dead launcher lived'
-    os.kill(held, signal.SIGCONT)  # its pending parent-death SIGTERM is delivered now
+    try:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+        deadline = time.monotonic() + 2.0
+        while free in _node_pids(run_dir) and time.monotonic() < deadline:
+            time.sleep(0.05)  # polling the process table, not synchronising the graph
+        assert free not in _node_pids(run_dir), 'a node outlived its SIGKILLed launcher by more than 2 s'
+        assert _domain_locked(run_dir), 'the domain was released while a child of the dead launcher lived'
+    finally:
+        os.kill(held, signal.SIGCONT)  # its pending parent-death SIGTERM is delivered now
     deadline = time.monotonic() + 2.0
     while _node_pids(run_dir) and time.monotonic() < deadline:
         time.sleep(0.05)
-    assert _node_pids(run_dir) == []
+    left = _node_pids(run_dir)
+    for pid in left:  # never leave an orphan behind, even when the test fails
+        os.kill(pid, signal.SIGKILL)
+    assert left == []
     assert not _domain_locked(run_dir)
 
 

@@ -87,11 +87,6 @@ class Player:
             wanted.add(topics.CLOCK)  # /clock always goes with the data
         self.topics = wanted
         self.remap = remap or {}
-        from acds_runtime.launcher import DomainLease
-        target = domain_id if domain_id is not None else int(os.environ.get('ROS_DOMAIN_ID', '0') or 0)
-        if DomainLease.held(target):
-            raise BagError(f'domain {target} belongs to a running graph (acds run): playing into it would inject '
-                           'data into that run; choose a free --domain')
         ros_env(domain_id)
         self.context = Context()
         rclpy.init(context=self.context, domain_id=domain_id,

@@ -17,6 +17,19 @@ def _record(args: argparse.Namespace) -> int:
     return main_record(args)
 
 
+def check_domain_free(domain: int | None) -> None:
+    """``play`` never publishes into a domain a running graph holds (it would inject data into that run)."""
+    import os
+
+    from acds_runtime.bag.writer import BagError
+    from acds_runtime.launcher import DomainLease
+
+    target = domain if domain is not None else int(os.environ.get('ROS_DOMAIN_ID', '0') or 0)
+    if DomainLease.held(target):
+        raise BagError(f'domain {target} belongs to a running graph (acds run): playing into it would inject data '
+                       'into that run; choose a free --domain')
+
+
 def _play(args: argparse.Namespace) -> int:
     from acds_runtime.bag.writer import BagError
 
@@ -28,6 +41,7 @@ def _play(args: argparse.Namespace) -> int:
     try:
         check_rate(args.rate)
         remap = parse_remaps(args.remap)
+        check_domain_free(args.domain)
         bag = open_bag(args.bag)
         player = Player(bag, domain_id=args.domain, select=args.topics, remap=remap)
     except BagError as exc:

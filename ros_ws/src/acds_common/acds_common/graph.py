@@ -20,13 +20,15 @@ owner's truth outputs of step k + 1 come from its stage of step k (``stamp_offse
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from acds_common import topics
 
-#: The node that owns sim time (publishes ``/clock`` and the truth).
+#: The node that owns sim time (publishes ``/clock`` and the truth) of a single-vehicle graph, and every
+#: node that can own it (a formation's is ``formation_dynamics``).
 TIME_OWNER = 'rigid_body'
+TIME_OWNERS = ('rigid_body', 'formation_dynamics')
 #: The launcher's observer (recorder) in the lockstep handshake, and how far the time owner may run ahead of it.
 MONITOR_NAME = 'run_monitor'
 MONITOR_LAG = 50
@@ -55,8 +57,8 @@ class Output:
 
     @property
     def msg_type(self) -> str:
-        """'package/msg/Type' of the topic (:data:`acds_common.topics.TYPES`)."""
-        return topics.TYPES[self.topic]
+        """'package/msg/Type' of the topic (:func:`acds_common.topics.type_of`)."""
+        return topics.type_of(self.topic)
 
 
 @dataclass(frozen=True)
@@ -79,7 +81,13 @@ class Stage:
 
 @dataclass(frozen=True)
 class NodeSpec:
-    """One node: its executable (console script ``name`` of ``package``), its stepper class, its ports."""
+    """One node: its executable (console script ``name`` of ``package``), its stepper class, its ports.
+
+    ``instance`` is the node's key in the graph: its name, or ``<vehicle>/<name>`` for a node of one
+    vehicle of a formation, which then runs in the ROS namespace ``/acds/<vehicle>`` (``namespace``):
+    its relative topics resolve there (:meth:`topic`), so every vehicle's nodes have the single
+    vehicle's topic names under their own namespace. ``time_owner``: this node owns sim time.
+    """
 
     name: str
     package: str
@@ -87,6 +95,22 @@ class NodeSpec:
     stages: tuple[Stage, ...]
     outputs: tuple[Output, ...]
     ground_commands: bool = False
+    time_owner: bool = False
+    instance: str = ''
+    namespace: str = topics.NAMESPACE
+
+    def __post_init__(self) -> None:
+        if not self.instance:
+            object.__setattr__(self, 'instance', self.name)
+
+    @property
+    def vehicle(self) -> str:
+        """The vehicle this node belongs to ('' for a node of the whole graph)."""
+        return self.instance.rpartition('/')[0]
+
+    def topic(self, name: str) -> str:
+        """Absolute name of ``name`` (relative names resolve in this node's namespace)."""
+        return name if name.startswith('/') else f'{self.namespace}/{name}'
 
     def output(self, key: str) -> Output:
         """The output declared under ``key``."""
@@ -116,7 +140,8 @@ def _rigid_body(_params: dict[str, Any]) -> NodeSpec:
          Output('torque_mag', topics.TRUTH_TORQUE_MAG, 'body', **truth),
          Output('torque_gg', topics.TRUTH_TORQUE_GG, 'body', **truth),
          Output('gyro', topics.GYRO, 'body', **truth),
-         Output('sun_sensor', topics.SUN_SENSOR, 'body', **truth)))
+         Output('sun_sensor', topics.SUN_SENSOR, 'body', **truth)),
+        time_owner=True)
 
 
 def _reaction_wheels(_params: dict[str, Any]) -> NodeSpec:
@@ -205,21 +230,52 @@ NODES: dict[str, Callable[[dict[str, Any]], NodeSpec]] = {
 
 
 def node_spec(name: str, params: dict[str, Any]) -> NodeSpec:
-    """The declaration of node ``name`` for its parameters."""
+    """The declaration of node ``name`` for its parameters.
+
+    A node of one vehicle of a formation (parameter ``vehicle``) gets the single-vehicle ports under
+    the vehicle's namespace; its inputs from the vehicle's own nodes (those of ``graph_nodes`` named
+    ``<vehicle>/<node>``) are qualified with the vehicle, inputs from nodes of the whole graph (the
+    formation's time owner, the run monitor) stay as they are.
+    """
     try:
-        return NODES[name](params)
+        spec = NODES[name](params)
     except KeyError:
         raise KeyError(f'unknown node {name!r} (known: {", ".join(NODES)})') from None
+    vehicle = params.get('vehicle', '')
+    if not vehicle:
+        return spec
+    own = {g.partition('/')[2] for g in params.get('graph_nodes', []) if g.startswith(f'{vehicle}/')}
+
+    def qualify(source: str) -> str:
+        return f'{vehicle}/{source}' if '/' not in source and source in own else source
+
+    stages = tuple(Stage(st.name, tuple(replace(i, source=qualify(i.source)) for i in st.inputs))
+                   for st in spec.stages)
+    return replace(spec, stages=stages, instance=f'{vehicle}/{name}', namespace=f'{topics.NAMESPACE}/{vehicle}')
+
+
+def instance_name(namespace: str, node_name: str) -> str:
+    """The graph key of a ROS node seen by discovery: its name, prefixed by its vehicle's namespace."""
+    prefix = f'{topics.NAMESPACE}/'
+    return f'{namespace[len(prefix):]}/{node_name}' if namespace.startswith(prefix) else node_name
 
 
 @dataclass(frozen=True)
 class Graph:
-    """The declared nodes of one run and the order the direct engine fires their stages in."""
+    """The declared nodes of one run (by instance) and the order the direct engine fires their stages in."""
 
     nodes: dict[str, NodeSpec]
 
+    @property
+    def time_owner(self) -> str:
+        """The instance that owns sim time."""
+        owners = [i for i, spec in self.nodes.items() if spec.time_owner]
+        if len(owners) != 1:
+            raise ValueError(f'a graph has exactly one time owner, found {owners or "none"}')
+        return owners[0]
+
     def present(self, node: str) -> bool:
-        """Whether ``node`` is part of this graph."""
+        """Whether instance ``node`` is part of this graph."""
         return node in self.nodes
 
     def outputs(self) -> Iterable[tuple[NodeSpec, Output]]:
@@ -229,52 +285,62 @@ class Graph:
                 yield spec, out
 
     def publisher_of(self, topic: str) -> list[str]:
-        """The nodes declared to publish ``topic``."""
-        return [spec.name for spec, out in self.outputs() if out.topic == topic]
+        """The instances declared to publish ``topic`` (absolute name)."""
+        return [spec.instance for spec, out in self.outputs() if spec.topic(out.topic) == topic]
 
     def firing_order(self) -> list[tuple[str, Stage]]:
-        """(node, stage) of every non-time-owner stage, ordered so every lag-0 input is produced first.
+        """(instance, stage) of every non-time-owner stage, ordered so every lag-0 input is produced first.
 
         Within a node, stages keep their declared order. The time owner's stages close the step
         and come last. Raises ValueError on a lag-0 cycle (it would deadlock the per-process graph).
         """
-        pending = [(name, stage) for name, spec in self.nodes.items() if name != TIME_OWNER for stage in spec.stages]
-        producers = {out.topic: spec.name for spec, out in self.outputs() if spec.name != TIME_OWNER}
-        done_nodes_stages: dict[str, int] = {name: 0 for name in self.nodes}
+        owner = self.time_owner
+        pending = [(i, st) for i, spec in self.nodes.items() if i != owner for st in spec.stages]
+        producers = {spec.topic(out.topic): spec.instance for spec, out in self.outputs() if spec.instance != owner}
+        fired_stages: dict[str, int] = dict.fromkeys(self.nodes, 0)
         order: list[tuple[str, Stage]] = []
         fired_topics: set[str] = set()
         while pending:
-            for i, (name, stage) in enumerate(pending):
-                spec = self.nodes[name]
-                if spec.stages.index(stage) != done_nodes_stages[name]:
+            for n, (inst, stage) in enumerate(pending):
+                spec = self.nodes[inst]
+                if spec.stages.index(stage) != fired_stages[inst]:
                     continue
-                needs = {inp.topic for inp in stage.inputs
-                         if inp.lag == 0 and inp.source in self.nodes and inp.source != TIME_OWNER
-                         and producers.get(inp.topic) == inp.source}
+                needs = {spec.topic(inp.topic) for inp in stage.inputs
+                         if inp.lag == 0 and inp.source in self.nodes and inp.source != owner
+                         and producers.get(spec.topic(inp.topic)) == inp.source}
                 if needs <= fired_topics:
-                    order.append((name, stage))
-                    done_nodes_stages[name] += 1
-                    if done_nodes_stages[name] == len(spec.stages):
-                        fired_topics.update(out.topic for out in spec.outputs)
-                    del pending[i]
+                    order.append((inst, stage))
+                    fired_stages[inst] += 1
+                    if fired_stages[inst] == len(spec.stages):
+                        fired_topics.update(spec.topic(out.topic) for out in spec.outputs)
+                    del pending[n]
                     break
             else:
-                raise ValueError('lag-0 cycle among ' + ', '.join(f'{n}.{s.name}' for n, s in pending))
-        owner = self.nodes.get(TIME_OWNER)
-        return order + ([(TIME_OWNER, s) for s in owner.stages] if owner else [])
+                raise ValueError('lag-0 cycle among ' + ', '.join(f'{i}.{st.name}' for i, st in pending))
+        return order + [(owner, st) for st in self.nodes[owner].stages]
 
 
 def build_graph(params_by_node: dict[str, dict[str, Any]]) -> Graph:
-    """The graph of the given nodes (name → its parameters), in the given order.
+    """The graph of the given instances (``<node>`` or ``<vehicle>/<node>`` → its parameters), in order.
 
     Raises ValueError when a per-step topic would have two publishers (the lockstep needs one
-    message per step per topic) or when lag-0 inputs form a cycle.
+    message per step per topic), when an input names a topic its source does not publish, when
+    there is not exactly one time owner, or when lag-0 inputs form a cycle.
     """
-    graph = Graph({name: node_spec(name, params) for name, params in params_by_node.items()})
+    graph = Graph({}) if not params_by_node else Graph(
+        {spec.instance: spec for spec in (node_spec(inst.rpartition('/')[2], params)
+                                          for inst, params in params_by_node.items())})
     for _spec, out in graph.outputs():
-        publishers = graph.publisher_of(out.topic)
+        publishers = graph.publisher_of(_spec.topic(out.topic))
         if out.every_step and len(publishers) > 1:
-            raise ValueError(f'{topics.resolve(out.topic)} would be published by {" and ".join(publishers)}; '
+            raise ValueError(f'{_spec.topic(out.topic)} would be published by {" and ".join(publishers)}; '
                              'a per-step topic has one publisher')
+    for spec in graph.nodes.values():
+        for st in spec.stages:
+            for inp in st.inputs:
+                source = graph.nodes.get(inp.source)
+                if source is not None and spec.topic(inp.topic) not in {source.topic(o.topic) for o in source.outputs}:
+                    raise ValueError(f'{spec.instance}.{st.name} reads {spec.topic(inp.topic)} from {inp.source}, '
+                                     'which does not publish it')
     graph.firing_order()
     return graph

@@ -45,7 +45,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 
 from acds_common import topics
 from acds_common.cdr import Codec, stamp_ns
-from acds_common.graph import MONITOR_LAG, MONITOR_NAME, TIME_OWNER, Input, NodeSpec, Output, node_spec
+from acds_common.graph import MONITOR_LAG, MONITOR_NAME, Input, NodeSpec, Output, instance_name, node_spec
 from acds_common.parameters import ConfigError, ParamSpec, node_param_specs, normalize
 from acds_common.stepper import StepError, Stepper
 
@@ -146,7 +146,11 @@ class LockstepNode(Node):
         super().__init__(name, namespace=topics.NAMESPACE)
         self.params = normalize(name, self._declare_parameters(node_param_specs(name)))
         self.spec: NodeSpec = node_spec(name, self.params)
-        self.time_owner = name == TIME_OWNER
+        if self.get_namespace() != self.spec.namespace:
+            raise ConfigError(f'{name}: runs in namespace {self.get_namespace()} but its parameter vehicle='
+                              f'{self.params["vehicle"]!r} means {self.spec.namespace} (--ros-args -r __ns:=...)')
+        self.instance = self.spec.instance
+        self.time_owner = self.spec.time_owner
         self.dt_ns = round(self.params['control_period_s'] * 1e9)
         self.graph_nodes: list[str] = self.params['graph_nodes']
         self.input_timeout_s: float = self.params['input_timeout_s']
@@ -227,7 +231,7 @@ class LockstepNode(Node):
     def _add_input(self, topic: str, source: str) -> None:
         if topic in self._inputs:
             return
-        self._inputs[topic] = _InputTopic(topic, source, Codec(topics.TYPES[topic]))
+        self._inputs[topic] = _InputTopic(topic, source, Codec(topics.type_of(topic)))
         self._raw_sub(topic, lambda data, t=topic: self._on_input(t, data))
 
     def _log(self, level: str, text: str) -> None:
@@ -306,7 +310,8 @@ class LockstepNode(Node):
         if k is None:
             return
         if k in entry.buffer or k < entry.consumed_below:
-            names = sorted({i.node_name for i in self.get_publishers_info_by_topic(self.resolve_topic_name(topic))})
+            names = sorted({instance_name(i.node_namespace, i.node_name)
+                            for i in self.get_publishers_info_by_topic(self.resolve_topic_name(topic))})
             self.fail(f'a second message for step {k} on {self.resolve_topic_name(topic)}: a publisher other '
                       f'than {entry.source} injects data (publishers seen: {", ".join(names) or "none left"}); '
                       'refusing to use it')
@@ -405,7 +410,8 @@ class LockstepNode(Node):
         self._last_intruder_check = now
         for entry in self._inputs.values():
             topic = self.resolve_topic_name(entry.topic)
-            names = [i.node_name for i in self.get_publishers_info_by_topic(topic)]
+            names = [UNNAMED if i.node_name == UNNAMED else instance_name(i.node_namespace, i.node_name)
+                     for i in self.get_publishers_info_by_topic(topic)]
             unnamed = sum(1 for n in names if n == UNNAMED)
             if unnamed:
                 first = self._unnamed_since.setdefault(topic, now)
@@ -454,14 +460,14 @@ class LockstepNode(Node):
                 self.fail(f'stage {stage.name} waited {waited:.1f} s for step {k} input(s): ' + ', '.join(missing))
                 return
             if not self.time_owner and stage.paced_by_clock and k > self._clock_step and i == 0:
-                self.fail(f'waited {waited:.1f} s for /clock step {k} from {TIME_OWNER}')
+                self.fail(f'waited {waited:.1f} s for /clock step {k} from the time owner')
                 return
 
     def _check_ready(self, now: float) -> None:
         missing = self._missing_publishers()
         absent: list[str] = []
         if self.time_owner:
-            absent = sorted(set(self.graph_nodes) - self._ready_from - {self.get_name()})
+            absent = sorted(set(self.graph_nodes) - self._ready_from - {self.instance})
             if not missing and not absent:
                 self._check_intruders(now)
                 self._started = True
@@ -471,7 +477,7 @@ class LockstepNode(Node):
                 return
         elif not missing:
             self._check_intruders(now)
-            self._ready_pub.publish(Codec(topics.TYPES[topics.READY]).encode(0, self.get_name()))
+            self._ready_pub.publish(Codec(topics.TYPES[topics.READY]).encode(0, self.instance))
             self._started = True
             self._last_progress = now
             self._try_fire()

@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from acds_common.graph import MONITOR_NAME, TIME_OWNER
+from acds_common.graph import MONITOR_NAME, TIME_OWNERS
 from acds_common.scenario import MAX_STEPS, NODE_SECTIONS, REQUIRED, SCHEMA, Scenario
 
 
@@ -50,6 +50,8 @@ LOCKSTEP: tuple[ParamSpec, ...] = (
     ParamSpec('input_timeout_s', 'float', 30.0, 'wall seconds a stage may wait for an input before the run '
               'fails', 's', 0.1, 3600.0),
     ParamSpec('seed', 'int', 1, 'scenario random seed (deterministic noise streams)', '', 0, 2**31 - 1),
+    ParamSpec('vehicle', 'str', '', 'the formation vehicle this node belongs to (its namespace /acds/<vehicle>); '
+              "'' in a single-vehicle graph"),
 )
 #: Fastest pacing a run may ask for (``real_time_factor``; 0 = as fast as possible).
 MAX_REAL_TIME_FACTOR = 1e6
@@ -63,7 +65,7 @@ TIME_OWNER_ONLY: tuple[ParamSpec, ...] = (
 
 def node_param_specs(node: str) -> list[ParamSpec]:
     """Every parameter of ``node``: lockstep ones, then its scenario sections' fields."""
-    specs = list(LOCKSTEP) + (list(TIME_OWNER_ONLY) if node == TIME_OWNER else [])
+    specs = list(LOCKSTEP) + (list(TIME_OWNER_ONLY) if node in TIME_OWNERS else [])
     for section in NODE_SECTIONS[node]:
         for name, f in SCHEMA[section].items():
             bounded = f.kind not in ('str', 'bool', 'strs')
@@ -158,7 +160,7 @@ def node_parameters(scenario: Scenario, steps: int, rtf: float = 0.0,
     out: dict[str, dict[str, Any]] = {}
     for node in nodes:
         params = {**common, **scenario.node_parameters(node)}
-        if node == TIME_OWNER:
+        if node in TIME_OWNERS:
             params.update(total_steps=steps, real_time_factor=rtf)
         params.update((overrides or {}).get(node, {}))
         out[node] = {k: v for k, v in params.items() if v != []}  # rcl cannot type an empty list: node default

@@ -1,7 +1,8 @@
 """Topic names of the ACDS graph (spec §2), all under the ``/acds`` namespace.
 
-Every node runs in namespace ``/acds``; names here are relative so they
-resolve to ``/acds/<name>``, except ``/clock``. Lockstep data topics carry a
+Every node runs in namespace ``/acds`` (a formation vehicle's nodes in ``/acds/<vehicle>``); names
+here are relative so they resolve in the node's namespace, except ``/clock`` and the lockstep
+handshake topics, which every node of a graph shares. Lockstep data topics carry a
 ``std_msgs/Header`` whose stamp is the sim time t_k = k·Δt of the step they
 belong to. Units are SI unless the name says otherwise.
 """
@@ -9,7 +10,7 @@ belong to. Units are SI unless the name says otherwise.
 NAMESPACE = '/acds'
 
 CLOCK = '/clock'                                #: rosgraph_msgs/Clock, published by rigid_body
-READY = 'lockstep/ready'                        #: std_msgs/String, node name when its inputs are matched
+READY = '/acds/lockstep/ready'                  #: std_msgs/String, node instance when its inputs are matched
 
 # dynamics/rigid_body truth (step k, state at t_k)
 TRUTH_ODOMETRY = 'truth/odometry'               #: nav_msgs/Odometry: ECI position/velocity, q body→ECI, ω body (rad/s)
@@ -46,7 +47,7 @@ GROUND_ACK = 'ground/ack'                       #: std_msgs/String: acknowledgem
 EVENTS = 'events'                               #: std_msgs/String: mode transitions, automatic turn-on/off, with sim time
 
 DIAGNOSTICS = 'diagnostics'                     #: diagnostic_msgs/DiagnosticArray: health and telemetry of every node
-MONITOR_ACK = 'lockstep/monitor_ack'            #: rosgraph_msgs/Clock: the run monitor has received /clock step k
+MONITOR_ACK = '/acds/lockstep/monitor_ack'      #: rosgraph_msgs/Clock: the run monitor has received /clock step k
 
 #: Message type of every topic, as 'package/msg/Type' (used by the monitor, recorder and player).
 TYPES: dict[str, str] = {
@@ -91,3 +92,18 @@ def relative(name: str) -> str:
     """The key of :data:`TYPES` for an absolute or relative topic name (inverse of :func:`resolve`)."""
     prefix = f'{NAMESPACE}/'
     return name[len(prefix):] if name.startswith(prefix) else name
+
+
+def type_of(name: str) -> str:
+    """Message type of a topic, absolute or relative, of the graph or of one vehicle of a formation.
+
+    A formation's per-vehicle topics are the single-vehicle names under the vehicle's namespace
+    (``/acds/<vehicle>/truth/odometry``, or relative to ``/acds``: ``<vehicle>/truth/odometry``).
+    """
+    key = relative(name)
+    if key in TYPES:
+        return TYPES[key]
+    head, sep, rest = key.partition('/')
+    if sep and rest in TYPES:
+        return TYPES[rest]
+    raise KeyError(f'topic {name!r} is not a topic of the ACDS graph')

@@ -21,7 +21,7 @@ from typing import Any
 
 from acds_common import topics
 from acds_common.cdr import Codec
-from acds_common.graph import TIME_OWNER, Graph, build_graph
+from acds_common.graph import Graph, build_graph
 from acds_common.parameters import node_parameters, normalize
 from acds_common.scenario import Scenario
 from acds_common.stepper import StepError, Stepper
@@ -40,9 +40,9 @@ def build_steppers(graph: Graph, params: dict[str, dict[str, Any]],
                    log: Callable[[str, str, str], None] | None = None) -> dict[str, Stepper]:
     """Every node's stepper, constructed from its normalized parameters as its node process does."""
     out = {}
-    for name, spec in graph.nodes.items():
-        node_log = None if log is None else (lambda level, text, n=name: log(n, level, text))
-        out[name] = stepper_class(spec.stepper)(normalize(name, params[name]), log=node_log)
+    for inst, spec in graph.nodes.items():
+        node_log = None if log is None else (lambda level, text, n=inst: log(n, level, text))
+        out[inst] = stepper_class(spec.stepper)(normalize(spec.name, params[inst]), log=node_log)
     return out
 
 
@@ -64,8 +64,8 @@ class DirectRun:
         self.dt_ns = round(scenario.control_period_s * 1e9)
         self.steppers = build_steppers(self.graph, self.params,
                                        lambda node, level, text: self.echo(f'[{node}] [{level.upper()}] {text}'))
-        self._codecs = {(spec.name, out.key): (topics.resolve(out.topic), Codec(out.msg_type, out.frame_id,
-                                                                              out.child_frame_id), out)
+        self._codecs = {(spec.instance, out.key): (spec.topic(out.topic), Codec(out.msg_type, out.frame_id,
+                                                                                  out.child_frame_id), out)
                         for spec, out in self.graph.outputs()}
         self._clock = Codec(topics.TYPES[topics.CLOCK])
         self._store: dict[str, dict[int, Any]] = {}
@@ -108,7 +108,7 @@ class DirectRun:
         finally:
             if self._writer is not None:
                 for topic in sorted({t for t, _c, _o in self._codecs.values()}):
-                    self._writer.note_publishers(topic, self.graph.publisher_of(topics.relative(topic)))
+                    self._writer.note_publishers(topic, self.graph.publisher_of(topic))
                 self._writer.close()
         wall = time.monotonic() - t0
         if self._writer is not None and self._writer.error:
@@ -116,15 +116,17 @@ class DirectRun:
         return RunResult(self.scenario, final, wall, self.observer.summary(final, wall), bag=self.record)
 
     def _loop(self, t0: float) -> int:
-        owner = self.steppers[TIME_OWNER]
-        order = [(name, self.steppers[name], stage) for name, stage in self.graph.firing_order()]
+        owner_name = self.graph.time_owner
+        owner = self.steppers[owner_name]
+        order = [(name, self.steppers[name], self.graph.nodes[name], stage)
+                 for name, stage in self.graph.firing_order()]
         present = set(self.graph.nodes)
         self._clock_tick(0)
-        self._emit(TIME_OWNER, owner.start(), 0, initial=True)
+        self._emit(owner_name, owner.start(), 0, initial=True)
         k = 0
         while True:
             t_s = k * self.dt_ns / 1e9
-            for name, stepper, stage in order:
+            for name, stepper, spec, stage in order:
                 inputs = {}
                 for inp in stage.inputs:
                     back = k - inp.lag
@@ -132,9 +134,9 @@ class DirectRun:
                         inputs[inp.key] = None
                         continue
                     try:
-                        inputs[inp.key] = self._store[topics.resolve(inp.topic)][back]
+                        inputs[inp.key] = self._store[spec.topic(inp.topic)][back]
                     except KeyError:
-                        raise LaunchError(f'node {inp.source} produced no {topics.resolve(inp.topic)} for step '
+                        raise LaunchError(f'node {inp.source} produced no {spec.topic(inp.topic)} for step '
                                           f'{back} ({name}.{stage.name} needs it)') from None
                 try:
                     outputs = getattr(stepper, stage.name)(k, t_s, inputs)

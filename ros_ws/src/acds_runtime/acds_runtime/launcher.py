@@ -25,7 +25,8 @@ from pathlib import Path
 from typing import IO, Any
 
 import yaml
-from acds_common.graph import TIME_OWNER, Graph, build_graph
+from acds_common import topics
+from acds_common.graph import Graph, build_graph
 from acds_common.lockstep import LAUNCHER_PID_ENV
 from acds_common.parameters import node_parameters
 from acds_common.scenario import Scenario
@@ -140,11 +141,16 @@ class DomainLease:
         self._fh.close()
 
 
+def params_yaml(graph: Graph, params: dict[str, dict[str, Any]]) -> str:
+    """The ROS 2 parameters file of a run: each node's parameters under its fully qualified name."""
+    return yaml.dump({f'{spec.namespace}/{spec.name}': {'ros__parameters': params[inst]}
+                      for inst, spec in graph.nodes.items()}, Dumper=_NoAliasDumper, sort_keys=True)
+
+
 def per_step_topics(graph: Graph) -> set[str]:
     """Absolute names of the graph's per-step topics (what a run's summary can join by step)."""
-    from acds_common import topics
 
-    return {topics.resolve(out.topic) for _spec, out in graph.outputs() if out.every_step}
+    return {spec.topic(out.topic) for spec, out in graph.outputs() if out.every_step}
 
 
 class GraphRun:
@@ -223,8 +229,7 @@ class GraphRun:
         self.graph = build_graph(params)
         self.observer = RunObserver(self.scenario, per_step_topics(self.graph))
         params_file = self.run_dir / 'params.yaml'
-        params_file.write_text(yaml.dump(
-            {f'/acds/{n}': {'ros__parameters': p} for n, p in params.items()}, Dumper=_NoAliasDumper, sort_keys=True))
+        params_file.write_text(params_yaml(self.graph, params))
         record = None
         if self.record is not None:
             from .bag.writer import BagError, BagWriter, RecordingSink, run_info
@@ -241,10 +246,11 @@ class GraphRun:
         self.monitor = RunMonitor(self.lease.domain_id, round(self.scenario.control_period_s * 1e9), self.graph,
                                   on_clock=self._on_clock, record=record, observer=self.observer, keep=self.keep)
         self._t0 = time.monotonic()
-        for name in params:
-            exe = VENV_BIN / name
+        for name, spec in self.graph.nodes.items():
+            exe = VENV_BIN / spec.name
+            namespace = [] if spec.namespace == topics.NAMESPACE else ['-r', f'__ns:={spec.namespace}']
             popen = subprocess.Popen(
-                [str(exe), '--ros-args', '--params-file', str(params_file)],
+                [str(exe), '--ros-args', *namespace, '--params-file', str(params_file)],
                 stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                 text=True, env=env, start_new_session=True, pass_fds=(self.lease.fd,),
                 preexec_fn=_die_with_parent)
@@ -267,7 +273,8 @@ class GraphRun:
 
     def wait(self) -> RunResult:
         """Wait until the time owner completes; raise LaunchError naming any node that dies first."""
-        owner = self.processes[TIME_OWNER]
+        assert self.graph is not None
+        owner = self.processes[self.graph.time_owner]
         while True:
             self._check_health()
             for proc in self.processes.values():

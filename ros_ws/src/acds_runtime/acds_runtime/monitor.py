@@ -27,7 +27,7 @@ from typing import Any
 import rclpy
 from acds_common import topics
 from acds_common.cdr import Codec, stamp_ns
-from acds_common.graph import MONITOR_ACK_EVERY, MONITOR_NAME, TIME_OWNER, Graph
+from acds_common.graph import MONITOR_ACK_EVERY, MONITOR_NAME, Graph, instance_name
 from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS, UNNAMED, UNNAMED_GRACE_S, message_class
 from rclpy.context import Context
 from rclpy.node import Node
@@ -71,18 +71,18 @@ class RunMonitor:
         self._lock = threading.Lock()
         self.clock_step = -1
         self.topics: dict[str, TopicState] = {}
-        self._clock = TopicState(topics.CLOCK, topics.TYPES[topics.CLOCK], {TIME_OWNER}, True, True)
+        self._clock = TopicState(topics.CLOCK, topics.TYPES[topics.CLOCK], {graph.time_owner}, True, True)
         for spec, out in graph.outputs():
-            name = topics.resolve(out.topic)
+            name = spec.topic(out.topic)
             state = self.topics.get(name)
             if state is None:
                 state = self.topics[name] = TopicState(name, out.msg_type, set(), out.every_step,
                                                        Codec(out.msg_type).stamped)
-            state.publishers.add(spec.name)
+            state.publishers.add(spec.instance)
         #: Called with (absolute topic, raw CDR) for every message, before the /clock ack (a bag writer).
         self.recorder = record(self.node) if record is not None else None
         for name, state in self.topics.items():
-            qos = COMMAND_QOS if name == topics.resolve(topics.GROUND_ACK) else LOCKSTEP_QOS
+            qos = COMMAND_QOS if name.endswith('/' + topics.GROUND_ACK) else LOCKSTEP_QOS
             self.node.create_subscription(message_class(state.msg_type), name,
                                           lambda data, t=name: self._on_raw(t, data), qos, raw=True)
         self.node.create_subscription(message_class(topics.TYPES[topics.CLOCK]), topics.CLOCK, self._on_clock_raw,
@@ -128,7 +128,8 @@ class RunMonitor:
     def _check_publishers(self, now: float) -> None:
         """Every graph topic may only have the publishers the graph declares for it."""
         for name, st in self.topics.items():
-            names = [i.node_name for i in self.node.get_publishers_info_by_topic(name)]
+            names = [UNNAMED if i.node_name == UNNAMED else instance_name(i.node_namespace, i.node_name)
+                     for i in self.node.get_publishers_info_by_topic(name)]
             if UNNAMED in names:
                 if now - self._unnamed_since.setdefault(name, now) < UNNAMED_GRACE_S:
                     continue
@@ -234,12 +235,12 @@ class RunMonitor:
         last = self.last_steps()
         candidates = []
         for name, spec in self.graph.nodes.items():
-            outs = [topics.resolve(o.topic) for o in spec.outputs if o.every_step]
+            outs = [spec.topic(o.topic) for o in spec.outputs if o.every_step]
             if not outs:
                 continue
             offset = max(o.stamp_offset for o in spec.outputs if o.every_step)
             nxt = min(last.get(t, -1) for t in outs) + 1 - offset
-            inputs = [(topics.resolve(i.topic), i.lag) for s in spec.stages for i in s.inputs
+            inputs = [(spec.topic(i.topic), i.lag) for s in spec.stages for i in s.inputs
                       if i.source in self.graph.nodes]
             if all(last.get(t, -1) >= nxt - lag for t, lag in inputs):
                 candidates.append((nxt, name))
