@@ -15,7 +15,7 @@ import pytest
 from acds_cli.bag.reader import open_bag, unfinished
 from acds_cli.bag.recover import recover_bag
 from acds_common import topics
-from acds_runtime.bag.writer import ABS_TYPES, cdr_stamp_ns, stamped
+from acds_runtime.bag.writer import cdr_stamp_ns, stamped
 from acds_runtime.testing import wait_for_messages
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -87,7 +87,7 @@ def _check_prefix(bag_path: Path, graph, at_least: int) -> int:
     dt = bag.control_period_ns
     assert dt == 500_000_000
     # the lockstep graph went on; wait until the monitor holds, on every topic, the bag's last step
-    last = {t: s.last_ns for t, s in bag.stats().items() if stamped(ABS_TYPES[t]) and not t.endswith('/diagnostics')}
+    last = {t: s.last_ns for t, s in bag.stats().items() if stamped(topics.type_of(t)) and not t.endswith('/diagnostics')}
 
     def caught_up() -> bool:
         got = graph.monitor.snapshot()

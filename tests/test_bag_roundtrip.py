@@ -9,6 +9,7 @@ import yaml
 from acds_cli.bag.info import bag_info
 from acds_cli.bag.reader import open_bag
 from acds_common import topics
+from acds_common.graph import node_spec
 from acds_common.scenario import load_scenario
 from acds_runtime.bag import writer as bag_writer
 from acds_runtime.launcher import GraphRun, LaunchError
@@ -21,7 +22,8 @@ def _stamp_ns(stamp) -> int:
 
 STEPS = 40
 TS = get_typestore(Stores.ROS2_JAZZY)
-PER_STEP = [topics.CLOCK, *(topics.resolve(t) for t in (*topics.TRUTH, topics.WHEEL_MOMENTUM, topics.WHEEL_TORQUE))]
+TRUTH = [topics.resolve(out.topic) for out in node_spec('rigid_body', {}).outputs]
+PER_STEP = [topics.CLOCK, *TRUTH, *(topics.resolve(t) for t in (topics.WHEEL_MOMENTUM, topics.WHEEL_TORQUE))]
 
 
 def _record(launch_graph, tmp_path, storage):
@@ -46,7 +48,7 @@ def _check_against_monitor(got, monitor):
         assert len(got[topic]) == STEPS + 1, f'{topic}: one message per step 0..{STEPS}'
     for topic, published in monitor.items():
         assert [d for _, d in got[topic]] == published, f'{topic}: recorded bytes differ from what was published'
-        if bag_writer.stamped(bag_writer.ABS_TYPES[topic]):
+        if bag_writer.stamped(topics.type_of(topic)):
             assert [t for t, _ in got[topic]] == [bag_writer.cdr_stamp_ns(d) for d in published], \
                 f'{topic}: timestamps are not the sim-time stamps'
     assert [t for t, _ in got[topics.CLOCK]][:3] == [0, 500_000_000, 1_000_000_000]

@@ -107,8 +107,8 @@ def _print_summary(summary: dict) -> None:
     print(f'\n== {summary["scenario"]}: {summary["steps"]} steps, {summary["sim_minutes"]:.1f} min sim '
           f'in {summary["wall_seconds"]:.1f} s wall ==')
     for key, value in summary.items():
-        if key in ('scenario', 'steps', 'sim_minutes', 'wall_seconds'):
-            continue
+        if key in ('scenario', 'steps', 'sim_minutes', 'wall_seconds') or value is None or isinstance(value, dict):
+            continue  # not applicable to this run (null), or a table its summary module prints
         if isinstance(value, float):
             value = f'{value:.6g}'
         elif isinstance(value, list) and value and isinstance(value[0], dict):

@@ -18,7 +18,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'acds_controller = acds_controller.controller_node:main'
+            'acds_controller = acds_controller.controller_node:main',
+            'formation_controller = acds_controller.formation_controller_node:main',
         ],
     },
 )

@@ -19,7 +19,8 @@ setup(
     entry_points={
         'console_scripts': [
             'rigid_body = dynamics.rigid_body_node:main',
-            'reaction_wheels = dynamics.reaction_wheels_node:main'
+            'reaction_wheels = dynamics.reaction_wheels_node:main',
+            'formation_dynamics = dynamics.formation_node:main',
         ],
     },
 )

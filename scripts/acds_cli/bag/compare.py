@@ -232,7 +232,7 @@ def run_compare(bag_path: Path | str, node: str, *, tolerance: float = 0.0, scen
     if not [t for t in outputs if t != DIAGNOSTICS]:
         raise BagError(f'bag {bag.path}: no recorded outputs of node {node}')
     present = set(params['graph_nodes'])
-    inputs = {topics.resolve(i.topic): Codec(topics.TYPES[i.topic]) for st in spec.stages for i in st.inputs
+    inputs = {topics.resolve(i.topic): Codec(topics.type_of(i.topic)) for st in spec.stages for i in st.inputs
               if i.source in present}
     lacking = sorted(t for t in inputs if not bag.has(t))
     if lacking:

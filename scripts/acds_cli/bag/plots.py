@@ -5,7 +5,8 @@ frame), Figs. 4-15 … 4-17 (roll/pitch/yaw responses: body rate deg/s, wheel
 momentum ft-lb-sec, magnetic moment A·m²), Fig. 4-18 / 4-43 / 4-51 (magnetic
 moments and the angle between the Earth field and the momentum vector),
 plus the mode timeline. SSS (seed 001): spin rate (rpm) and the magnetic
-torque about the spin axis (dyne-cm). A figure whose topics are absent is skipped.
+torque about the spin axis (dyne-cm). Formations (seed 004): ``formation_plots``.
+A figure whose topics are absent is skipped.
 Time axes are sim minutes. The series are gathered in one streaming pass over
 the bag (only the plotted fields are kept), and the output folder is checked
 before the bag is read.
@@ -23,6 +24,7 @@ import yaml
 from acds_common import topics, units
 from acds_runtime.bag.writer import check_out_dir, typestore
 
+from . import formation_plots
 from .reader import Bag, open_bag
 
 AXES = (('x', 'roll'), ('y', 'pitch'), ('z', 'yaw'))
@@ -108,6 +110,8 @@ def make_plots(bag_path: Path | str, out_dir: Path | str | None = None) -> list[
         vectors[topics.GYRO] = lambda m: _v3(m.angular_velocity)
     if name.startswith('sss'):
         vectors[topics.TRUTH_TORQUE_MAG] = lambda m: _v3(m.vector)
+    formation = formation_plots.vehicles(bag)
+    vectors.update(formation_plots.formation_vectors(formation))
     data = _gather(bag, vectors, {topics.MODE: lambda m: m.status[0].message if m.status else ''})
     out.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
@@ -208,4 +212,7 @@ def make_plots(bag_path: Path | str, out_dir: Path | str | None = None) -> list[
             ax.set_ylabel(ylabel)
             ax.grid(alpha=0.3)
         save(fig, 'sss_spin_rate_torque', 'SSS spin rate and magnetic spin torque')
+
+    if formation:
+        formation_plots.plot_formation(formation, lambda topic: _series(data, topic), plt, save)
     return written

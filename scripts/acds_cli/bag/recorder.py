@@ -52,6 +52,14 @@ def run_folder_info(run_dir: Path) -> tuple[int | None, dict[str, str]]:
     return domain, info
 
 
+def _known(topic: str) -> bool:
+    try:
+        topics.type_of(topic)
+    except KeyError:
+        return False
+    return True
+
+
 def record(path: Path | str, *, storage: str = 'mcap', select: list[str] | None = None,
            domain_id: int | None = None, run_dir: Path | None = None, stop: threading.Event | None = None,
            log: Any = None) -> BagWriter:
@@ -66,10 +74,10 @@ def record(path: Path | str, *, storage: str = 'mcap', select: list[str] | None 
     if domain_id is None:
         raise BagError('record: which graph? give --domain N or --run-dir RUN_FOLDER')
     wanted = [topics.resolve(t) for t in select] if select else [topics.resolve(t) for t in topics.TYPES]
-    abs_types = {topics.resolve(t): ty for t, ty in topics.TYPES.items()}
-    unknown = [t for t in wanted if t not in abs_types]
+    unknown = [t for t in wanted if not _known(t)]
     if unknown:
-        raise BagError(f'record: unknown topic {", ".join(unknown)} (known: {", ".join(sorted(abs_types))})')
+        raise BagError(f'record: unknown topic {", ".join(unknown)} (known: {", ".join(sorted(topics.TYPES))}, '
+                       'or one of them under a formation vehicle\'s namespace)')
     stop = stop or threading.Event()
     ros_env(domain_id)
     context = Context()
@@ -82,7 +90,7 @@ def record(path: Path | str, *, storage: str = 'mcap', select: list[str] | None 
         if topic in SKIP:
             continue
         qos = COMMAND_QOS if topic in COMMAND_TOPICS else LOCKSTEP_QOS
-        node.create_subscription(message_class(abs_types[topic]), topic, lambda d, t=topic: sink(t, d), qos, raw=True)
+        node.create_subscription(message_class(topics.type_of(topic)), topic, lambda d, t=topic: sink(t, d), qos, raw=True)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     log(f'[record] recording domain {domain_id} into {path} ({storage}); stop with Ctrl-C or SIGTERM')

@@ -24,6 +24,7 @@ Value of each message type (SI, the frame names of :mod:`acds_common.frames`):
 * ``sensor_msgs/msg/Imu``: ``((wx, wy, wz), covariance_9)``: rate gyros only (orientation and
   linear acceleration marked "not provided", covariance[0] = −1, REP-145).
 * ``nav_msgs/msg/Odometry``: :class:`OdometryValue` (pose/twist covariances zero: truth).
+* ``geometry_msgs/msg/WrenchStamped``: ``((fx, fy, fz), (tx, ty, tz))`` in N and N·m.
 * ``diagnostic_msgs/msg/DiagnosticArray``: a tuple of :class:`Status`.
 """
 
@@ -193,6 +194,24 @@ def _magnetic_field(c: Codec) -> tuple[Any, Any]:
     return encode, decode
 
 
+_V6 = struct.Struct('<6d')
+
+
+def _wrench_stamped(c: Codec) -> tuple[Any, Any]:
+    head = c._head + _pad(c._body_offset, 8)
+
+    def encode(t_ns: int, value: Any) -> bytes:
+        force, torque = value
+        return ENCAPSULATION + _STAMP.pack(*divmod(t_ns, 1_000_000_000)) + head + _V6.pack(*force, *torque)
+
+    def decode(data: bytes) -> tuple[int, Any]:
+        r = _Reader(data, 12)
+        r.string()
+        v = r.doubles(_V6)
+        return stamp_ns(data), (v[:3], v[3:])
+    return encode, decode
+
+
 _QUAT = struct.Struct('<4d')
 _IDENTITY_ORIENTATION = _QUAT.pack(0.0, 0.0, 0.0, 1.0)
 
@@ -270,6 +289,7 @@ _TYPES = {
     'rosgraph_msgs/msg/Clock': _clock,
     'std_msgs/msg/String': _text,
     'geometry_msgs/msg/Vector3Stamped': _vector3_stamped,
+    'geometry_msgs/msg/WrenchStamped': _wrench_stamped,
     'sensor_msgs/msg/MagneticField': _magnetic_field,
     'sensor_msgs/msg/Imu': _imu,
     'nav_msgs/msg/Odometry': _odometry,

@@ -332,3 +332,14 @@ def sun_frame_dcm(sun_eci_unit: np.ndarray, ecliptic_normal_eci: np.ndarray) -> 
     y = y / norm_y
     x = np.cross(y, z)
     return np.vstack([x, y, z])
+
+
+def hill_frame(orbit: Orbit, t_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(R_ECI←Hill, r, v) of the reference orbit at ``t_s``: the Hill frame's axes as columns — radial out,
+    along track, orbit normal — and the reference position (m) and velocity (m/s) in ECI (seed 004 slide
+    63, Clohessy–Wiltshire)."""
+    r, v = orbit.position_velocity_eci(t_s)
+    x = r / np.linalg.norm(r)
+    z = np.cross(r, v)
+    z = z / np.linalg.norm(z)
+    return np.stack([x, np.cross(z, x), z], axis=1), r, v

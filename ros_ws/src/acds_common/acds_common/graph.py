@@ -144,10 +144,14 @@ def _rigid_body(_params: dict[str, Any]) -> NodeSpec:
         time_owner=True)
 
 
-def _reaction_wheels(_params: dict[str, Any]) -> NodeSpec:
+def _reaction_wheels(params: dict[str, Any]) -> NodeSpec:
+    if _param(params, 'wheels_drive', 'volts') == 'torque':  # torque-commanded wheels (a formation vehicle)
+        command = Input('torque', topics.WHEEL_TORQUE_COMMAND, 'formation_controller')
+    else:
+        command = Input('volts', topics.WHEEL_VOLTS, 'acds_controller')
     return NodeSpec(
         'reaction_wheels', 'dynamics', 'dynamics.reaction_wheels_step:ReactionWheelsStep',
-        (Stage('drive', (Input('volts', topics.WHEEL_VOLTS, 'acds_controller'),)),),
+        (Stage('drive', (command,)),),
         (Output('momentum', topics.WHEEL_MOMENTUM, 'body'),
          Output('torque', topics.WHEEL_TORQUE, 'body'),
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
@@ -218,6 +222,48 @@ def _ascs_mode_manager(params: dict[str, Any]) -> NodeSpec:
                     (stage,), outputs, ground_commands=True)
 
 
+def _formation_dynamics(params: dict[str, Any]) -> NodeSpec:
+    """The formation's time owner: every vehicle's translation and attitude (spec §10; seed 004).
+
+    Step k takes each vehicle's achieved dipole and wheel momentum/rate of step k (from that vehicle's
+    em_driver and reaction_wheels, in its namespace) and returns each vehicle's truth of step k + 1
+    under ``/acds/<vehicle>/``: the single-vehicle topic names, so each vehicle's nodes read them as a
+    single vehicle's nodes would.
+    """
+    truth = dict(stamp_offset=1)
+    inputs: list[Input] = []
+    outputs: list[Output] = []
+    for v in _param(params, 'formation_vehicles', []):
+        inputs += [Input(f'{v}/dipole', f'{v}/{topics.DIPOLE_AVG}', f'{v}/em_driver'),
+                   Input(f'{v}/wheel_h', f'{v}/{topics.WHEEL_MOMENTUM}', f'{v}/reaction_wheels'),
+                   Input(f'{v}/wheel_hdot', f'{v}/{topics.WHEEL_TORQUE}', f'{v}/reaction_wheels')]
+        outputs += [Output(f'{v}/odometry', f'{v}/{topics.TRUTH_ODOMETRY}', 'formation', f'{v}_body', **truth),
+                    Output(f'{v}/gyro', f'{v}/{topics.GYRO}', f'{v}_body', **truth),
+                    Output(f'{v}/b_body', f'{v}/{topics.TRUTH_B_BODY}', f'{v}_body', **truth),
+                    Output(f'{v}/wrench', f'{v}/{topics.TRUTH_WRENCH}', f'{v}_body', **truth)]
+    return NodeSpec('formation_dynamics', 'dynamics', 'dynamics.formation_step:FormationDynamicsStep',
+                    (Stage('integrate', tuple(inputs)),), tuple(outputs), time_owner=True)
+
+
+def _formation_controller(params: dict[str, Any]) -> NodeSpec:
+    """One vehicle's formation controller: every vehicle's truth of step k and wheel momentum of step k − 1
+    (the RF link of seed 004 slide 70); it returns its own vehicle's dipole and wheel torque commands."""
+    inputs: list[Input] = []
+    for w in _param(params, 'formation_vehicles', []):
+        ns = f'{topics.NAMESPACE}/{w}'
+        inputs += [Input(f'{w}/odometry', f'{ns}/{topics.TRUTH_ODOMETRY}', 'formation_dynamics'),
+                   Input(f'{w}/gyro', f'{ns}/{topics.GYRO}', 'formation_dynamics'),
+                   Input(f'{w}/b_body', f'{ns}/{topics.TRUTH_B_BODY}', 'formation_dynamics'),
+                   Input(f'{w}/wheel_h', f'{ns}/{topics.WHEEL_MOMENTUM}', f'{w}/reaction_wheels', lag=1),
+                   Input(f'{w}/wheel_hdot', f'{ns}/{topics.WHEEL_TORQUE}', f'{w}/reaction_wheels', lag=1)]
+    return NodeSpec('formation_controller', 'acds_controller',
+                    'acds_controller.formation_controller_step:FormationControllerStep',
+                    (Stage('control', tuple(inputs)),),
+                    (Output('moment', topics.MOMENT_COMMAND, 'body'),
+                     Output('wheel_torque', topics.WHEEL_TORQUE_COMMAND, 'body'),
+                     Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
+
+
 #: Every node the graph knows, by name: params → its declaration.
 NODES: dict[str, Callable[[dict[str, Any]], NodeSpec]] = {
     'rigid_body': _rigid_body,
@@ -226,6 +272,8 @@ NODES: dict[str, Callable[[dict[str, Any]], NodeSpec]] = {
     'em_driver': _em_driver,
     'acds_controller': _acds_controller,
     'ascs_mode_manager': _ascs_mode_manager,
+    'formation_dynamics': _formation_dynamics,
+    'formation_controller': _formation_controller,
 }
 
 
@@ -283,6 +331,11 @@ class Graph:
         for spec in self.nodes.values():
             for out in spec.outputs:
                 yield spec, out
+
+    def truth_topics(self) -> list[str]:
+        """Absolute names of the truth: the time owner's per-step outputs (hashed into a run's truth digest)."""
+        spec = self.nodes[self.time_owner]
+        return sorted(spec.topic(out.topic) for out in spec.outputs if out.every_step)
 
     def publisher_of(self, topic: str) -> list[str]:
         """The instances declared to publish ``topic`` (absolute name)."""

@@ -46,7 +46,14 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from acds_common import topics
 from acds_common.cdr import Codec, stamp_ns
 from acds_common.graph import MONITOR_LAG, MONITOR_NAME, Input, NodeSpec, Output, instance_name, node_spec
-from acds_common.parameters import ConfigError, ParamSpec, node_param_specs, normalize
+from acds_common.parameters import (
+    FORMATION_NODES,
+    FORMATION_VEHICLES,
+    ConfigError,
+    ParamSpec,
+    node_param_specs,
+    normalize,
+)
 from acds_common.stepper import StepError, Stepper
 
 #: QoS of every lockstep data topic: nothing is dropped between matched endpoints, late joiners
@@ -144,7 +151,13 @@ class LockstepNode(Node):
     def __init__(self, stepper_cls: type[Stepper]) -> None:
         name = stepper_cls.node
         super().__init__(name, namespace=topics.NAMESPACE)
-        self.params = normalize(name, self._declare_parameters(node_param_specs(name)))
+        vehicles: list[str] = []
+        if name in FORMATION_NODES:  # the formation's vehicles decide which parameters there are
+            vehicles = list(self.declare_parameter(FORMATION_VEHICLES.name, Parameter.Type.STRING_ARRAY,
+                                                   descriptor(FORMATION_VEHICLES)).value or [])
+        self.params = normalize(name, self._declare_parameters(
+            [s for s in node_param_specs(name, vehicles) if s.name != FORMATION_VEHICLES.name],
+            {FORMATION_VEHICLES.name: vehicles} if name in FORMATION_NODES else {}))
         self.spec: NodeSpec = node_spec(name, self.params)
         if self.get_namespace() != self.spec.namespace:
             raise ConfigError(f'{name}: runs in namespace {self.get_namespace()} but its parameter vehicle='
@@ -208,9 +221,12 @@ class LockstepNode(Node):
         self.create_timer(0.1, self._watchdog, clock=Clock(clock_type=ClockType.STEADY_TIME))
 
     # ---- declarations -------------------------------------------------------------------------
-    def _declare_parameters(self, specs: list[ParamSpec]) -> dict[str, Any]:
-        """Declare every parameter (typed, described, ranged, read-only); {name: value or None if not given}."""
-        given: dict[str, Any] = {}
+    def _declare_parameters(self, specs: list[ParamSpec], declared: dict[str, Any]) -> dict[str, Any]:
+        """Declare every parameter (typed, described, ranged, read-only); {name: value or None if not given}.
+
+        ``declared``: parameters already declared, with their values (merged into the result).
+        """
+        given: dict[str, Any] = dict(declared)
         for spec in specs:
             desc = descriptor(spec)
             if spec.required or spec.default == []:
@@ -219,14 +235,14 @@ class LockstepNode(Node):
                 param = self.declare_parameter(spec.name, spec.default, desc)
             value = param.value
             given[spec.name] = list(value) if isinstance(value, (list, tuple)) or hasattr(value, 'tolist') else value
-        unknown = sorted(set(self._parameter_overrides) - {s.name for s in specs} - {'use_sim_time'})
+        unknown = sorted(set(self._parameter_overrides) - {s.name for s in specs} - set(declared) - {'use_sim_time'})
         if unknown:
             raise ConfigError(f'{self.get_name()}: unknown parameter(s) {", ".join(unknown)} '
                               f'(declared: {", ".join(sorted(s.name for s in specs))})')
         return given
 
     def _raw_sub(self, topic: str, callback: Callable[[bytes], None]) -> None:
-        self.create_subscription(message_class(topics.TYPES[topic]), topic, callback, LOCKSTEP_QOS, raw=True)
+        self.create_subscription(message_class(topics.type_of(topic)), topic, callback, LOCKSTEP_QOS, raw=True)
 
     def _add_input(self, topic: str, source: str) -> None:
         if topic in self._inputs:

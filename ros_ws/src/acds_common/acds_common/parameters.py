@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from acds_common.graph import MONITOR_NAME, TIME_OWNERS
-from acds_common.scenario import MAX_STEPS, NODE_SECTIONS, REQUIRED, SCHEMA, Scenario
+from acds_common.scenario import FORMATION_VEHICLE_SECTIONS, MAX_STEPS, NODE_SECTIONS, REQUIRED, SCHEMA, Scenario
 
 
 class ConfigError(ValueError):
@@ -63,16 +63,35 @@ TIME_OWNER_ONLY: tuple[ParamSpec, ...] = (
 )
 
 
-def node_param_specs(node: str) -> list[ParamSpec]:
-    """Every parameter of ``node``: lockstep ones, then its scenario sections' fields."""
+#: Nodes that act on the whole formation and so take every vehicle's sections (``<vehicle>.<parameter>``).
+FORMATION_NODES = ('formation_dynamics', 'formation_controller')
+#: The parameter naming a formation's vehicles (declared first: it decides the rest).
+FORMATION_VEHICLES = ParamSpec('formation_vehicles', 'strs', REQUIRED, 'names of the formation\'s vehicles, in '
+                               'order (each one\'s sections are the parameters <vehicle>.<name>)')
+
+
+def _section_specs(section: str, prefix: str = '') -> list[ParamSpec]:
+    out = []
+    for name, f in SCHEMA[section].items():
+        bounded = f.kind not in ('str', 'bool', 'strs')
+        out.append(ParamSpec(
+            prefix + f.param_name(section, name), f.kind, f.default, f.doc, f.si,
+            f.lo if bounded else None, f.hi if bounded else None,
+            f.choices if f.kind in ('str', 'strs') else (), f.length))
+    return out
+
+
+def node_param_specs(node: str, vehicles: list[str] | tuple[str, ...] = ()) -> list[ParamSpec]:
+    """Every parameter of ``node``: lockstep ones, then its scenario sections' fields; a formation-wide
+    node (:data:`FORMATION_NODES`) also has ``formation_vehicles`` and each vehicle's sections."""
     specs = list(LOCKSTEP) + (list(TIME_OWNER_ONLY) if node in TIME_OWNERS else [])
     for section in NODE_SECTIONS[node]:
-        for name, f in SCHEMA[section].items():
-            bounded = f.kind not in ('str', 'bool', 'strs')
-            specs.append(ParamSpec(
-                f.param_name(section, name), f.kind, f.default, f.doc, f.si,
-                f.lo if bounded else None, f.hi if bounded else None,
-                f.choices if f.kind in ('str', 'strs') else (), f.length))
+        specs.extend(_section_specs(section))
+    if node in FORMATION_NODES:
+        specs.append(FORMATION_VEHICLES)
+        for v in vehicles:
+            for section in FORMATION_VEHICLE_SECTIONS:
+                specs.extend(_section_specs(section, f'{v}.'))
     return specs
 
 
@@ -121,7 +140,7 @@ def normalize(node: str, given: dict[str, Any]) -> dict[str, Any]:
     :func:`~acds_common.scenario.Scenario.node_parameters`); a ROS host passes ``None`` for a
     parameter it did not receive.
     """
-    specs = node_param_specs(node)
+    specs = node_param_specs(node, given.get('formation_vehicles') or ())
     known = {s.name for s in specs}
     unknown = sorted(set(given) - known - {'use_sim_time'})
     if unknown:
@@ -138,30 +157,40 @@ def normalize(node: str, given: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def section(params: dict[str, Any], name: str) -> dict[str, Any]:
-    """{field: value} of scenario section ``name`` from normalized node parameters (SI)."""
-    return {field: params[f.param_name(name, field)] for field, f in SCHEMA[name].items()}
+def section(params: dict[str, Any], name: str, vehicle: str = '') -> dict[str, Any]:
+    """{field: value} of scenario section ``name`` from normalized node parameters (SI); ``vehicle``: that
+    formation vehicle's copy, which the formation-wide nodes receive as ``<vehicle>.<parameter>``."""
+    prefix = f'{vehicle}.' if vehicle else ''
+    return {field: params[prefix + f.param_name(name, field)] for field, f in SCHEMA[name].items()}
 
 
 def node_parameters(scenario: Scenario, steps: int, rtf: float = 0.0,
                     overrides: dict[str, dict[str, Any]] | None = None) -> dict[str, dict[str, Any]]:
     """Every node's parameters for a run of ``steps`` steps: the lockstep ones plus its scenario sections.
 
-    What the launcher writes to ``params.yaml`` and the direct engine passes its steppers. Empty lists
-    are left out (rcl cannot type an empty list: the node uses its default).
+    What the launcher writes to ``params.yaml`` and the direct engine passes its steppers, by instance:
+    ``<node>`` for the nodes of the whole graph, ``<vehicle>/<node>`` for a formation vehicle's (which get
+    parameter ``vehicle``). Empty lists are left out (rcl cannot type an empty list: the node's default).
     """
-    nodes = list(scenario.get('', 'nodes'))
+    instances: list[tuple[str, str, str]] = [(n, n, '') for n in scenario.get('', 'nodes')]
+    vehicles = [v['name'] for v in scenario.values.get('vehicles', [])]
+    for v in scenario.values.get('vehicles', []):
+        instances += [(f'{v["name"]}/{n}', n, v['name']) for n in v['nodes']]
     common = {
         'control_period_s': scenario.control_period_s,
-        'graph_nodes': [*nodes, MONITOR_NAME],
+        'graph_nodes': [inst for inst, _n, _v in instances] + [MONITOR_NAME],
         'input_timeout_s': scenario.get('', 'input_timeout'),
         'seed': scenario.get('', 'seed'),
     }
     out: dict[str, dict[str, Any]] = {}
-    for node in nodes:
-        params = {**common, **scenario.node_parameters(node)}
+    for inst, node, vehicle in instances:
+        params = {**common, **scenario.node_parameters(node, vehicle)}
+        if vehicle:
+            params['vehicle'] = vehicle
+        if node in FORMATION_NODES:
+            params['formation_vehicles'] = vehicles
         if node in TIME_OWNERS:
             params.update(total_steps=steps, real_time_factor=rtf)
-        params.update((overrides or {}).get(node, {}))
-        out[node] = {k: v for k, v in params.items() if v != []}  # rcl cannot type an empty list: node default
+        params.update((overrides or {}).get(inst, {}))
+        out[inst] = {k: v for k, v in params.items() if v != []}  # rcl cannot type an empty list: node default
     return out

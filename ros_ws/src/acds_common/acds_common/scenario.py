@@ -103,9 +103,10 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'control_period': _q('lockstep control period Δt (the DPA cycle)', 0.5, 's', TIME, lo=1e-3, hi=60.0),
         'duration': _q('run length (or duration_orbits)', REQUIRED, 's',
                        {**TIME, 'orbits': float('nan')}, lo=0.0, hi=30 * 86400.0),
-        'nodes': Field('strs', 'nodes of the graph', ['rigid_body', 'reaction_wheels'],
+        'nodes': Field('strs', 'nodes of the graph (a formation: its time owner formation_dynamics; each '
+                       "vehicle's nodes are listed under vehicles)", ['rigid_body', 'reaction_wheels'],
                        choices=('rigid_body', 'reaction_wheels', 'magnetometer_sim', 'em_driver',
-                                'acds_controller', 'ascs_mode_manager'), unique=True),
+                                'acds_controller', 'ascs_mode_manager', 'formation_dynamics'), unique=True),
         'input_timeout': _q('wall time a node may wait for an input', 30.0, 's', TIME, lo=0.5, hi=3600.0),
     },
     'spacecraft': {
@@ -151,8 +152,17 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'substeps': Field('int', 'RK4 substeps per control period', 10, lo=1, hi=10000),
     },
     'wheels': {
-        'layout': Field('str', 'three_orthogonal or four_cant20 (spec §4)', 'three_orthogonal',
+        'drive': Field('str', 'volts: square-law drive from the controller\'s volts (HEAO, spec §4); torque: '
+                       'torque-commanded wheels (EMFFORCE, seed 004 slide 74) along torque_axes', 'volts',
+                       choices=('volts', 'torque')),
+        'layout': Field('str', 'volts drive: three_orthogonal or four_cant20 (spec §4)', 'three_orthogonal',
                         choices=('three_orthogonal', 'four_cant20')),
+        'torque_axes': Field('floats', 'torque drive: unit wheel axes, body axes, one (x, y, z) triple per wheel '
+                             '(EMFFORCE: one wheel about z)', [0.0, 0.0, 1.0], lo=-1.0, hi=1.0),
+        'max_torque': _q('torque drive: torque limit of each wheel (EMFFORCE: 0.1 N·m)', 0.1, 'nm', {'nm': 1.0},
+                         lo=1e-6, hi=1e4),
+        'capacity': _q('torque drive: momentum capacity of each wheel (0: not given, unlimited)', 0.0, 'nms',
+                       MOMENTUM, lo=0.0, hi=1e6),
         'failed_wheel': Field('int', 'index of a failed wheel of the 4-wheel cluster, −1 for none', -1,
                               lo=-1, hi=3),
         'initial_momentum': _q('initial wheel momentum, body axes', [0.0, 0.0, 0.0], 'nms', MOMENTUM,
@@ -184,11 +194,12 @@ SCHEMA: dict[str, dict[str, Field]] = {
     },
     'em_driver': {
         'command_source': Field('str', 'node whose moment commands drive the coils', 'acds_controller',
-                                choices=('acds_controller', 'ascs_mode_manager')),
-        'drive_types': Field('strs', 'per-axis drive: bridge_switch (HEAO) or constant_level (SSS)',
-                             ['bridge_switch'] * 3, choices=('bridge_switch', 'constant_level'), length=3),
+                                choices=('acds_controller', 'ascs_mode_manager', 'formation_controller')),
+        'drive_types': Field('strs', 'per-axis drive: bridge_switch (HEAO) or constant_level (SSS), or none '
+                             '(no coil on that axis)',
+                             ['bridge_switch'] * 3, choices=('bridge_switch', 'constant_level', 'none'), length=3),
         'coil_resistance_ohm': Field('floats', 'per-axis winding resistance (Table 4-3: 30.3 Ω)', [30.3] * 3,
-                                     length=3, lo=0.1, hi=1e4),
+                                     length=3, lo=1e-3, hi=1e4),
         'coil_inductance_h': Field('floats', 'per-axis winding inductance (Table 4-3: 20.3 H)', [20.3] * 3,
                                    length=3, lo=1e-6, hi=1e3),
         'coil_moment_per_amp_am2': Field('floats', 'per-axis dipole per ampere (Table 4-3: 2062/0.727)',
@@ -267,6 +278,56 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'bus_v': Field('float', 'main bus feeding the coils (seed 001: 28 V); sets the commanded dipoles',
                        28.0, lo=1.0, hi=100.0),
     },
+    # ---- electromagnetic formation flight (spec §10; seed 004) ----------------------------------
+    'formation': {
+        'frame': Field('str', 'planar: the EMFFORCE air-bearing testbed (x, y, yaw); free_space: 3-D, no field; '
+                       'hill: relative motion about a circular LEO orbit (Clohessy–Wiltshire)', 'planar',
+                       choices=('planar', 'free_space', 'hill')),
+        'em_model': Field('str', 'inter-vehicle wrench: far_field (exact dipole–dipole) or near_field (Biot–Savart '
+                          'of the coils)', 'far_field', choices=('far_field', 'near_field')),
+        'segments': Field('int', 'near field: straight segments per coil loop', 64, lo=3, hi=4096),
+        'earth_field': Field('bool', 'hill: the Earth field\'s torque and force on every dipole (orbit, earth '
+                             'sections)', True),
+        'law': Field('str', 'hold: keep the second vehicle at relative_position from the first; spin_up: spin '
+                     'the pair about the frame z axis', 'hold', choices=('hold', 'spin_up')),
+        'relative_position': _q('hold: the second vehicle\'s position relative to the first, formation frame',
+                                [2.5, 0.0, 0.0], 'm', LENGTH, length=3, lo=-1e5, hi=1e5),
+        'hold_natural_frequency': _q('hold: PD natural frequency', 0.1, 'rad_s', {'rad_s': 1.0}, lo=1e-4, hi=10.0),
+        'hold_damping_ratio': Field('float', 'hold: PD damping ratio', 0.9, lo=0.05, hi=5.0),
+        'spin_rate': _q('spin_up: commanded rate of the array about the frame z axis', 0.05, 'rad_s', RATE,
+                        lo=-1.0, hi=1.0),
+        'spin_ramp': _q('spin_up: rate reference ramp', 1e-3, 'rad_s2', {'rad_s2': 1.0, 'deg_s2': _DEG},
+                        lo=1e-7, hi=1.0),
+        'spin_separation': _q('spin_up: separation held while spinning', 2.5, 'm', LENGTH, lo=0.01, hi=1e5),
+        'spin_start': _q('spin_up: when the rate reference starts', 0.0, 's', TIME, lo=0.0, hi=1e7),
+        'radial_natural_frequency': _q('spin_up: radial PD natural frequency', 0.2, 'rad_s', {'rad_s': 1.0},
+                                       lo=1e-4, hi=10.0),
+        'radial_damping_ratio': Field('float', 'spin_up: radial PD damping ratio', 0.9, lo=0.05, hi=5.0),
+        'rate_gain_per_s': Field('float', 'spin_up: rate loop gain, 1/s', 0.2, lo=0.0, hi=100.0),
+        'attitude_natural_frequency': _q('attitude hold by the wheels: PD natural frequency', 0.5, 'rad_s',
+                                         {'rad_s': 1.0}, lo=1e-4, hi=100.0),
+        'attitude_damping_ratio': Field('float', 'attitude hold: PD damping ratio', 0.8, lo=0.05, hi=5.0),
+        'max_force': _q('limit of the commanded relative force', 0.5, 'n', {'n': 1.0}, lo=0.0, hi=1e4),
+        'dump': Field('bool', 'hill with the Earth field: Earth as a momentum dump (slides 31–33)', False),
+        'dump_start': _q('dump: start dumping the vehicle whose wheels hold more than this', 0.5, 'nms', MOMENTUM,
+                         lo=0.0, hi=1e6),
+        'dump_done': _q('dump: stop (and pick again) below this', 0.05, 'nms', MOMENTUM, lo=0.0, hi=1e6),
+    },
+    'vehicle': {
+        'mass': _q('vehicle mass', REQUIRED, 'kg', {'kg': 1.0, 'lb': u.LB_KG}, lo=1e-3, hi=1e7),
+        'initial_position': _q('initial position, formation frame (hill: relative to the reference orbit)',
+                               [0.0, 0.0, 0.0], 'm', LENGTH, length=3, lo=-1e7, hi=1e7),
+        'initial_velocity': _q('initial velocity, formation frame', [0.0, 0.0, 0.0], 'm_s', {'m_s': 1.0},
+                               length=3, lo=-1e4, hi=1e4),
+        'coil_axes': Field('floats', 'unit axes of the coils in body axes, one (x, y, z) triple per coil, '
+                           'orthonormal (EMFFORCE: two vertical coils along x and y)', [1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                           lo=-1.0, hi=1.0),
+        'coil_radii': _q('coil radii (EMFFORCE: 0.375 m outer, 0.345 m inner)', [0.375, 0.345], 'm', LENGTH,
+                         lo=1e-3, hi=100.0),
+        'coil_turns': Field('floats', 'turns of each coil (EMFFORCE: 100 wraps)', [100.0, 100.0], lo=1.0, hi=1e6),
+        'coil_max_current': _q('current limit of each coil (EMFFORCE: ~100 A)', [100.0, 100.0], 'a', {'a': 1.0},
+                               lo=1e-6, hi=1e5),
+    },
 }
 
 #: Which scenario sections each node receives as parameters.
@@ -277,7 +338,17 @@ NODE_SECTIONS: dict[str, tuple[str, ...]] = {
     'em_driver': ('em_driver',),
     'acds_controller': ('spacecraft', 'controller', 'magnetometer', 'wheels'),
     'ascs_mode_manager': ('modes', 'sss'),
+    'formation_dynamics': ('orbit', 'earth', 'sun', 'dynamics', 'formation'),
+    'formation_controller': ('orbit', 'formation'),
 }
+#: Sections every vehicle of a formation has of its own (given under ``vehicles:``; a top-level
+#: section of the same name gives the defaults all vehicles share).
+VEHICLE_SECTIONS = ('spacecraft', 'vehicle', 'em_driver', 'wheels')
+#: Per-vehicle sections the formation-wide nodes (time owner, controllers) receive for *every* vehicle,
+#: named ``<vehicle>.<parameter>``.
+FORMATION_VEHICLE_SECTIONS = ('spacecraft', 'vehicle', 'em_driver')
+#: Nodes a vehicle of a formation may run (each in its namespace /acds/<vehicle>).
+VEHICLE_NODES = ('em_driver', 'reaction_wheels', 'formation_controller')
 
 #: Where shipped scenarios live (override with ACDS_SCENARIO_DIR).
 SCENARIO_DIR = Path(os.environ.get('ACDS_SCENARIO_DIR', Path(__file__).resolve().parents[4] / 'scenarios'))
@@ -321,12 +392,35 @@ class Scenario:
         """Number of control steps in the run."""
         return max(1, round(self.duration_s() / self.control_period_s))
 
-    def node_parameters(self, node: str) -> dict[str, Any]:
-        """ROS parameters (SI, unit in the name) for ``node`` from its sections."""
+    @property
+    def formation(self) -> bool:
+        """Whether this is a formation of several vehicles (spec §10)."""
+        return 'vehicles' in self.values
+
+    def vehicle(self, name: str) -> dict[str, Any]:
+        """One vehicle of a formation: {name, nodes, section: {field: SI value}}."""
+        for v in self.values.get('vehicles', []):
+            if v['name'] == name:
+                return v
+        raise KeyError(f'scenario {self.name} has no vehicle {name!r}')
+
+    def node_parameters(self, node: str, vehicle: str = '') -> dict[str, Any]:
+        """ROS parameters (SI, unit in the name) for ``node`` from its sections (a vehicle's node: its own).
+
+        The formation-wide nodes (:data:`FORMATION_VEHICLE_SECTIONS`) also get every vehicle's sections,
+        named ``<vehicle>.<parameter>``.
+        """
+        own = self.vehicle(vehicle) if vehicle else {}
         params: dict[str, Any] = {}
         for section in NODE_SECTIONS[node]:
+            values = own.get(section, self.values.get(section))
             for name, f in SCHEMA[section].items():
-                params[f.param_name(section, name)] = self.values[section][name]
+                params[f.param_name(section, name)] = values[name]
+        if node in ('formation_dynamics', 'formation_controller'):
+            for v in self.values['vehicles']:
+                for section in FORMATION_VEHICLE_SECTIONS:
+                    for name, f in SCHEMA[section].items():
+                        params[f'{v["name"]}.{f.param_name(section, name)}'] = v[section][name]
         return params
 
 
@@ -533,9 +627,9 @@ def _check_value(where: str, f: Field, value: Any, factor: float) -> Any:
     return numbers
 
 
-def _validate_section(path: Path, section: str, given: dict[str, Any]) -> dict[str, Any]:
+def _validate_section(path: Path, section: str, given: dict[str, Any], label: str | None = None) -> dict[str, Any]:
     schema = SCHEMA[section]
-    prefix = f'{section}.' if section else ''
+    prefix = f'{label if label is not None else section}.' if section else ''
     allowed: dict[str, tuple[str, str | None]] = {}
     for name, f in schema.items():
         if f.units:
@@ -570,27 +664,90 @@ def _validate_section(path: Path, section: str, given: dict[str, Any]) -> dict[s
 
 def _check_graph(path: Path, sc: Scenario) -> None:
     """Checks across keys: the node list can run, and the run has a bounded number of steps."""
-    if TIME_OWNER not in sc.get('', 'nodes'):
-        raise ScenarioError(f'{path}: nodes: {TIME_OWNER} is missing (it owns sim time; every graph has it)')
+    owner = 'formation_dynamics' if sc.formation else TIME_OWNER
+    if owner not in sc.get('', 'nodes'):
+        what = 'a formation\'s time owner' if sc.formation else 'it owns sim time; every graph has it'
+        raise ScenarioError(f'{path}: nodes: {owner} is missing ({what})')
+    if sc.formation and set(sc.get('', 'nodes')) != {owner}:
+        raise ScenarioError(f'{path}: nodes: a formation lists only formation_dynamics at the top level; each '
+                            'vehicle lists its own nodes (vehicles[].nodes)')
+    if not sc.formation and 'formation_dynamics' in sc.get('', 'nodes'):
+        raise ScenarioError(f'{path}: nodes: formation_dynamics needs a vehicles list')
     steps = round(sc.duration_s() / sc.control_period_s)
     if steps > MAX_STEPS:
         raise ScenarioError(f'{path}: duration / control_period give {steps:,} steps, more than the {MAX_STEPS:,} '
                             'a run may have (shorten duration_* or lengthen control_period_*)')
 
 
+def _merge_units(section: str, base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
+    """``over``'s keys over ``base``'s; a key given in another unit replaces the base's (as ``extends`` does)."""
+    merged = dict(base)
+    for key, value in over.items():
+        stem = _stem(section, key)
+        for old in [o for o in merged if _stem(section, o) == stem]:
+            del merged[old]
+        merged[key] = value
+    return merged
+
+
+def _validate_vehicles(path: Path, data: dict[str, Any]) -> list[dict[str, Any]]:
+    """The ``vehicles`` of a formation: each a name, its nodes and its sections (over the top-level defaults)."""
+    given = data['vehicles']
+    if not isinstance(given, list) or len(given) < 2 or not all(isinstance(v, dict) for v in given):
+        raise ScenarioError(f'{path}: vehicles: expected a list of at least two vehicles (mappings), got {_show(given)}')
+    out: list[dict[str, Any]] = []
+    for i, item in enumerate(given):
+        where = f'vehicles[{i}]'
+        unknown = sorted(set(item) - {'name', 'nodes', *VEHICLE_SECTIONS})
+        if unknown:
+            raise ScenarioError(f'{path}: {where}: unknown key "{unknown[0]}" (a vehicle has: name, nodes, '
+                                f'{", ".join(VEHICLE_SECTIONS)})')
+        name = item.get('name')
+        if not isinstance(name, str) or not SAFE_NAME.fullmatch(name) or '.' in name:
+            raise ScenarioError(f'{path}: {where}.name: {_show(name)} is not a vehicle name (letters, digits, _ -)')
+        if any(v['name'] == name for v in out):
+            raise ScenarioError(f'{path}: {where}.name: vehicle {name!r} is listed twice')
+        nodes = item.get('nodes', list(VEHICLE_NODES))
+        if not isinstance(nodes, list) or any(n not in VEHICLE_NODES for n in nodes) or len(set(nodes)) != len(nodes):
+            raise ScenarioError(f'{path}: {where}.nodes: {_show(nodes)}: a vehicle runs distinct nodes of '
+                                f'{", ".join(VEHICLE_NODES)}')
+        vehicle: dict[str, Any] = {'name': name, 'nodes': list(nodes)}
+        for section in VEHICLE_SECTIONS:
+            own = item.get(section, {})
+            if not isinstance(own, dict):
+                raise ScenarioError(f'{path}: {where}.{section}: must be a mapping of keys, got {_show(own)}')
+            vehicle[section] = _validate_section(path, section, _merge_units(section, data.get(section, {}), own),
+                                                 label=f'vehicles.{name}.{section}')
+        out.append(vehicle)
+    return out
+
+
 def load_scenario(name_or_path: str) -> Scenario:
-    """Read, merge (``extends``), validate and convert a scenario; raise ScenarioError on any problem."""
+    """Read, merge (``extends``), validate and convert a scenario; raise ScenarioError on any problem.
+
+    A formation (a ``vehicles`` list) validates each vehicle's :data:`VEHICLE_SECTIONS` from the
+    vehicle's own keys over the top-level section of the same name (the shared defaults); its values
+    are ``values['vehicles']``, a list of {name, nodes, section: {field: SI value}}.
+    """
     path = scenario_path(name_or_path)
     data = _read_yaml(path)
     sections = [s for s in SCHEMA if s]
+    formation = 'vehicles' in data
     for key, value in data.items():
         if isinstance(value, dict) and key not in SCHEMA:
             raise ScenarioError(f'{path}: unknown section "{key}" (sections: {", ".join(sections)})')
         if key in sections and not isinstance(value, dict):
             raise ScenarioError(f'{path}: "{key}" must be a mapping of keys, got {_show(value)}')
-    values = {'': _validate_section(path, '', {k: v for k, v in data.items() if k not in sections})}
+    if 'vehicle' in data and not formation:
+        raise ScenarioError(f'{path}: "vehicle": a section of a formation\'s vehicles (give a vehicles list)')
+    values: dict[str, Any] = {'': _validate_section(
+        path, '', {k: v for k, v in data.items() if k not in sections and k != 'vehicles'})}
     for section in sections:
+        if section in VEHICLE_SECTIONS and (formation or section == 'vehicle'):
+            continue  # per vehicle (a formation's top-level section is the vehicles' shared defaults)
         values[section] = _validate_section(path, section, data.get(section, {}))
+    if formation:
+        values['vehicles'] = _validate_vehicles(path, data)
     sc = Scenario(values['']['name'], path, values, data)
     if path.parent == SCENARIO_DIR and sc.name != path.stem:
         raise ScenarioError(f'{path}: name "{sc.name}" differs from the file name "{path.stem}"')

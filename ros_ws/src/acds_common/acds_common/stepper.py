@@ -48,17 +48,19 @@ class Stepper:
         self.dt_ns = round(self.control_period_s * 1e9)
         self.graph_nodes: list[str] = list(params['graph_nodes'])
         self.seed: int = params['seed']
+        #: The formation vehicle this node belongs to ('' in a single-vehicle graph).
+        self.vehicle: str = params.get('vehicle', '')
         self._log = log or _print_log
         #: Set by the stepper to end the run after the current stage (time owner).
         self.finished = False
 
-    def section(self, name: str) -> dict[str, Any]:
-        """{field: SI value} of a scenario section this node receives."""
-        return section(self.params, name)
+    def section(self, name: str, vehicle: str = '') -> dict[str, Any]:
+        """{field: SI value} of a scenario section this node receives (``vehicle``: that vehicle's copy)."""
+        return section(self.params, name, vehicle)
 
     def present(self, node: str) -> bool:
-        """Whether ``node`` is part of this graph."""
-        return node in self.graph_nodes
+        """Whether ``node`` is part of this graph (a vehicle's node: one of its own vehicle's, or a qualified name)."""
+        return node in self.graph_nodes or (bool(self.vehicle) and f'{self.vehicle}/{node}' in self.graph_nodes)
 
     def step_time_s(self, k: int) -> float:
         """t_k in seconds (exact integer-ns step identity, as the stamps)."""

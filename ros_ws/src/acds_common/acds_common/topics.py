@@ -19,6 +19,7 @@ TRUTH_SUN_COSINES = 'truth/sun_direction_cosines'  #: geometry_msgs/Vector3Stamp
 TRUTH_TORQUE_MAG = 'truth/torque_magnetic'      #: geometry_msgs/Vector3Stamped: M × B_true over the step, N·m (body)
 TRUTH_TORQUE_GG = 'truth/torque_gravity_gradient'  #: geometry_msgs/Vector3Stamped: N·m (body)
 GYRO = 'sensors/gyro'                           #: sensor_msgs/Imu: ideal rate gyros (angular_velocity, rad/s, body)
+TRUTH_WRENCH = 'truth/wrench'                   #: geometry_msgs/WrenchStamped: formation: external force + torque, body
 SUN_SENSOR = 'sensors/sun'                      #: geometry_msgs/Vector3Stamped: unit sun vector in body; zero vector = sun absent
 
 # dynamics/reaction_wheels (step k)
@@ -33,6 +34,7 @@ MAG_BIAS_VOLTS = 'magnetometer/bias_volts'      #: geometry_msgs/Vector3Stamped:
 # acds_controller (step k)
 MOMENT_COMMAND = 'controller/moment_command'    #: geometry_msgs/Vector3Stamped: commanded dipole, body, A·m²
 WHEEL_VOLTS = 'controller/wheel_volts'          #: geometry_msgs/Vector3Stamped: wheel drive volts per body axis, V
+WHEEL_TORQUE_COMMAND = 'controller/wheel_torque'  #: geometry_msgs/Vector3Stamped: wanted ḣ of torque-driven wheels, body, N·m
 
 # em_driver (step k)
 DIPOLE_AVG = 'em_driver/dipole_avg'             #: geometry_msgs/Vector3Stamped: achieved dipole averaged over the step, A·m²
@@ -59,6 +61,7 @@ TYPES: dict[str, str] = {
     TRUTH_TORQUE_MAG: 'geometry_msgs/msg/Vector3Stamped',
     TRUTH_TORQUE_GG: 'geometry_msgs/msg/Vector3Stamped',
     GYRO: 'sensor_msgs/msg/Imu',
+    TRUTH_WRENCH: 'geometry_msgs/msg/WrenchStamped',
     SUN_SENSOR: 'geometry_msgs/msg/Vector3Stamped',
     WHEEL_MOMENTUM: 'geometry_msgs/msg/Vector3Stamped',
     WHEEL_TORQUE: 'geometry_msgs/msg/Vector3Stamped',
@@ -67,6 +70,7 @@ TYPES: dict[str, str] = {
     MAG_BIAS_VOLTS: 'geometry_msgs/msg/Vector3Stamped',
     MOMENT_COMMAND: 'geometry_msgs/msg/Vector3Stamped',
     WHEEL_VOLTS: 'geometry_msgs/msg/Vector3Stamped',
+    WHEEL_TORQUE_COMMAND: 'geometry_msgs/msg/Vector3Stamped',
     DIPOLE_AVG: 'geometry_msgs/msg/Vector3Stamped',
     DIPOLE_END: 'geometry_msgs/msg/Vector3Stamped',
     COIL_CURRENT: 'geometry_msgs/msg/Vector3Stamped',
@@ -78,10 +82,6 @@ TYPES: dict[str, str] = {
     DIAGNOSTICS: 'diagnostic_msgs/msg/DiagnosticArray',
     MONITOR_ACK: 'rosgraph_msgs/msg/Clock',
 }
-
-#: Truth topics (hashed into the run's truth digest).
-TRUTH = (TRUTH_ODOMETRY, TRUTH_B_BODY, TRUTH_SUN_COSINES, TRUTH_TORQUE_MAG, TRUTH_TORQUE_GG, GYRO, SUN_SENSOR)
-
 
 def resolve(topic: str) -> str:
     """Absolute topic name (``/acds/...``, or ``/clock``)."""
@@ -100,6 +100,8 @@ def type_of(name: str) -> str:
     A formation's per-vehicle topics are the single-vehicle names under the vehicle's namespace
     (``/acds/<vehicle>/truth/odometry``, or relative to ``/acds``: ``<vehicle>/truth/odometry``).
     """
+    if name in TYPES:  # an absolute name of its own (/clock, the lockstep handshake)
+        return TYPES[name]
     key = relative(name)
     if key in TYPES:
         return TYPES[key]

@@ -28,6 +28,9 @@ def _rosbags_bytes(msg_type: str, t_ns: int, value, frame: str, child: str = '')
     header = Header(stamp=Time(sec=t_ns // 10**9, nanosec=t_ns % 10**9), frame_id=frame)
     if msg_type == 'geometry_msgs/msg/Vector3Stamped':
         msg = m[msg_type](header=header, vector=V3(*value))
+    elif msg_type == 'geometry_msgs/msg/WrenchStamped':
+        W = m['geometry_msgs/msg/Wrench']
+        msg = m[msg_type](header=header, wrench=W(force=V3(*value[0]), torque=V3(*value[1])))
     elif msg_type == 'sensor_msgs/msg/MagneticField':
         msg = m[msg_type](header=header, magnetic_field=V3(*value[0]), magnetic_field_covariance=np.array(value[1]))
     elif msg_type == 'sensor_msgs/msg/Imu':
@@ -58,6 +61,7 @@ statuses = st.tuples(*[st.builds(Status, st.integers(0, 3), text, text, text,
                                  st.lists(st.tuples(text, text), max_size=3).map(tuple))] * 2)
 CASES = [
     ('geometry_msgs/msg/Vector3Stamped', vec3),
+    ('geometry_msgs/msg/WrenchStamped', st.tuples(vec3, vec3)),
     ('sensor_msgs/msg/MagneticField', st.tuples(vec3, cov9)),
     ('sensor_msgs/msg/Imu', st.tuples(vec3, cov9)),
     ('nav_msgs/msg/Odometry', st.builds(OdometryValue, vec3, st.tuples(finite, finite, finite, finite), vec3, vec3)),

@@ -20,7 +20,10 @@ Dipole solutions (far field, ``acds_common.dipole_field``):
   dipoles for the required instantaneous forces; once the required momentum has been dumped, pick
   another" — the dumping vehicle is the one with the most stored wheel momentum (slide 33), its
   dipole is μ = −μ_max (B × h)/|B × h| (the Earth torque μ × B = −μ_max B² h⊥/|B × h| opposes h),
-  and the partner's dipole is solved by ``solve_remaining_dipoles``.
+  and the partner's dipole is solved by ``solve_remaining_dipoles``. The maximum is capped at the
+  dipole that removes h⊥ in one control period (a sampled law's deadbeat bound: held longer it
+  overshoots and chatters; the slides' continuous-time simulation has no such limit), but not below
+  the min-norm pair's |μ| for the step's force (so dumping never asks more dipole of the partner).
 
 Two-vehicle steady spin (slides 19, 48, 49), derived: masses m_A, m_B at separation d spinning at ω
 about their centre of mass; each vehicle's centripetal force is μ_red ω² d (μ_red = m_A m_B /(m_A +
@@ -444,14 +447,20 @@ class FormationController:
         moments = v.coil_axes_body.T @ (body_to_frame.T @ dipole_frame)
         return float(np.max(np.abs(moments) / v.coil_max_dipole_am2))
 
-    def _dump_dipole(self, k: int, b_frame: np.ndarray, h_frame: np.ndarray, body_to_frame: np.ndarray) -> np.ndarray:
-        """Full dipole of vehicle k along −(B × h), the direction whose Earth torque removes h fastest."""
+    def _dump_dipole(self, k: int, b_frame: np.ndarray, h_frame: np.ndarray, body_to_frame: np.ndarray,
+                     floor_am2: float) -> np.ndarray:
+        """Full dipole of vehicle k along −(B × h), the direction whose Earth torque removes h fastest —
+        but no more than removes the momentum across the field, |h⊥| = |B × h|/|B|, in one control period
+        (|μ| ≤ |B × h|/(|B|² Δt): a larger dipole held for the period overshoots h⊥ and chatters), and no
+        less than ``floor_am2`` (the min-norm pair's, so the partner needs no more dipole than without
+        dumping)."""
         u = -cross3(b_frame, h_frame)
         norm = float(np.linalg.norm(u))
         if norm == 0.0:
             return np.zeros(3)
+        deadbeat = norm / (float(b_frame @ b_frame) * self.dt)
         u /= norm
-        return u / self._coil_scale(k, u, body_to_frame)
+        return u * min(1.0 / self._coil_scale(k, u, body_to_frame), max(deadbeat, floor_am2))
 
     def step(self, t_s: float, measurements: Sequence[Measurement],
              frame_to_inertial: np.ndarray | None = None) -> tuple[VehicleCommand, VehicleCommand]:
@@ -498,9 +507,11 @@ class FormationController:
             if self._dumper is None and max(stored) > self.dump.start_nms:
                 self._dumper = int(np.argmax(stored))
         self._dumping_now = False
+        normal = np.array([0.0, 0.0, 1.0]) if self.frame == "planar" else None
+        mu_a, mu_b = min_norm_dipoles(rho, force_b, normal, self._prev_mu_a)
         if have_field and self._dumper is not None:
             k = self._dumper
-            free = self._dump_dipole(k, b_frame[k], h_frame[k], b2f[k])
+            free = self._dump_dipole(k, b_frame[k], h_frame[k], b2f[k], float(np.linalg.norm(mu_a)))
             forces = np.array([-force_b, force_b])
             try:
                 sol = solve_remaining_dipoles(pos, k, free, forces, np.zeros((2, 3)))
@@ -509,8 +520,6 @@ class FormationController:
             if sol is not None and self._coil_scale(1 - k, sol[1 - k], b2f[1 - k]) <= 1.0:
                 self._dumping_now = True
                 return [sol[0], sol[1]]
-        normal = np.array([0.0, 0.0, 1.0]) if self.frame == "planar" else None
-        mu_a, mu_b = min_norm_dipoles(rho, force_b, normal, self._prev_mu_a)
         scale = max(self._coil_scale(0, mu_a, b2f[0]), self._coil_scale(1, mu_b, b2f[1]))
         if scale > 1.0:
             mu_a, mu_b = mu_a / scale, mu_b / scale

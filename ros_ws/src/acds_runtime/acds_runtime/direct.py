@@ -26,7 +26,7 @@ from acds_common.parameters import node_parameters, normalize
 from acds_common.scenario import Scenario
 from acds_common.stepper import StepError, Stepper
 
-from .launcher import LaunchError, RunResult, per_step_topics
+from .launcher import LaunchError, RunResult
 from .summary import RunObserver
 
 
@@ -60,7 +60,7 @@ class DirectRun:
         self.record_storage = record_storage
         self.params = node_parameters(scenario, self.steps, 0.0, overrides)
         self.graph = build_graph(self.params)
-        self.observer = RunObserver(scenario, per_step_topics(self.graph))
+        self.observer = RunObserver(scenario, self.graph)
         self.dt_ns = round(scenario.control_period_s * 1e9)
         self.steppers = build_steppers(self.graph, self.params,
                                        lambda node, level, text: self.echo(f'[{node}] [{level.upper()}] {text}'))

@@ -147,12 +147,6 @@ def params_yaml(graph: Graph, params: dict[str, dict[str, Any]]) -> str:
                       for inst, spec in graph.nodes.items()}, Dumper=_NoAliasDumper, sort_keys=True)
 
 
-def per_step_topics(graph: Graph) -> set[str]:
-    """Absolute names of the graph's per-step topics (what a run's summary can join by step)."""
-
-    return {spec.topic(out.topic) for spec, out in graph.outputs() if out.every_step}
-
-
 class GraphRun:
     """Run a scenario's node graph to completion (use as a context manager)."""
 
@@ -227,7 +221,7 @@ class GraphRun:
         os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
         params = node_parameters(self.scenario, self.steps, self.rtf, self.overrides)
         self.graph = build_graph(params)
-        self.observer = RunObserver(self.scenario, per_step_topics(self.graph))
+        self.observer = RunObserver(self.scenario, self.graph)
         params_file = self.run_dir / 'params.yaml'
         params_file.write_text(params_yaml(self.graph, params))
         record = None

@@ -28,6 +28,6 @@ def preflight(scenario: Scenario) -> None:
         raise ScenarioError(f'{scenario.path}: nodes: {exc}') from None
     for name, spec in graph.nodes.items():  # the scenario's order: the rigid body (inertia) first
         try:
-            stepper_class(spec.stepper)(normalize(name, params[name]), log=lambda _level, _text: None)
+            stepper_class(spec.stepper)(normalize(spec.name, params[name]), log=lambda _level, _text: None)
         except ValueError as exc:  # every package's exception is a ValueError with a message naming the key
             raise ScenarioError(f'{scenario.path}: {exc} (the {name} model refuses it)') from None

@@ -8,8 +8,9 @@ value)`` and ``contribute(summary)``). It keeps only what the summaries keep (ru
 change points), never the messages, so its memory does not grow with the run's length.
 ``print_tables`` lets each module print its tables.
 
-The truth digest is SHA-256 over, for each truth topic in sorted order, its name and the
-SHA-256 of its serialized messages in step order: equal data ⇒ equal digest, in either engine.
+The truth digest is SHA-256 over, for each truth topic (the time owner's per-step outputs,
+:meth:`acds_common.graph.Graph.truth_topics`) in sorted order, its name and the SHA-256 of its
+serialized messages in step order: equal data ⇒ equal digest, in either engine.
 
 JSON has no NaN or infinity, so :func:`summary_json` (every summary file:
 ``run --summary-json``, ``sweep --json``) writes a non-finite number as
@@ -30,11 +31,11 @@ from typing import Any
 import numpy as np
 from acds_common import topics
 from acds_common.cdr import Codec
+from acds_common.graph import Graph
 from acds_common.inertia import inertia_tensor
+from acds_common.rotations import quat_to_dcm
 from acds_common.units import nms_to_ftlbs, tesla_to_gauss
 
-#: Truth topics hashed into the run's truth digest.
-TRUTH = tuple(sorted(topics.resolve(t) for t in topics.TRUTH))
 #: Per-step topics the common (dynamics) summary reads.
 ODOMETRY, B_BODY, WHEEL_H = (topics.resolve(t) for t in (topics.TRUTH_ODOMETRY, topics.TRUTH_B_BODY,
                                                           topics.WHEEL_MOMENTUM))
@@ -49,19 +50,15 @@ def _summary_modules() -> list:
             for m in sorted(pkgutil.iter_modules(summaries.__path__), key=lambda m: m.name)]
 
 
-def _quat_rotate(q: tuple[float, float, float, float], v: np.ndarray) -> np.ndarray:
-    """v rotated by the unit quaternion q (x, y, z, w): body → ECI."""
-    x, y, z, w = q
-    r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                  [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                  [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-    return r @ v
-
-
 class DynamicsSummary:
-    """Momentum and energy drift, final rates and momentum, the |B| range seen (every run)."""
+    """Momentum and energy drift, final rates and momentum, the |B| range seen (every single-vehicle run)."""
 
     topics = (ODOMETRY, B_BODY, WHEEL_H)
+
+    @staticmethod
+    def applies(scenario: Any) -> bool:
+        """A single vehicle's run (a formation's vehicles are summarised by ``summaries.emff``)."""
+        return not scenario.formation
 
     def __init__(self, scenario: Any) -> None:
         sc = scenario
@@ -82,7 +79,7 @@ class DynamicsSummary:
             omega = np.array(odom.angular)
             wheel = values.get(WHEEL_H)
             h_body = self.inertia @ omega + (np.array(wheel) if wheel is not None else 0.0)
-            h = float(np.linalg.norm(_quat_rotate(odom.orientation, h_body)))
+            h = float(np.linalg.norm(quat_to_dcm(odom.orientation) @ h_body))
             e = 0.5 * float(omega @ self.inertia @ omega)
             if self.h0 is None:
                 self.h0, self.e0 = h, e
@@ -109,18 +106,20 @@ class DynamicsSummary:
 class RunObserver:
     """The streaming summary of one run (module docstring)."""
 
-    def __init__(self, scenario: Any, per_step_topics: set[str]) -> None:
+    def __init__(self, scenario: Any, graph: Graph) -> None:
         self.scenario = scenario
         self.dt_ns = round(scenario.control_period_s * 1e9)
-        self.parts: list[Any] = [DynamicsSummary(scenario)]
+        self.parts: list[Any] = [DynamicsSummary(scenario)] if DynamicsSummary.applies(scenario) else []
         self.parts += [m.Accumulator(scenario) for m in _summary_modules() if m.applies(scenario)]
         wanted = {topics.resolve(t) for p in self.parts for t in p.topics}
-        self.per_step = sorted(wanted & per_step_topics)
+        per_step = {spec.topic(out.topic) for spec, out in graph.outputs() if out.every_step}
+        self.per_step = sorted(wanted & per_step)
+        self.truth = graph.truth_topics()
         self.events = {topics.resolve(t) for p in self.parts for t in getattr(p, 'event_topics', ())}
-        self.codecs = {t: Codec(topics.TYPES[topics.relative(t)]) for t in (*self.per_step, *self.events)}
+        self.codecs = {t: Codec(topics.type_of(t)) for t in (*self.per_step, *self.events)}
         self._pending: dict[int, dict[str, Any]] = {}
         self._next = 0
-        self._digests = {t: hashlib.sha256() for t in TRUTH}
+        self._digests = {t: hashlib.sha256() for t in self.truth}
         self.truth_messages = 0
 
     # ---- feeding ------------------------------------------------------------------------------------
@@ -174,7 +173,7 @@ class RunObserver:
     def truth_digest(self) -> str:
         """The run's truth digest (module docstring)."""
         h = hashlib.sha256()
-        for topic in TRUTH:
+        for topic in self.truth:
             h.update(topic.encode())
             h.update(self._digests[topic].hexdigest().encode())
         return h.hexdigest()

@@ -31,7 +31,7 @@ from dynamics.errors import DynamicsError
 from dynamics.rigid_body_model import RigidBodyModel
 from dynamics.wheels_model import ReactionWheels, WheelsConfig
 
-__all__ = ['ActuatorLimits', 'actuator_limits', 'build_rigid_body', 'build_wheels']
+__all__ = ['ActuatorLimits', 'actuator_limits', 'build_rigid_body', 'build_torque_wheels', 'build_wheels']
 
 
 def build_rigid_body(spacecraft: dict[str, Any], orbit: dict[str, Any], earth: dict[str, Any], sun: dict[str, Any],
@@ -57,6 +57,19 @@ def build_rigid_body(spacecraft: dict[str, Any], orbit: dict[str, Any], earth: d
                               gravity_gradient=dynamics['gravity_gradient'], substeps=dynamics['substeps'],
                               q0_body_to_eci=spacecraft['initial_quaternion_xyzw'],
                               omega0_body_rad_s=spacecraft['initial_rates'])
+
+
+def build_torque_wheels(wheels: dict[str, Any]) -> Any:
+    """Torque-commanded wheels (``wheels.drive: torque``, a formation vehicle's; seed 004 slide 74)."""
+    from dynamics.formation import TorqueWheels
+
+    with scenario_key('wheels', DynamicsError):
+        axes = wheels['torque_axes']
+        if not axes or len(axes) % 3:
+            raise DynamicsError(f'torque_axes must hold one (x, y, z) triple per wheel, got {len(axes)} numbers')
+        capacity = wheels['capacity'] if wheels['capacity'] > 0.0 else None
+        return TorqueWheels(np.array(axes, dtype=float).reshape(-1, 3).T, wheels['max_torque'], capacity,
+                            h0_nms=np.array(axes, dtype=float).reshape(-1, 3) @ np.array(wheels['initial_momentum']))
 
 
 def build_wheels(wheels: dict[str, Any]) -> ReactionWheels:

@@ -71,7 +71,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from acds_common import units
 from acds_common.dipole_field import cross3, dipole_pair_wrench
-from acds_common.environment import Orbit
+from acds_common.environment import Orbit, hill_frame
 
 from dynamics import biot_savart
 from dynamics.errors import DynamicsError, finite_float, finite_vector3
@@ -84,6 +84,9 @@ EM_MODELS = ("far_field", "near_field")
 #: Central-difference step of the Earth-field gradient, as a fraction of the geocentric radius
 #: (truncation error ~ (1e-4)² relative, rounding ~ 1e-13 relative).
 EARTH_GRADIENT_STEP_FRACTION = 1e-4
+#: Most a vehicle may turn in one RK4 substep (rad): beyond it the integration is refused, not trusted
+#: (RK4's stability limit on a rotation is ~2.8 rad per step; 0.5 rad keeps its error below ~1e-4).
+MAX_TURN_PER_SUBSTEP_RAD = 0.5
 
 #: EMFFORCE vehicle mass, kg (slide 70).
 EMFFORCE_MASS_KG = 19.0
@@ -374,11 +377,8 @@ class FormationDynamics:
 
     def _hill_to_eci(self, t_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(R_ECI←Hill, r_ref, v_ref) at ``t_s``: columns radial, along-track, orbit normal."""
-        r, v = self.cfg.orbit.position_velocity_eci(t_s)
-        x = r / np.linalg.norm(r)
-        z = cross3(r, v)
-        z /= np.linalg.norm(z)
-        return np.stack([x, cross3(z, x), z], axis=1), r, v
+        assert self.cfg.orbit is not None
+        return hill_frame(self.cfg.orbit, t_s)
 
     # ---------------------------------------------------------------------------------- physics
 
@@ -496,6 +496,7 @@ class FormationDynamics:
         step = (np.array(dip), np.array(h0), np.array(hdot))
         m = self.cfg.substeps
         sub = dt / m
+        self._check_resolution(sub, step[1])
         y = (self._pos, self._vel, self._q, self._w)
         sums = [np.zeros((len(self.vehicles), 3)) for _ in range(5)]
         for k in range(m):
@@ -517,6 +518,22 @@ class FormationDynamics:
         self._check_contact()
         self._t += dt
         self._avg = Wrenches(*(s / (6.0 * m) for s in sums))
+
+    def _check_resolution(self, sub_s: float, wheel_h: np.ndarray) -> None:
+        """Refuse a substep the RK4 cannot resolve: a vehicle turning (body rate |ω| plus the wheels'
+        gyroscopic nutation rate |h|/I_min, not in ``planar``, which has no gyroscopic coupling) more than
+        MAX_TURN_PER_SUBSTEP_RAD per substep."""
+        for k, spec in enumerate(self.vehicles):
+            rate = float(np.linalg.norm(self._w[k]))
+            if self.cfg.frame != "planar":
+                rate += float(np.linalg.norm(wheel_h[k])) / float(np.min(np.linalg.eigvalsh(self._inertia[k])))
+            if rate * sub_s > MAX_TURN_PER_SUBSTEP_RAD:
+                need = math.ceil(rate * sub_s * self.cfg.substeps / MAX_TURN_PER_SUBSTEP_RAD)
+                raise DynamicsError(
+                    f"vehicle {spec.name} turns at {rate:.4g} rad/s (|ω| + |h_wheel|/I_min) at t = {self._t:.6g} s: "
+                    f"{rate * sub_s:.3g} rad per {sub_s:.4g} s substep is more than the integrator resolves "
+                    f"({MAX_TURN_PER_SUBSTEP_RAD} rad); raise dynamics.substeps to {need} or more, or look at why "
+                    "it spins")
 
     # ------------------------------------------------------------------------------------ output
 

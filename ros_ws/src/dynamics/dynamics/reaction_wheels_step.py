@@ -16,24 +16,28 @@ import numpy as np
 from acds_common.messages import WARN, diagnostic, vec, vector3
 from acds_common.stepper import Stepper
 
-from dynamics.configuration import build_wheels
+from dynamics.configuration import build_torque_wheels, build_wheels
 
 #: Wheel telemetry on ``diagnostics`` every this many steps.
 TELEMETRY_EVERY = 20
 
 
 class ReactionWheelsStep(Stepper):
-    """Three orthogonal wheels (or the 4-wheel 20°-cant cluster) driven by volts."""
+    """Three orthogonal wheels (or the 4-wheel 20°-cant cluster) driven by volts, or torque-commanded wheels."""
 
     node = 'reaction_wheels'
 
     def __init__(self, params: dict[str, Any], log: Any = None) -> None:
         super().__init__(params, log)
-        self.wheels = build_wheels(self.section('wheels'))
+        w = self.section('wheels')
+        self.torque_drive = w['drive'] == 'torque'
+        self.wheels: Any = build_torque_wheels(w) if self.torque_drive else build_wheels(w)
         self._last_volts = np.zeros(3)
 
     def drive(self, k: int, _t: float, inp: dict[str, Any]) -> dict[str, Any]:
-        """Apply the step-k volts for one control period."""
+        """Apply the step-k drive (volts, or a torque command) for one control period."""
+        if self.torque_drive:
+            return self._torque_drive(k, inp)
         volts = vec(inp['volts'])
         warning = None
         if not np.all(np.isfinite(volts)):
@@ -45,6 +49,23 @@ class ReactionWheelsStep(Stepper):
         if warning is not None or k % TELEMETRY_EVERY == 0:
             values = {**{f'wheel_{i}_momentum_nms': f'{h:.6g}' for i, h in enumerate(self.wheels.wheel_momenta_nms())},
                       **{f'drive_{a}_volts': f'{v:.4g}' for a, v in zip('xyz', volts, strict=True)}}
+            out['diagnostics'] = (diagnostic(self.node, values) if warning is None
+                                  else diagnostic(self.node, values, warning, WARN))
+        return out
+
+    def _torque_drive(self, k: int, inp: dict[str, Any]) -> dict[str, Any]:
+        """Torque-commanded wheels: the controller's wanted ḣ, clipped per wheel (a non-finite one: zero, WARN)."""
+        command = vec(inp['torque'])
+        warning = None
+        if not np.all(np.isfinite(command)):
+            warning = f'non-finite wheel torque command {command.tolist()} rejected at step {k}; zero torque'
+            command = np.zeros(3)
+        h_start, hdot = self.wheels.step(command, self.control_period_s)
+        out: dict[str, Any] = {'momentum': vector3(h_start), 'torque': vector3(hdot)}
+        if warning is not None or k % TELEMETRY_EVERY == 0:
+            per_wheel = self.wheels.axes_body.T @ self.wheels.momentum_body_nms()
+            values = {**{f'wheel_{i}_momentum_nms': f'{h:.6g}' for i, h in enumerate(per_wheel)},
+                      **{f'wheel_{i}_current_a': f'{c:.4g}' for i, c in enumerate(self.wheels.current_a)}}
             out['diagnostics'] = (diagnostic(self.node, values) if warning is None
                                   else diagnostic(self.node, values, warning, WARN))
         return out

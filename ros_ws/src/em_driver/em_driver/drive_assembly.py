@@ -17,6 +17,8 @@ Conventions:
   max_moment_am2 and divided by moment_per_amp_am2 to give the current command.
 * 'constant_level' axes: only the sign of the command component matters
   (−1/0/+1); the full supply is switched onto the coil.
+* 'none' axes: there is no coil on that axis (an EMFF vehicle's two coils, seed 004): zero dipole,
+  zero current, no alarm; the command on it is ignored.
 * Mismatch / excess-coil-current alarm: the active unit's measured current
   (e_ft / sense gain) differs from the current a healthy driver would hold
   (the command, limited to what the supply reaches) by more than
@@ -46,7 +48,7 @@ from em_driver.bridge_switch import (
 __all__ = ['DRIVE_TYPES', 'UNITS', 'AxisConfig', 'AssemblyResult', 'DriveAssembly']
 
 #: Drive types selectable per axis.
-DRIVE_TYPES = ('bridge_switch', 'constant_level')
+DRIVE_TYPES = ('bridge_switch', 'constant_level', 'none')
 #: Redundant unit names per axis (driver + winding).
 UNITS = ('A', 'B')
 
@@ -205,6 +207,8 @@ class DriveAssembly:
         out = {k: np.zeros(3) for k in ('avg', 'end', 'cur', 'cmd', 'eft', 'duty', 'power')}
         switches = np.zeros(3, dtype=int)
         for k, ax in enumerate(self._axes):
+            if ax.config.drive_type == 'none':  # no coil on this axis: nothing to drive, nothing to monitor
+                continue
             if math.isfinite(command[k]):
                 ax.command = float(command[k])
             else:

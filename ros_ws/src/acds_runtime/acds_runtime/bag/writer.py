@@ -44,8 +44,6 @@ RUN_INFO_FILE = 'acds_run.yaml'
 STORAGES = {'mcap': StoragePlugin.MCAP, 'sqlite3': StoragePlugin.SQLITE3}
 #: Topics never recorded (lockstep handshake plumbing).
 SKIP = {topics.resolve(topics.READY), topics.resolve(topics.MONITOR_ACK)}
-#: Absolute topic name → message type.
-ABS_TYPES = {topics.resolve(t): ty for t, ty in topics.TYPES.items()}
 
 _TYPESTORE = None
 
@@ -272,7 +270,7 @@ class BagWriter:
             try:
                 conn = self._conns.get(topic)
                 if conn is None:
-                    msgtype = msgtype or ABS_TYPES[topic]
+                    msgtype = msgtype or topics.type_of(topic)
                     conn = self._writer.add_connection(topic, msgtype, typestore=typestore(),
                                                        offered_qos_profiles=qos or [offered_qos(topic)])
                     self._conns[topic] = conn
