@@ -5,7 +5,9 @@ frame), Figs. 4-15 … 4-17 (roll/pitch/yaw responses: body rate deg/s, wheel
 momentum ft-lb-sec, magnetic moment A·m²), Fig. 4-18 / 4-43 / 4-51 (magnetic
 moments and the angle between the Earth field and the momentum vector),
 plus the mode timeline. SSS (seed 001): spin rate (rpm) and the magnetic
-torque about the spin axis (dyne-cm). Formations (seed 004): ``formation_plots``.
+torque about the spin axis (dyne-cm). Torque-rod runs (seed 003, the bag holds
+``em_driver/power``): body rates and |ω| (deg/s, with the summary's 0.1°/s threshold),
+dipole commands (A·m²) and rod currents (mA). Formations (seed 004): ``formation_plots``.
 A figure whose topics are absent is skipped.
 Time axes are sim minutes. The series are gathered in one streaming pass over
 the bag (only the plotted fields are kept), and the output folder is checked
@@ -110,6 +112,10 @@ def make_plots(bag_path: Path | str, out_dir: Path | str | None = None) -> list[
         vectors[topics.GYRO] = lambda m: _v3(m.angular_velocity)
     if name.startswith('sss'):
         vectors[topics.TRUTH_TORQUE_MAG] = lambda m: _v3(m.vector)
+    rods = bag.has(topics.COIL_POWER)
+    if rods:
+        vectors[topics.MOMENT_COMMAND] = lambda m: _v3(m.vector)
+        vectors[topics.COIL_CURRENT] = lambda m: _v3(m.vector)
     formation = formation_plots.vehicles(bag)
     vectors.update(formation_plots.formation_vectors(formation))
     data = _gather(bag, vectors, {topics.MODE: lambda m: m.status[0].message if m.status else ''})
@@ -212,6 +218,30 @@ def make_plots(bag_path: Path | str, out_dir: Path | str | None = None) -> list[
             ax.set_ylabel(ylabel)
             ax.grid(alpha=0.3)
         save(fig, 'sss_spin_rate_torque', 'SSS spin rate and magnetic spin torque')
+
+    # Torque rods (seed 003): rates, |ω|, dipole commands, rod currents
+    if rods and len(t_w):
+        from acds_runtime.summaries.oresat import DETUMBLED_RATE_DEG_S
+        t_c, cmd = _series(data, topics.MOMENT_COMMAND)
+        t_i, cur = _series(data, topics.COIL_CURRENT)
+        rate = np.degrees(w)
+        fig, axs = plt.subplots(4, 1, figsize=(8, 10), sharex=True)
+        for i, (a, _) in enumerate(AXES):
+            axs[0].plot(t_w, rate[:, i], lw=0.8, label=f'ω{a}')
+        axs[0].set_ylabel('body rate, deg/s')
+        axs[1].semilogy(t_w, np.linalg.norm(rate, axis=1), lw=0.8, label='|ω|')
+        axs[1].axhline(DETUMBLED_RATE_DEG_S, color='k', ls='--', lw=0.8, label=f'{DETUMBLED_RATE_DEG_S:g}°/s')
+        axs[1].set_ylabel('|ω|, deg/s')
+        for ax, (tt, y, ylabel, lab) in zip(axs[2:], ((t_c, cmd, 'dipole command, A·m²', 'M'),
+                                                    (t_i, cur * 1e3, 'rod current, mA', 'I')), strict=True):
+            for i, (a, _) in enumerate(AXES):
+                if len(tt):
+                    ax.plot(tt, y[:, i], lw=0.6, label=f'{lab}{a}')
+            ax.set_ylabel(ylabel)
+        for ax in axs:
+            ax.legend(fontsize=8, loc='upper right')
+            ax.grid(alpha=0.3)
+        save(fig, 'torque_rod_detumble', 'Torque-rod detumble: rates, |ω|, dipole commands, rod currents')
 
     if formation:
         formation_plots.plot_formation(formation, lambda topic: _series(data, topic), plt, save)

@@ -3,7 +3,8 @@
 The controller applies ``law <slot> <name>`` and ``gain <name> <value>`` commands; the mode
 manager validates them before forwarding (a command the controller would refuse is refused
 on the ground link, with the reason). Both read this one table. Ranges bracket the study's
-values (seed 002 §4.2.3, Table 4-2).
+values (seed 002 §4.2.3, Table 4-2); the CubeSat laws' gains (seed 003): k_ω up to
+1e3 kg·m²/s (J_min ≈ 2.5e5 kg·m² in a 90-min orbit; OreSat's is 2.054e-5), k_h up to 1 s⁻¹.
 """
 
 from __future__ import annotations
@@ -12,8 +13,8 @@ import math
 
 #: Selectable magnetic laws per slot: acquisition (Mode 1A) and unloading (Mode 1B, cruise).
 LAW_CHOICES: dict[str, tuple[str, ...]] = {
-    'acquisition': ('bxh', 'bdot'),
-    'unloading': ('bxh', 'lead', 'none'),
+    'acquisition': ('bxh', 'bdot', 'b_cross_omega'),
+    'unloading': ('bxh', 'lead', 'none', 'b_cross_h'),
 }
 #: Scalar run-time gains: name → (low, high, unit).
 SCALAR_GAINS: dict[str, tuple[float, float, str]] = {
@@ -25,6 +26,8 @@ SCALAR_GAINS: dict[str, tuple[float, float, str]] = {
     'max_moment': (0.0, 5000.0, 'A·m²'),
     'scan_rate_rpm': (-1.0, 1.0, 'rpm'),
     'lead_time': (0.0, 1e5, 's'),
+    'detumble_gain': (0.0, 1e3, 'kg·m²/s'),
+    'dump_gain': (0.0, 1.0, '1/s'),
 }
 #: Wheel-law gain sets and their per-axis parameters (Table 4-2): name → (low, high, unit).
 WHEEL_SETS = ('acquisition', 'normal')

@@ -173,6 +173,9 @@ def _magnetometer_sim(_params: dict[str, Any]) -> NodeSpec:
 
 def _em_driver(params: dict[str, Any]) -> NodeSpec:
     source = _param(params, 'em_driver_command_source', 'acds_controller')
+    rods = _param(params, 'em_driver_driver_kind', 'electromagnet') == 'torque_rod'
+    # The torque rods' bus power and duty every step: the CubeSat summary's energy and duty (seed 003).
+    electrical = (Output('power', topics.COIL_POWER, 'body'), Output('duty', topics.COIL_DUTY, 'body')) if rods else ()
     return NodeSpec(
         'em_driver', 'em_driver', 'em_driver.em_driver_step:EmDriverStep',
         (Stage('drive', (
@@ -183,6 +186,7 @@ def _em_driver(params: dict[str, Any]) -> NodeSpec:
          Output('dipole_end', topics.DIPOLE_END, 'body'),
          Output('coil_current', topics.COIL_CURRENT, 'body'),
          Output('e_ft', topics.E_FT, 'body'),
+         *electrical,
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 

@@ -6,7 +6,9 @@ each field accepts a small set of units and is converted to SI here, the one
 place where seed units meet SI (spec header "Units"). ``extends: <name>``
 starts from another scenario and overrides keys (deep merge); a relative
 ``extends`` (a bare name or a path) is looked up first beside the extending
-file, then among the shipped scenarios.
+file, then among the shipped scenarios. A key naming a file (``Field.path``, e.g.
+``em_driver.torque_rod_design``) is relative to the scenario file that gives it
+(also through ``extends``) and becomes an absolute path.
 
 Reading is strict, and every problem is one :class:`ScenarioError` line naming
 the file and the key: the file must be UTF-8 YAML text; a key given twice in
@@ -72,6 +74,7 @@ class Field:
     pattern: re.Pattern[str] | None = None  # 'str': the whole value must match
     unique: bool = False  # 'strs': no entry twice
     quaternion: bool = False  # 'floats' (x, y, z, w): must be normalisable
+    path: bool = False  # 'str': a file name, resolved relative to the scenario file that gives it ('' = none)
 
     def param_name(self, section: str, name: str) -> str:
         """The ROS parameter name this key becomes."""
@@ -93,6 +96,7 @@ MOMENTUM = {'ft_lb_s': u.FT_LB_S_NMS, 'nms': 1.0}
 FIELD = {'gauss': u.GAUSS_T, 't': 1.0}
 COUPLING = {'g_per_am2': u.GAUSS_T, 't_per_am2': 1.0}
 TIME = {'s': 1.0, 'min': 60.0}
+MOMENT_OF_INERTIA = {**INERTIA, 'g_mm2': u.G_MM2_KG_M2}
 
 #: Every key a scenario may hold, by section ('' is the top level).
 SCHEMA: dict[str, dict[str, Field]] = {
@@ -195,8 +199,13 @@ SCHEMA: dict[str, dict[str, Field]] = {
     'em_driver': {
         'command_source': Field('str', 'node whose moment commands drive the coils', 'acds_controller',
                                 choices=('acds_controller', 'ascs_mode_manager', 'formation_controller')),
-        'drive_types': Field('strs', 'per-axis drive: bridge_switch (HEAO) or constant_level (SSS), or none '
-                             '(no coil on that axis)',
+        'driver_kind': Field('str', 'coil hardware: electromagnet (HEAO/SSS coils, drive_types and coil_* keys) '
+                             'or torque_rod (CubeSat rods of seed 003 from torque_rod_design, PWM from supply_v)',
+                             'electromagnet', choices=('electromagnet', 'torque_rod')),
+        'torque_rod_design': Field('str', 'torque_rod: the rod of every axis, a `acds design-torque-rod --json` '
+                                   'file (relative to the scenario file that names it)', '', path=True),
+        'drive_types': Field('strs', 'electromagnet: per-axis drive, bridge_switch (HEAO) or constant_level (SSS), '
+                             'or none (no coil on that axis)',
                              ['bridge_switch'] * 3, choices=('bridge_switch', 'constant_level', 'none'), length=3),
         'coil_resistance_ohm': Field('floats', 'per-axis winding resistance (Table 4-3: 30.3 Ω)', [30.3] * 3,
                                      length=3, lo=1e-3, hi=1e4),
@@ -227,14 +236,29 @@ SCHEMA: dict[str, dict[str, Field]] = {
     },
     # ---- flight laws and modes (spec §7, §8) ----------------------------------------------------
     'controller': {
-        'acquisition_law': Field('str', 'Mode 1A magnetic law', 'bxh', choices=('bxh', 'bdot')),
-        'unloading_law': Field('str', 'Mode 1B/cruise unloading law', 'bxh', choices=('bxh', 'lead', 'none')),
+        'acquisition_law': Field('str', 'Mode 1A magnetic law (b_cross_omega: the CubeSat detumble law '
+                                 'M = −(k_ω/|B|)(B̂ × ω) of seed 003)', 'bxh', choices=('bxh', 'bdot', 'b_cross_omega')),
+        'unloading_law': Field('str', 'Mode 1B/cruise unloading law (b_cross_h: seed 003 dumping form '
+                               'M = −(k_h/|B|)(B̂ × h))', 'bxh', choices=('bxh', 'lead', 'none', 'b_cross_h')),
         'acquisition_gain_per_s_g2': Field('float', 'B×H acquisition gain G, (s·G²)⁻¹', 0.05, lo=0.0, hi=10.0),
         'bdot_gain_ft_lb_s_per_g2': Field('float', 'B-dot gain K_D, ft-lb-s/G²', 1.0, lo=0.0, hi=1e4),
         'unloading_gain_mode_1b_per_s_g2': Field('float', 'unloading gain in Mode 1B', 0.05, lo=0.0, hi=10.0),
         'unloading_gain_scan_per_s_g2': Field('float', 'unloading gain, celestial scan', 0.01, lo=0.0, hi=10.0),
         'unloading_gain_point_per_s_g2': Field('float', 'unloading gain, celestial point', 0.02, lo=0.0, hi=10.0),
-        'max_moment_am2': Field('float', 'per-axis moment command saturation', 2000.0, lo=1.0, hi=1e5),
+        'max_moment_am2': Field('float', 'per-axis moment command saturation', 2000.0, lo=1e-3, hi=1e5),
+        # seed 003 gain design, k_ω = (4π/T_orb)(sin ξ + 1) J_min: the on-board design values (defaults: the seed's)
+        'detumble_orbit_period': _q('b_cross_omega gain: orbit period T_orb (seed 003: ISS, 5560.8 s)', 5560.8, 's',
+                                    TIME, lo=1e3, hi=1e6),
+        'magnetic_inclination': _q('ξ, inclination of the orbit to the geomagnetic equator, for the b_cross_omega '
+                                   'and b_cross_h gains (seed 003: 0.90129 rad, the ISS inclination)', 0.90129,
+                                   'rad', ANGLE, lo=1e-3, hi=math.pi / 2),
+        'detumble_j_min': _q('b_cross_omega gain: smallest principal moment of inertia J_min (seed 003: '
+                             '5,094,047.43 g·mm²)', 5094047.43 * u.G_MM2_KG_M2, 'kg_m2', MOMENT_OF_INERTIA,
+                             lo=1e-6, hi=1e9),
+        'dump_time': _q('b_cross_h gain: dump the slowest momentum mode to dump_residual_fraction within this time '
+                        '(seed 003: "say, 1 orbit of 90 minutes")', 5400.0, 's', TIME, lo=1.0, hi=1e7),
+        'dump_residual_fraction': Field('float', 'b_cross_h gain: momentum left of the slowest mode after dump_time',
+                                        0.1, lo=1e-6, hi=0.999),
         'coupling_compensation': Field('bool', 'subtract the known Δ·M from the sensed field', False),
         'wheel_gains': Field('str', 'acquisition wheel-law gains (Table 4-2)', 'heao_b',
                              choices=('heao_a', 'heao_b', 'heao_b_preliminary')),
@@ -526,6 +550,7 @@ def _read_yaml(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:
         raise ScenarioError(f'{path}:{where} is not valid YAML: {getattr(exc, "problem", exc)}') from None
     if not isinstance(data, dict):
         raise ScenarioError(f'{path}: a scenario is a mapping of keys, got {type(data).__name__}')
+    _resolve_paths(data, path)
     if 'extends' not in data:
         return data
     base = _read_yaml(_extends_path(data.pop('extends'), path), (*chain, path.resolve()))
@@ -543,6 +568,21 @@ def _read_yaml(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:
                 del base[old]
             base[key] = value
     return base
+
+
+def _resolve_paths(data: dict[str, Any], path: Path) -> None:
+    """Make every file-name key (``Field.path``) this file gives absolute, relative to this file's folder.
+
+    Done per file before ``extends`` merges them, so a base scenario's file names stay relative to the base.
+    """
+    for section, fields in SCHEMA.items():
+        given = data if not section else data.get(section)
+        if not isinstance(given, dict):
+            continue
+        for name, f in fields.items():
+            value = given.get(name)
+            if f.path and isinstance(value, str) and value and not Path(value).is_absolute():
+                given[name] = str((path.parent / value).resolve())
 
 
 def _stem(section: str, key: str) -> str:

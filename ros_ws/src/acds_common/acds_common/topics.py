@@ -41,6 +41,9 @@ DIPOLE_AVG = 'em_driver/dipole_avg'             #: geometry_msgs/Vector3Stamped:
 DIPOLE_END = 'em_driver/dipole_end'             #: geometry_msgs/Vector3Stamped: achieved dipole at t_k+1, A·m²
 COIL_CURRENT = 'em_driver/coil_current'         #: geometry_msgs/Vector3Stamped: coil current at t_k+1 (signed), A
 E_FT = 'em_driver/e_ft'                         #: geometry_msgs/Vector3Stamped: current-sensor telemetry voltage e_ft, V
+# em_driver, torque-rod kind only (step k, over [t_k, t_k+1])
+COIL_POWER = 'em_driver/power'                  #: geometry_msgs/Vector3Stamped: net bus power per axis, step average, W
+COIL_DUTY = 'em_driver/duty'                    #: geometry_msgs/Vector3Stamped: |PWM duty| of the active winding per axis
 
 # ascs_mode_manager
 MODE = 'mode'                                   #: diagnostic_msgs/DiagnosticArray: current mode (step k), transition cause
@@ -75,6 +78,8 @@ TYPES: dict[str, str] = {
     DIPOLE_END: 'geometry_msgs/msg/Vector3Stamped',
     COIL_CURRENT: 'geometry_msgs/msg/Vector3Stamped',
     E_FT: 'geometry_msgs/msg/Vector3Stamped',
+    COIL_POWER: 'geometry_msgs/msg/Vector3Stamped',
+    COIL_DUTY: 'geometry_msgs/msg/Vector3Stamped',
     MODE: 'diagnostic_msgs/msg/DiagnosticArray',
     GROUND_COMMAND: 'std_msgs/msg/String',
     GROUND_ACK: 'std_msgs/msg/String',

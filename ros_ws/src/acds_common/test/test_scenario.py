@@ -105,3 +105,18 @@ def test_every_number_in_the_schema_has_a_physical_range():
                  if f.kind in ('float', 'int', 'floats') and not (f.lo is not None and f.hi is not None
                                                                  and math.isfinite(f.lo) and math.isfinite(f.hi))]
     assert unbounded == []
+
+
+def test_a_file_name_key_is_relative_to_the_file_that_gives_it(tmp_path):
+    base_dir, child_dir = tmp_path / 'base', tmp_path / 'elsewhere'
+    base_dir.mkdir()
+    child_dir.mkdir()
+    write(base_dir, BASE + 'em_driver:\n  driver_kind: torque_rod\n  torque_rod_design: rods/rod.json\n', 'base.yaml')
+    inherited = load_scenario(write(child_dir, f'extends: {base_dir / "base.yaml"}\nname: c\n', 'c.yaml'))
+    assert inherited.get('em_driver', 'torque_rod_design') == str((base_dir / 'rods' / 'rod.json').resolve())
+    own = load_scenario(write(child_dir, f'extends: {base_dir / "base.yaml"}\nname: d\n'
+                                         'em_driver:\n  torque_rod_design: rod.json\n', 'd.yaml'))
+    assert own.get('em_driver', 'torque_rod_design') == str((child_dir / 'rod.json').resolve())
+    absolute = load_scenario(write(child_dir, BASE + f'em_driver:\n  torque_rod_design: {tmp_path / "r.json"}\n'))
+    assert absolute.get('em_driver', 'torque_rod_design') == str(tmp_path / 'r.json')
+    assert load_scenario(write(tmp_path, BASE)).get('em_driver', 'torque_rod_design') == ''

@@ -43,10 +43,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from acds_common.units import G_MM2_KG_M2
 
 from acds_controller.magnetic_laws import ControllerError, as_vector3, check_gain
 
 __all__ = [
+    'T_ORB_SEED_S',
+    'XI_SEED_RAD',
+    'J_MIN_SEED_KG_M2',
+    'K_OMEGA_SEED',
     'detumble_gain',
     'detumble_moment',
     'dump_moment',
@@ -72,6 +77,14 @@ def detumble_gain(orbit_period_s: float, xi_rad: float, j_min_kg_m2: float) -> f
     if t == 0.0 or j == 0.0:
         raise ControllerError('orbit_period_s and j_min_kg_m2 must be > 0')
     return 4.0 * math.pi / t * (math.sin(xi) + 1.0) * j
+
+
+#: Seed 003 "Mission Requirements": the ISS orbit period, s, its inclination taken as ξ, rad, and OreSat's
+#: J_min from its CAD model (the seed's 5,094,047.43 "g/mm²" is g·mm²), kg·m²; k_ω from them, kg·m²/s.
+T_ORB_SEED_S = 5560.8
+XI_SEED_RAD = 0.90129
+J_MIN_SEED_KG_M2 = 5_094_047.43 * G_MM2_KG_M2
+K_OMEGA_SEED = detumble_gain(T_ORB_SEED_S, XI_SEED_RAD, J_MIN_SEED_KG_M2)
 
 
 def _cross_law(b_t: np.ndarray, x: np.ndarray, gain: float, name: str) -> np.ndarray:

@@ -4,6 +4,13 @@ The controller stepper receives the ``spacecraft``, ``controller`` and
 ``magnetometer`` scenario sections as SI values ({field: value}, see
 ``acds_common.scenario.SCHEMA``) and builds its cores here; the launcher's
 pre-flight builds the same stepper before any process starts.
+
+The seed-003 gains are design values the scenario states, as a flight program would carry
+them, not quantities taken from the simulated orbit or body: k_ω = (4π/T_orb)(sin ξ + 1)J_min
+from ``controller.detumble_orbit_period``, ``magnetic_inclination`` (ξ) and ``detumble_j_min``
+(:func:`~acds_controller.b_cross_omega.detumble_gain`), and the dumping gain k_h from
+``dump_time``, ξ and ``dump_residual_fraction``
+(:func:`~acds_controller.b_cross_omega.dump_gain_per_s`).
 """
 
 from __future__ import annotations
@@ -15,6 +22,7 @@ from acds_common.coupling import coupling_from_section
 from acds_common.inertia import inertia_tensor
 from acds_common.validation import scenario_key
 
+from acds_controller.b_cross_omega import detumble_gain, dump_gain_per_s
 from acds_controller.dpa import Dpa, DpaConfig
 from acds_controller.magnetic_laws import ControllerError
 from acds_controller.transfer_assembly import TransferAssembly
@@ -53,5 +61,8 @@ def _build(sc: dict[str, Any], c: dict[str, Any], mag: dict[str, Any]) -> tuple[
         wheel_gains_acquisition=WHEEL_GAIN_SETS[c['wheel_gains']],
         scan_rate_rad_s=c['scan_rate'],
         target_q_body_to_eci=np.array(c['target_quaternion_xyzw']),
-        lead_time_s=c['lead_time_s']))
+        lead_time_s=c['lead_time_s'],
+        detumble_gain_kg_m2_s=detumble_gain(c['detumble_orbit_period'], c['magnetic_inclination'],
+                                            c['detumble_j_min']),
+        dump_gain_per_s=dump_gain_per_s(c['dump_time'], c['magnetic_inclination'], c['dump_residual_fraction'])))
     return ta, dpa

@@ -6,13 +6,18 @@ command for the electromagnet drivers and the wheel drive volts. Modes (exact st
 
 * ``'standby'``: everything zero.
 * ``'mode_1a'``: rate reduction, magnetics only on the body momentum H = I·ω (B×H, G = 0.05)
-  or B-dot (K_D ≈ 1); wheels off (0 V).
+  or B-dot (K_D ≈ 1), or the CubeSat detumble law M = −(k_ω/|B|)(B̂ × ω) (``b_cross_omega``,
+  seed 003, :mod:`acds_controller.b_cross_omega`); wheels off (0 V).
 * ``'mode_1b'``: sun acquisition; the wheels close the loop on the sun-sensor error and gyro
   rate with the acquisition gains (Table 4-2); the magnetics unload the wheels (H = h).
   With the sun absent (zero sun vector) the position term is zero: rate damping only.
 * ``'celestial_scan'``: normal-mode gains; x/y hold the scan axis (the z axis of the target
   attitude) on its inertial direction, z follows the scan-rate law (eq. 4-26); unloading G = 0.01.
 * ``'celestial_point'``: normal-mode gains, inertial hold of the target attitude; unloading G = 0.02.
+
+Unloading law ``b_cross_h`` is seed 003's momentum-dumping form M = −(k_h/|B|)(B̂ × h) with one
+gain k_h (s⁻¹) in every unloading mode. With no sensed field (zero vector: no magnetometer) the
+two seed-003 laws command nothing, as B×H and B-dot do.
 
 Mode 1B unloading gain: the study does not quote a separate value; its acquisition runs carry
 one gain label (K = .05) through the whole run, so 0.05 (s·G²)⁻¹ is the default
@@ -28,6 +33,7 @@ import numpy as np
 from acds_common.dpa_commands import AXES, GAIN_TABLE, LAW_CHOICES, SCALAR_GAINS
 from acds_common.units import FT_LB_NM, deg, nms_to_ftlbs, rad_s_to_rpm, rpm_to_rad_s, tesla_to_gauss
 
+from acds_controller.b_cross_omega import K_OMEGA_SEED, detumble_moment, dump_moment
 from acds_controller.magnetic_laws import (
     G_ACQUISITION_STUDY,
     G_UNLOAD_POINT_STUDY,
@@ -80,6 +86,8 @@ _SCALAR_GAIN_FIELDS = {
     'max_moment': 'max_moment_am2',
     'scan_rate_rpm': 'scan_rate_rad_s',
     'lead_time': 'lead_time_s',
+    'detumble_gain': 'detumble_gain_kg_m2_s',
+    'dump_gain': 'dump_gain_per_s',
 }
 
 
@@ -95,7 +103,9 @@ class DpaConfig:
     Δ·M_prev from the sensed field. ``scan_rate_rad_s``: ω_z0. ``target_q_body_to_eci``:
     (x, y, z, w) attitude held in celestial point; its z axis is the celestial scan axis.
     ``v_sat_v``: wheel drive limit, V. ``wheel_torque_gain_nm_per_v2`` and ``lead_time_s``:
-    express the wheel command as momentum for the lead law.
+    express the wheel command as momentum for the lead law. ``detumble_gain_kg_m2_s``: k_ω of the
+    ``b_cross_omega`` law, kg·m²/s (default: the seed's 2.054e-5). ``dump_gain_per_s``: k_h of the
+    ``b_cross_h`` unloading law, s⁻¹.
     """
 
     inertia_kg_m2: np.ndarray
@@ -116,6 +126,8 @@ class DpaConfig:
     v_sat_v: float = V_SAT_V
     wheel_torque_gain_nm_per_v2: float = WHEEL_TORQUE_GAIN_NM_PER_V2
     lead_time_s: float = LEAD_TIME_S
+    detumble_gain_kg_m2_s: float = K_OMEGA_SEED
+    dump_gain_per_s: float = 0.0
 
     def __post_init__(self) -> None:
         inertia = as_matrix3(self.inertia_kg_m2, 'inertia_kg_m2')
@@ -222,6 +234,9 @@ class Dpa:
             if c.acquisition_law == 'bxh':
                 h_used = c.inertia_kg_m2 @ omega
                 m = bxh_moment(b, h_used, c.acquisition_gain_study)
+            elif c.acquisition_law == 'b_cross_omega':
+                if np.any(b):
+                    m = detumble_moment(b, omega, c.detumble_gain_kg_m2_s)
             elif self._b_prev_t is not None:
                 m = bdot_moment(b, self._b_prev_t, dt, c.bdot_gain_study)
         elif mode != 'standby':
@@ -264,6 +279,8 @@ class Dpa:
                 'celestial_point': c.unloading_gain_point_study}[mode]
         if c.unloading_law == 'none':
             return np.zeros(3)
+        if c.unloading_law == 'b_cross_h':
+            return dump_moment(b, h_wheel, c.dump_gain_per_s) if np.any(b) else np.zeros(3)
         if c.unloading_law == 'lead':
             eps = wheel_command_momentum_nms(volts, c.wheel_torque_gain_nm_per_v2, c.lead_time_s)
             return lead_moment(b, h_wheel, eps, gain)

@@ -53,6 +53,19 @@ def test_build_from_scenarios_uses_their_sections():
     assert not np.any(coupling_from_section(base['magnetometer']))
 
 
+def test_oresat_scenario_gain_is_the_seed_formula_on_its_design_values():
+    """k_ω = (4π/T_orb)(sin ξ + 1)J_min with the scenario's T_orb, ξ, J_min (seed 003: 2.054e-5 kg·m²/s);
+    the orbit and body the scenario builds match those design values."""
+    sc = load_scenario('oresat_detumble')
+    c = sc.values['controller']
+    _, dpa = build_dpa(sc.values['spacecraft'], c, sc.values['magnetometer'])
+    assert f'{dpa.config.detumble_gain_kg_m2_s:.4g}' == '2.054e-05'
+    assert dpa.config.acquisition_law == 'b_cross_omega' and dpa.config.max_moment_am2 == 0.1552
+    assert sc.orbit_period_s() == pytest.approx(c['detumble_orbit_period'], abs=1e-3)
+    assert sc.get('orbit', 'inclination') == c['magnetic_inclination']
+    assert np.linalg.eigvalsh(dpa.config.inertia_kg_m2)[0] == pytest.approx(c['detumble_j_min'], rel=1e-9)
+
+
 def _stepper() -> ControllerStep:
     from acds_common.parameters import node_parameters
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from acds_common.dpa_commands import GAIN_LIMITS, GAIN_TABLE
 from acds_common.units import SLUG_FT2_KG_M2, rad, rpm_to_rad_s
+from acds_controller.b_cross_omega import K_OMEGA_SEED, detumble_moment, dump_moment
 from acds_controller.dpa import WHEEL_TORQUE_GAIN_NM_PER_V2, Dpa, DpaConfig
 from acds_controller.magnetic_laws import (
     ControllerError,
@@ -62,6 +63,32 @@ def test_mode_1a_bdot_needs_two_samples_then_opposes_field_rate() -> None:
     b_dot = (b2 - B_T) / 0.5
     np.testing.assert_allclose(second.moment_command_am2, -1.3558179e8 * b_dot, rtol=1e-6)
     assert not np.any(second.wheel_volts_v)
+
+
+def test_mode_1a_b_cross_omega_is_the_saturated_seed_003_law_and_quiet_without_a_field() -> None:
+    """Seed 003: M = sat(−(k_ω/|B|)(B̂ × ω)) per axis at the rods' moment; zero field (no magnetometer) → 0."""
+    omega = np.full(3, rad(5.0))
+    dpa = _dpa(acquisition_law='b_cross_omega', max_moment_am2=0.1552)
+    assert dpa.config.detumble_gain_kg_m2_s == K_OMEGA_SEED
+    out = dpa.step('mode_1a', B_T, omega, SUN_Z, np.ones(3), Q_ID, 1.0)
+    raw = detumble_moment(B_T, omega, K_OMEGA_SEED)
+    np.testing.assert_allclose(out.moment_command_am2, saturate(raw, 0.1552), rtol=1e-15)
+    assert out.telemetry['acquisition_law'] == 'b_cross_omega' and not np.any(out.wheel_volts_v)
+    weak = 0.25 * B_T  # |B| 9.4 µT: the command exceeds the rods on some axis and is clipped there
+    clipped = dpa.step('mode_1a', weak, omega, SUN_Z, np.ones(3), Q_ID, 1.0)
+    assert np.max(np.abs(clipped.moment_command_am2)) == 0.1552 and clipped.telemetry['moment_saturated'] == 'true'
+    assert not np.any(dpa.step('mode_1a', np.zeros(3), omega, SUN_Z, np.ones(3), Q_ID, 1.0).moment_command_am2)
+
+
+def test_unloading_b_cross_h_dumps_wheel_momentum_with_one_gain_in_every_mode() -> None:
+    h = np.array([0.01, -0.02, 0.005])
+    dpa = _dpa(unloading_law='b_cross_h', dump_gain_per_s=7e-4, max_moment_am2=0.1552)
+    for mode in ('mode_1b', 'celestial_point', 'celestial_scan'):
+        out = dpa.step(mode, B_T, np.zeros(3), SUN_Z, h, Q_ID, 1.0)
+        np.testing.assert_allclose(out.moment_command_am2, saturate(dump_moment(B_T, h, 7e-4), 0.1552))
+        assert float(np.cross(out.moment_command_am2, B_T) @ h) < 0.0  # the torque opposes h
+    dpa.set_gain('dump_gain', 0.0)
+    assert not np.any(dpa.step('mode_1b', B_T, np.zeros(3), SUN_Z, h, Q_ID, 1.0).moment_command_am2)
 
 
 def _closed_loop_single_axis(axis: int, angle0_rad: float, duration_s: float) -> tuple[float, float]:

@@ -25,6 +25,7 @@ from acds_common.environment import (
     TiltedDipoleField,
 )
 from acds_common.inertia import InertiaError, inertia_tensor
+from acds_common.torque_rod_record import TorqueRodRecordError, dipole_bound_am2, read_torque_rod_record
 from acds_common.validation import scenario_key
 
 from dynamics.errors import DynamicsError
@@ -93,11 +94,22 @@ def actuator_limits(em_driver: dict[str, Any], wheels: dict[str, Any]) -> Actuat
 
     Dipole per axis: both windings (active and standby) carrying the full bus current E/R, with no
     transistor drop — more than any drive can make (spec §6), so only a value from outside the graph
-    exceeds it. Wheel momentum per axis: every wheel at its capacity along that axis, Σ_j |a_ij|·H_j
-    (the single-axis maximum; Table 4-6's box is what every axis holds at once).
+    exceeds it. For ``driver_kind: torque_rod`` the same bound from the rod's design record
+    (:func:`acds_common.torque_rod_record.dipole_bound_am2`, seed 003). Wheel momentum per axis: every
+    wheel at its capacity along that axis, Σ_j |a_ij|·H_j (the single-axis maximum; Table 4-6's box is
+    what every axis holds at once).
     """
-    per_amp = np.asarray(em_driver['coil_moment_per_amp_am2'], dtype=float)
-    i_max = em_driver['supply_v'] / np.asarray(em_driver['coil_resistance_ohm'], dtype=float)
+    if em_driver['driver_kind'] == 'torque_rod':
+        with scenario_key('em_driver.torque_rod_design', DynamicsError):
+            try:
+                record = read_torque_rod_record(em_driver['torque_rod_design'])
+            except TorqueRodRecordError as exc:
+                raise DynamicsError(str(exc)) from None
+        dipole = np.full(3, dipole_bound_am2(record, em_driver['supply_v']))
+    else:
+        per_amp = np.asarray(em_driver['coil_moment_per_amp_am2'], dtype=float)
+        i_max = em_driver['supply_v'] / np.asarray(em_driver['coil_resistance_ohm'], dtype=float)
+        dipole = 2.0 * per_amp * i_max
     cluster = build_wheels(wheels)
     axes = np.abs(cluster.wheel_axes_body())
-    return ActuatorLimits(2.0 * per_amp * i_max, axes @ cluster.wheel_capacities_nms())
+    return ActuatorLimits(dipole, axes @ cluster.wheel_capacities_nms())

@@ -1,8 +1,18 @@
 """Scenario section → drive assembly, and the forwarded-command grammar (pure, no rclpy).
 
 The node (``em_driver_node``) receives the ``em_driver`` scenario section as SI values
-({field: value}, see ``acds_common.scenario.SCHEMA['em_driver']``) and builds the
-:class:`~em_driver.drive_assembly.DriveAssembly` here.
+({field: value}, see ``acds_common.scenario.SCHEMA['em_driver']``) and builds its coils here,
+by ``driver_kind``:
+
+* ``electromagnet``: the :class:`~em_driver.drive_assembly.DriveAssembly` of the HEAO/SSS coils
+  (``drive_types``, ``coil_*``, ``supply_v``, ``epsilon``, ``band_floor_a``);
+* ``torque_rod``: the :class:`~em_driver.torque_rod.TorqueRodAssembly` of seed 003, the rod of
+  ``torque_rod_design`` (a ``design-torque-rod --json`` record) on every body axis, each winding
+  on its PWM H-bridge (20 kHz, 10 bits) from ``supply_v`` with the record's bridge resistance
+  (the design's R = V²/P − R_bridge assumes it). Both assemblies have the same interface
+  (``step(moment_command_am2, dt_s) -> AssemblyResult``, ``select_eea``, ``inject_failure``), so
+  the node, its topics and the commands below are the same; ``mismatch_settle`` applies to the
+  electromagnets only (a rod settles within milliseconds, one control period decides).
 
 Commands forwarded by ascs_mode_manager in the ``mode`` array (key ``command/em_driver``),
 whitespace separated, keywords case-insensitive::
@@ -19,10 +29,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from acds_common.torque_rod_record import TorqueRodRecordError, read_torque_rod_record
+from acds_common.validation import scenario_key
+
 from em_driver.bridge_switch import CoilFault, CoilParams, DriverParams, EmDriverError
 from em_driver.drive_assembly import UNITS, AxisConfig, DriveAssembly
+from em_driver.torque_rod import PwmDriverParams, TorqueRodAssembly
+from em_driver.torque_rod_design import load_rod
 
-__all__ = ['DriverCommand', 'axis_configs', 'build_assembly', 'parse_command']
+__all__ = ['DriverCommand', 'axis_configs', 'build_assembly', 'build_torque_rods', 'parse_command']
 
 _AXES = {'x': 0, 'y': 1, 'z': 2}
 _FAILURES = tuple(f.value for f in CoilFault)
@@ -49,11 +64,26 @@ def axis_configs(section: dict[str, Any]) -> list[AxisConfig]:
     return out
 
 
-def build_assembly(section: dict[str, Any]) -> DriveAssembly:
+def build_assembly(section: dict[str, Any]) -> DriveAssembly | TorqueRodAssembly:
     """The three-axis redundant drive assembly the section describes (failures come at failure_time)."""
+    if section['driver_kind'] == 'torque_rod':
+        return build_torque_rods(section)
     return DriveAssembly(axis_configs(section), auto_switch_to_standby=section['auto_switch_to_standby'],
                          mismatch_tolerance_frac=section['mismatch_tolerance_frac'],
                          mismatch_settle_s=section['mismatch_settle'])
+
+
+def build_torque_rods(section: dict[str, Any]) -> TorqueRodAssembly:
+    """Three rods of the ``torque_rod_design`` record, PWM from ``supply_v`` (module docstring)."""
+    with scenario_key('torque_rod_design', EmDriverError):
+        try:
+            record = read_torque_rod_record(section['torque_rod_design'])
+        except TorqueRodRecordError as exc:
+            raise EmDriverError(str(exc)) from None
+        rod = load_rod(record)
+        driver = PwmDriverParams(supply_v=section['supply_v'], bridge_resistance_ohm=record['bridge_resistance_ohm'])
+    return TorqueRodAssembly([rod] * 3, driver, auto_switch_to_standby=section['auto_switch_to_standby'],
+                             mismatch_tolerance_frac=section['mismatch_tolerance_frac'])
 
 
 @dataclass(frozen=True)
@@ -65,7 +95,7 @@ class DriverCommand:
     unit: str
     failure: str | None = None
 
-    def apply(self, assembly: DriveAssembly) -> str:
+    def apply(self, assembly: DriveAssembly | TorqueRodAssembly) -> str:
         """Apply to the assembly; return the event text for telemetry."""
         name = 'xyz'[self.axis]
         if self.verb == 'select':

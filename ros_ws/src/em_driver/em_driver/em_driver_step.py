@@ -11,6 +11,11 @@ current at t_k+1, e_ft, and diagnostics (duty, switch count, power, per-axis ala
 units, events) every ``telemetry_every`` steps and at every event, alarm change or rejected
 command. A NaN/inf command component is rejected with a WARN diagnostic and that axis holds
 its last valid command; the excess-coil-current / mismatch alarm is reported at level ERROR.
+
+``em_driver.driver_kind`` picks the hardware (``configuration.build_assembly``): the HEAO/SSS
+electromagnets or the seed-003 CubeSat torque rods, behind the same assembly interface. The
+torque-rod kind also returns, every step, the net bus power (W) and |PWM duty| of each axis over
+[t_k, t_k+1] (``power``, ``duty``), which the CubeSat detumble summary integrates.
 """
 
 from __future__ import annotations
@@ -28,7 +33,7 @@ from em_driver.drive_assembly import AssemblyResult
 
 
 class EmDriverStep(Stepper):
-    """Electromagnets with bridge-switch (HEAO) or constant-level (SSS) drives, active/standby."""
+    """Electromagnets with bridge-switch (HEAO) or constant-level (SSS) drives, or CubeSat torque rods; active/standby."""
 
     node = 'em_driver'
 
@@ -38,6 +43,7 @@ class EmDriverStep(Stepper):
         with scenario_key('em_driver', EmDriverError):
             self.assembly = build_assembly(self.cfg)
         self.source = self.cfg['command_source']
+        self._electrical = self.cfg['driver_kind'] == 'torque_rod'
         self._failure_pending = self.cfg['failure'] != 'none'
         self._alarms = np.zeros(3, dtype=bool)
 
@@ -65,6 +71,9 @@ class EmDriverStep(Stepper):
             'coil_current': vector3(result.coil_current_a),
             'e_ft': vector3(result.e_ft_v),
         }
+        if self._electrical:
+            out['power'] = vector3(result.power_w)
+            out['duty'] = vector3(result.duty)
         alarm_changed = bool(np.any(result.alarms != self._alarms))
         self._alarms = result.alarms.copy()
         if events or rejected or alarm_changed or k % self.cfg['telemetry_every'] == 0:

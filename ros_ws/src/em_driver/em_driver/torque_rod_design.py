@@ -190,8 +190,12 @@ def load_rod(record: dict[str, Any] | str | Path) -> TorqueRod:
     """The :class:`TorqueRod` of a design JSON record (a dict or a ``--json`` file)."""
     data = json.loads(Path(record).read_text()) if isinstance(record, str | Path) else record
     try:
+        material = data['core']
+        if material not in CORE_MATERIALS:
+            raise EmDriverError(f'torque-rod design record: unknown core {material!r} '
+                                f'(known: {", ".join(CORE_MATERIALS)})')
         wire = magnet_wire(int(data['awg']), data['wire_insulation_build_mm'] * 1e-3)
-        return TorqueRod(data['core_length_mm'] * 1e-3, data['core_radius_mm'] * 1e-3, CORE_MATERIALS[data['core']],
+        return TorqueRod(data['core_length_mm'] * 1e-3, data['core_radius_mm'] * 1e-3, CORE_MATERIALS[material],
                          wire, data['wire_length_per_winding_m'], int(data['windings']))
     except KeyError as exc:
         raise EmDriverError(f'torque-rod design record lacks key {exc.args[0]!r}') from None

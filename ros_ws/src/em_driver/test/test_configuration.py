@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 from acds_common.scenario import SCHEMA
+from acds_common.torque_rod_record import dipole_bound_am2, read_torque_rod_record
 from em_driver.bridge_switch import EmDriverError
 from em_driver.configuration import DriverCommand, axis_configs, build_assembly, parse_command
+from em_driver.torque_rod import TorqueRodAssembly
+from em_driver.torque_rod_design import DesignRequest, design_torque_rod
 
 
 def section(**overrides: Any) -> dict[str, Any]:
@@ -66,3 +71,67 @@ def test_commands_apply_to_the_assembly() -> None:
     assert assembly.unit_fault(0, 'A') == 'dead_driver'
     parse_command('eea_failure x A none').apply(assembly)
     assert assembly.unit_fault(0, 'A') is None
+
+
+@pytest.fixture(scope='module')
+def rod_record(tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, Path]:
+    """The seed's minimum-mass AWG 35 rod (seed 003) and its `design-torque-rod --json` file."""
+    design = design_torque_rod(DesignRequest(awg=35))
+    path = tmp_path_factory.mktemp('rod') / 'rod.json'
+    path.write_text(json.dumps(design.to_json_dict()))
+    return design, path
+
+
+def test_torque_rod_kind_builds_three_designed_rods_on_pwm_bridges(rod_record) -> None:
+    design, path = rod_record
+    assembly = build_assembly(section(driver_kind='torque_rod', torque_rod_design=str(path), supply_v=7.2))
+    assert isinstance(assembly, TorqueRodAssembly)
+    assert assembly.driver.supply_v == 7.2 and assembly.driver.bridge_resistance_ohm == design.request.bridge_resistance_ohm
+    np.testing.assert_allclose(assembly.max_moment_am2(), design.moment_am2, rtol=1e-12)
+    command = np.array([0.1, -0.05, 0.0])
+    result = assembly.step(command, 1.0)  # τ = 1.8 ms: settled within the period, 10-bit duty
+    np.testing.assert_allclose(result.avg_dipole_am2, command, atol=2e-3)
+    assert np.all(result.power_w >= 0.0) and result.power_w[2] == 0.0 and result.duty[0] == pytest.approx(
+        0.1 / design.moment_am2, abs=1e-3)
+    DriverCommand('select', 1, 'B').apply(assembly)
+    assert assembly.active_units == ('A', 'B', 'A')
+
+
+@pytest.mark.parametrize(('record', 'message'), [
+    (None, 'no design file given'),
+    ('missing', 'cannot be read'),
+    ('[1, 2]', 'one JSON object'),
+    ('{"core": "permalloy"', 'is not a JSON design record'),
+    ({'drop': 'moment_am2'}, "lacks key 'moment_am2'"),
+    ({'set': ('core_radius_mm', -1.0)}, 'core_radius_mm must be a finite positive number'),
+    ({'set': ('core', 'mumetal')}, "unknown core 'mumetal'"),
+])
+def test_a_bad_rod_design_file_is_refused_naming_the_key(rod_record, tmp_path: Path, record: Any,
+                                                         message: str) -> None:
+    design, _ = rod_record
+    path = tmp_path / 'rod.json'
+    if isinstance(record, str) and record != 'missing':
+        path.write_text(record)
+    elif isinstance(record, dict):
+        data = design.to_json_dict()
+        data.pop(record.get('drop', ''), None)
+        if 'set' in record:
+            data[record['set'][0]] = record['set'][1]
+        path.write_text(json.dumps(data))
+    given = '' if record is None else str(path)
+    with pytest.raises(EmDriverError, match='torque_rod_design') as err:
+        build_assembly(section(driver_kind='torque_rod', torque_rod_design=given, supply_v=7.2))
+    assert message in str(err.value)
+
+
+def test_the_dipole_bound_holds_for_both_windings_at_the_bus_over_winding_resistance(rod_record) -> None:
+    """acds_common's bound (the rigid body's actuator limit) is above anything the rod can make (seed 003)."""
+    design, path = rod_record
+    record = read_torque_rod_record(path)
+    for supply in (3.0, 7.2, 12.0):
+        i_max = design.rod.windings * supply / design.rod.props.resistance_ohm
+        bound = dipole_bound_am2(record, supply)
+        for i in np.linspace(0.0, i_max, 50):
+            assert float(design.rod.moment_am2(i)) <= bound * (1.0 + 1e-12)
+    saturated = dict(record, moment_am2=0.5 * record['moment_am2'], current_a=record['current_a'])
+    assert dipole_bound_am2(saturated, 7.2) == pytest.approx(0.5 * dipole_bound_am2(record, 7.2))
