@@ -53,7 +53,8 @@ class Progress:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    """Run a scenario through the full process graph and print its summary."""
+    """Run a scenario through the full process graph (or the direct engine) and print its summary."""
+    from acds_runtime.direct import DirectRun
     from acds_runtime.launcher import GraphRun, LaunchError
     from acds_runtime.preflight import preflight
     from acds_runtime.summary import print_tables, write_summary_json
@@ -66,30 +67,41 @@ def cmd_run(args: argparse.Namespace) -> int:
         if steps > MAX_STEPS:
             raise UsageError(f'--until-min {args.until_min:g}: {steps:,} steps of {scenario.control_period_s} s, '
                              f'more than the {MAX_STEPS:,} a run may have')
+    direct = args.engine == 'direct'
+    if direct and args.rtf:
+        raise UsageError('--rtf paces the process graph\'s clock; the direct engine has none (use --engine graph)')
     run_dir = Path(args.run_dir or ROOT / 'runs' / f'{scenario.name}_{time.strftime("%Y%m%d_%H%M%S")}')
     check_output_dir('--run-dir' if args.run_dir else 'run folder', run_dir)
     if args.summary_json:
         check_output_file('--summary-json', Path(args.summary_json))
-    quiet = args.quiet
-    echo = (lambda line: None) if quiet else None
+    echo = (lambda line: None) if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
     bag = None if args.no_record else Path(args.record) if args.record else run_dir / 'bag'
-    graph = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=Progress(scenario.control_period_s),
-                     record=bag)
-    print(f'[acds] scenario {scenario.name}: {graph.steps} steps of {scenario.control_period_s} s '
-          f'({graph.steps * scenario.control_period_s / 60:.1f} min sim), nodes {", ".join(scenario.get("", "nodes"))}; '
-          f'run folder {run_dir}', file=sys.stderr, flush=True)
+    progress = Progress(scenario.control_period_s)
+    if direct:
+        run_dir.mkdir(parents=True, exist_ok=True)
+        engine = DirectRun(scenario, steps=steps, echo=echo, progress=progress, record=bag)
+    else:
+        engine = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=None if not args.quiet else echo,
+                          progress=progress, record=bag)
+    print(f'[acds] scenario {scenario.name}: {engine.steps} steps of {scenario.control_period_s} s '
+          f'({engine.steps * scenario.control_period_s / 60:.1f} min sim), '
+          + ('direct engine (one process, no DDS)' if direct else f'nodes {", ".join(scenario.get("", "nodes"))}')
+          + f'; run folder {run_dir}', file=sys.stderr, flush=True)
     try:
-        with graph:
-            print(f'[acds] ROS domain {graph.lease.domain_id}' + (f'; recording into {bag}' if bag else ''),
-                  file=sys.stderr, flush=True)
-            result = graph.wait()
-            summary = result.summary
+        if direct:
+            summary = engine.run().summary
+        else:
+            with engine:
+                print(f'[acds] ROS domain {engine.lease.domain_id}' + (f'; recording into {bag}' if bag else ''),
+                      file=sys.stderr, flush=True)
+                summary = engine.wait().summary
     except LaunchError as exc:
         print(f'[acds] run failed: {exc}', file=sys.stderr)
         return 1
     except KeyboardInterrupt as exc:
         signum = getattr(exc, 'signum', signal.SIGINT)
-        print(f'\n[acds] stopped by {signal.Signals(signum).name}: all nodes stopped', file=sys.stderr)
+        stopped = 'the run stopped' if direct else 'all nodes stopped'
+        print(f'\n[acds] stopped by {signal.Signals(signum).name}: {stopped}', file=sys.stderr)
         return 128 + signum
     _print_summary(summary)
     print_tables(summary)
@@ -149,7 +161,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest='verb', metavar='VERB', required=True)
 
     p = sub.add_parser('run', help='run a scenario through the full node graph (default: the main job)',
-                       description='Run SCENARIO (a shipped name or a YAML path) through the full process graph.')
+                       description='Run SCENARIO (a shipped name or a YAML path) through the full process graph '
+                                   '(or --engine direct).')
     p.add_argument('scenario', nargs='?', help=f'scenario name or path (default {DEFAULT_SCENARIO})')
     g = p.add_mutually_exclusive_group()
     g.add_argument('--steps', type=step_count, help='number of control steps (default: the scenario duration)')
@@ -163,6 +176,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help='pace at this real-time factor (default 0: as fast as possible)')
     p.add_argument('--run-dir', help='run folder (default runs/<scenario>_<time>); checked writable before the run')
     p.add_argument('--quiet', action='store_true', help="don't forward the nodes' output")
+    p.add_argument('--engine', choices=('graph', 'direct'), default='graph',
+                   help='graph: one process per node over DDS (default); direct: the same steppers in this process, '
+                        'no DDS — bit-identical data, faster')
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser('scenarios', help='list the shipped scenarios', description='List the shipped scenarios.')
