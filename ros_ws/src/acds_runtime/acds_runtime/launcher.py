@@ -27,7 +27,7 @@ from typing import IO, Any
 import yaml
 from acds_common.graph import TIME_OWNER, Graph, build_graph
 from acds_common.lockstep import LAUNCHER_PID_ENV
-from acds_common.parameters import node_parameters
+from acds_common.parameters import node_parameters, parameters_yaml
 from acds_common.scenario import Scenario
 
 from . import shm
@@ -40,13 +40,6 @@ FASTDDS_PROFILE = Path(__file__).with_name('fastdds_profile.xml')
 DOMAIN_LOCK_DIR = Path(os.environ.get('ACDS_DOMAIN_LOCK_DIR', '/tmp/acds_domains'))
 #: Domain IDs handed out to runs (0 stays free for a user's own ROS graph).
 DOMAIN_RANGE = range(11, 100)
-
-
-class _NoAliasDumper(yaml.SafeDumper):
-    """rcl's params-file parser rejects YAML aliases: write every value out."""
-
-    def ignore_aliases(self, data: Any) -> bool:
-        return True
 
 
 class LaunchError(RuntimeError):
@@ -223,8 +216,7 @@ class GraphRun:
         self.graph = build_graph(params)
         self.observer = RunObserver(self.scenario, per_step_topics(self.graph))
         params_file = self.run_dir / 'params.yaml'
-        params_file.write_text(yaml.dump(
-            {f'/acds/{n}': {'ros__parameters': p} for n, p in params.items()}, Dumper=_NoAliasDumper, sort_keys=True))
+        params_file.write_text(parameters_yaml(params))
         record = None
         if self.record is not None:
             from .bag.writer import BagError, BagWriter, RecordingSink, run_info

@@ -27,6 +27,7 @@ from typing import Any
 
 import yaml
 from acds_common import topics
+from acds_common.parameters import NoAliasDumper
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
@@ -156,11 +157,6 @@ def check_target(path: Path, storage: str = 'mcap') -> None:
                        f'(a bag needs at least {MIN_FREE_BYTES / 2**20:.0f} MiB)')
 
 
-class _NoAliasDumper(yaml.SafeDumper):
-    def ignore_aliases(self, data: Any) -> bool:
-        return True
-
-
 def run_info(scenario: Any, steps: int, params: dict[str, Any] | None = None,
              domain_id: int | None = None) -> dict[str, str]:
     """The run description stored with a bag (all values are strings, as custom_data requires)."""
@@ -172,7 +168,7 @@ def run_info(scenario: Any, steps: int, params: dict[str, Any] | None = None,
         'nodes': ','.join(scenario.get('', 'nodes')),
     }
     if params is not None:
-        info['params'] = yaml.dump(params, Dumper=_NoAliasDumper, sort_keys=True)
+        info['params'] = yaml.dump(params, Dumper=NoAliasDumper, sort_keys=True)
     if domain_id is not None:
         info['domain_id'] = str(domain_id)
     return info
