@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from acds_common import topics
+from acds_common.frames import BODY, ECI, MAGNETOMETER
 
 #: The node that owns sim time (publishes ``/clock`` and the truth).
 TIME_OWNER = 'rigid_body'
@@ -110,21 +111,22 @@ def _rigid_body(_params: dict[str, Any]) -> NodeSpec:
             Input('wheel_hdot', topics.WHEEL_TORQUE, 'reaction_wheels'),
             Input('mode', topics.MODE, 'ascs_mode_manager'),
         )),),
-        (Output('odometry', topics.TRUTH_ODOMETRY, 'eci', 'body', **truth),
-         Output('b_body', topics.TRUTH_B_BODY, 'body', **truth),
-         Output('sun_cosines', topics.TRUTH_SUN_COSINES, 'sun_frame', **truth),
-         Output('torque_mag', topics.TRUTH_TORQUE_MAG, 'body', **truth),
-         Output('torque_gg', topics.TRUTH_TORQUE_GG, 'body', **truth),
-         Output('gyro', topics.GYRO, 'body', **truth),
-         Output('sun_sensor', topics.SUN_SENSOR, 'body', **truth)))
+        (Output('odometry', topics.TRUTH_ODOMETRY, ECI, BODY, **truth),
+         Output('b_body', topics.TRUTH_B_BODY, BODY, **truth),
+         Output('sun_cosines', topics.TRUTH_SUN_COSINES, BODY, **truth),  # the sun frame's z in body components
+         Output('torque_mag', topics.TRUTH_TORQUE_MAG, BODY, **truth),
+         Output('torque_gg', topics.TRUTH_TORQUE_GG, BODY, **truth),
+         Output('gyro', topics.GYRO, BODY, **truth),
+         Output('sun_sensor', topics.SUN_SENSOR, BODY, **truth),
+         Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
 def _reaction_wheels(_params: dict[str, Any]) -> NodeSpec:
     return NodeSpec(
         'reaction_wheels', 'dynamics', 'dynamics.reaction_wheels_step:ReactionWheelsStep',
         (Stage('drive', (Input('volts', topics.WHEEL_VOLTS, 'acds_controller'),)),),
-        (Output('momentum', topics.WHEEL_MOMENTUM, 'body'),
-         Output('torque', topics.WHEEL_TORQUE, 'body'),
+        (Output('momentum', topics.WHEEL_MOMENTUM, BODY),
+         Output('torque', topics.WHEEL_TORQUE, BODY),
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
@@ -136,9 +138,9 @@ def _magnetometer_sim(_params: dict[str, Any]) -> NodeSpec:
             Input('dipole', topics.DIPOLE_AVG, 'em_driver', lag=1),
             Input('mode', topics.MODE, 'ascs_mode_manager', lag=1),
         )),),
-        (Output('volts', topics.MAG_VOLTS, 'magnetometer'),
-         Output('bias_volts', topics.MAG_BIAS_VOLTS, 'magnetometer'),
-         Output('field', topics.MAG_FIELD, 'magnetometer'),
+        (Output('volts', topics.MAG_VOLTS, MAGNETOMETER),
+         Output('bias_volts', topics.MAG_BIAS_VOLTS, MAGNETOMETER),
+         Output('field', topics.MAG_FIELD, MAGNETOMETER),
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
@@ -150,10 +152,10 @@ def _em_driver(params: dict[str, Any]) -> NodeSpec:
             Input('command', topics.MOMENT_COMMAND, source),
             Input('mode', topics.MODE, 'ascs_mode_manager'),
         )),),
-        (Output('dipole_avg', topics.DIPOLE_AVG, 'body'),
-         Output('dipole_end', topics.DIPOLE_END, 'body'),
-         Output('coil_current', topics.COIL_CURRENT, 'body'),
-         Output('e_ft', topics.E_FT, 'body'),
+        (Output('dipole_avg', topics.DIPOLE_AVG, BODY),
+         Output('dipole_end', topics.DIPOLE_END, BODY),
+         Output('coil_current', topics.COIL_CURRENT, BODY),
+         Output('e_ft', topics.E_FT, BODY),
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
@@ -171,8 +173,8 @@ def _acds_controller(_params: dict[str, Any]) -> NodeSpec:
             Input('wheel_hdot', topics.WHEEL_TORQUE, 'reaction_wheels', lag=1),
             Input('coil_current', topics.COIL_CURRENT, 'em_driver', lag=1),
         )),),
-        (Output('moment', topics.MOMENT_COMMAND, 'body'),
-         Output('volts', topics.WHEEL_VOLTS, 'body'),
+        (Output('moment', topics.MOMENT_COMMAND, BODY),
+         Output('volts', topics.WHEEL_VOLTS, BODY),
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
@@ -185,7 +187,7 @@ def _ascs_mode_manager(params: dict[str, Any]) -> NodeSpec:
         stage = Stage('heao', (Input('gyro', topics.GYRO, 'rigid_body'),
                                Input('sun', topics.SUN_SENSOR, 'rigid_body')))
     outputs = (Output('mode', topics.MODE),
-               *((Output('moment', topics.MOMENT_COMMAND, 'body'),) if sss else ()),
+               *((Output('moment', topics.MOMENT_COMMAND, BODY),) if sss else ()),
                Output('events', topics.EVENTS, every_step=False, many=True),
                Output('diagnostics', topics.DIAGNOSTICS, every_step=False),
                Output('ack', topics.GROUND_ACK, every_step=False, lockstep=False, many=True))
