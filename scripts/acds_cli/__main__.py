@@ -73,8 +73,14 @@ def cmd_run(args: argparse.Namespace) -> int:
     quiet = args.quiet
     echo = (lambda line: None) if quiet else None
     bag = None if args.no_record else Path(args.record) if args.record else run_dir / 'bag'
+    if bag is not None:
+        from acds_runtime.bag.writer import BagError, check_target
+        try:
+            check_target(bag, args.storage, args.compression)
+        except BagError as exc:
+            raise UsageError(str(exc)) from None
     graph = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=Progress(scenario.control_period_s),
-                     record=bag)
+                     record=bag, record_storage=args.storage, record_compression=args.compression)
     print(f'[acds] scenario {scenario.name}: {graph.steps} steps of {scenario.control_period_s} s '
           f'({graph.steps * scenario.control_period_s / 60:.1f} min sim), nodes {", ".join(scenario.get("", "nodes"))}; '
           f'run folder {run_dir}', file=sys.stderr, flush=True)
@@ -159,6 +165,8 @@ def build_parser() -> argparse.ArgumentParser:
     g = p.add_mutually_exclusive_group()
     g.add_argument('--record', metavar='PATH', help='record the run into this rosbag2 bag (default RUN_DIR/bag)')
     g.add_argument('--no-record', action='store_true', help="don't record a bag (nor plot it)")
+    from .verbs.bag import add_bag_options
+    add_bag_options(p)
     p.add_argument('--rtf', type=real_time_factor, default=0.0,
                    help='pace at this real-time factor (default 0: as fast as possible)')
     p.add_argument('--run-dir', help='run folder (default runs/<scenario>_<time>); checked writable before the run')

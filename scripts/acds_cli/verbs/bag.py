@@ -10,6 +10,16 @@ import argparse
 import sys
 
 STORAGE_HELP = 'mcap (default) or sqlite3'
+COMPRESSION_HELP = 'zstd (MCAP chunks, the default for mcap, as rosbag2 writes) or none (sqlite3: always none)'
+
+
+def add_bag_options(p: argparse.ArgumentParser, storage: bool = True) -> None:
+    """``--storage`` and ``--compression``, as every verb that writes a bag takes them."""
+    from acds_runtime.bag.writer import COMPRESSIONS, STORAGES
+
+    if storage:
+        p.add_argument('--storage', choices=tuple(STORAGES), default='mcap', help=STORAGE_HELP)
+    p.add_argument('--compression', choices=COMPRESSIONS, help=COMPRESSION_HELP)
 
 
 def _record(args: argparse.Namespace) -> int:
@@ -98,7 +108,7 @@ def _recover(args: argparse.Namespace) -> int:
     from ..bag.recover import recover_bag
 
     try:
-        src, copy = recover_bag(args.src, args.dest)
+        src, copy = recover_bag(args.src, args.dest, args.compression)
     except BagError as exc:
         print(f'acds recover: {exc}', file=sys.stderr)
         return 2
@@ -115,7 +125,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    'a rosbag2 bag (MCAP by default) until SIGINT/SIGTERM. Buffered messages are '
                                    'flushed every second: a killed recorder loses at most the last second.')
     p.add_argument('path', help='bag folder to create (must not exist)')
-    p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap', help=STORAGE_HELP)
+    add_bag_options(p)
     p.add_argument('--topics', nargs='+', metavar='TOPIC', help='record only these topics (default: all)')
     p.add_argument('--domain', type=int, help='ROS domain id of the graph (printed by acds run, in RUN/domain_id)')
     p.add_argument('--run-dir', help='run folder of the graph: domain, scenario and parameters are read from it')
@@ -165,4 +175,5 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    'acds custom data); SRC is only read.')
     p.add_argument('src', help='the bag folder (or its storage file) to repair')
     p.add_argument('dest', help='bag folder to create for the repaired copy (must not exist)')
+    add_bag_options(p, storage=False)
     p.set_defaults(func=_recover)

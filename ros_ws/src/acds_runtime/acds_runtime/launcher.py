@@ -146,7 +146,8 @@ class GraphRun:
     def __init__(self, scenario: Scenario, run_dir: Path, *, steps: int | None = None, rtf: float = 0.0,
                  echo: Callable[[str], None] | None = None, progress: Callable[[int, int, float], None] | None = None,
                  overrides: dict[str, dict[str, Any]] | None = None,
-                 record: Path | None = None, record_storage: str = 'mcap', keep: bool = False):
+                 record: Path | None = None, record_storage: str = 'mcap', record_compression: str | None = None,
+                 keep: bool = False):
         self.scenario = scenario
         self.run_dir = Path(run_dir)
         self.steps = steps if steps is not None else scenario.total_steps()
@@ -157,6 +158,8 @@ class GraphRun:
         #: Record every topic into this rosbag2 bag (written by the run monitor, in lockstep).
         self.record = Path(record) if record is not None else None
         self.record_storage = record_storage
+        #: zstd | none (None: the storage's default, zstd chunks for MCAP).
+        self.record_compression = record_compression
         self.bag_writer: Any = None
         #: Keep every message in the run monitor (tests; a long run would grow without bound).
         self.keep = keep
@@ -200,7 +203,7 @@ class GraphRun:
         if self.record is not None:
             from .bag.writer import BagError, check_target
             try:
-                check_target(self.record, self.record_storage)
+                check_target(self.record, self.record_storage, self.record_compression)
             except BagError as exc:
                 raise LaunchError(str(exc)) from None
         self.run_dir.mkdir(parents=True, exist_ok=True)
@@ -222,7 +225,9 @@ class GraphRun:
             from .bag.writer import BagError, BagWriter, RecordingSink, run_info
             try:
                 self.bag_writer = BagWriter(self.record, self.record_storage,
-                                            run_info(self.scenario, self.steps, params, self.lease.domain_id))
+                                            run_info(self.scenario, self.steps, params, self.lease.domain_id,
+                                                     self.run_dir.name),
+                                            compression=self.record_compression)
             except BagError as exc:
                 self.lease.close()
                 self.lease = None
