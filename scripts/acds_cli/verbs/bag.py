@@ -9,16 +9,18 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..bag import FORMATS
+
 STORAGE_HELP = 'mcap (default) or sqlite3'
 COMPRESSION_HELP = 'zstd (MCAP chunks, the default for mcap, as rosbag2 writes) or none (sqlite3: always none)'
 
 
 def add_bag_options(p: argparse.ArgumentParser, storage: bool = True) -> None:
     """``--storage`` and ``--compression``, as every verb that writes a bag takes them."""
-    from acds_runtime.bag.writer import COMPRESSIONS, STORAGES
+    from acds_runtime.bag import COMPRESSIONS, STORAGE_NAMES
 
     if storage:
-        p.add_argument('--storage', choices=tuple(STORAGES), default='mcap', help=STORAGE_HELP)
+        p.add_argument('--storage', choices=STORAGE_NAMES, default='mcap', help=STORAGE_HELP)
     p.add_argument('--compression', choices=COMPRESSIONS, help=COMPRESSION_HELP)
 
 
@@ -78,7 +80,7 @@ def _plot(args: argparse.Namespace) -> int:
     from ..bag.plots import make_plots
 
     try:
-        paths = make_plots(args.bag, args.out)
+        paths = make_plots(args.bag, args.out, args.format)
     except BagError as exc:
         print(f'acds plot: {exc}', file=sys.stderr)
         return 2
@@ -154,11 +156,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--set', nargs='+', metavar='PARAM:=VALUE', help='override node parameters (YAML values)')
     p.set_defaults(func=_compare)
 
-    p = sub.add_parser('plot', help="PNGs of the study's figures from a bag",
+    p = sub.add_parser('plot', help="the study's figures from a bag (PNG, SVG or PDF)",
                        description='Direction cosines, body rates, wheel momenta, magnetic moments, field/momentum '
-                                   'angle, mode timeline (and SSS spin rate/torque) as PNGs, study units.')
+                                   'angle, sun angle, mode timeline (and SSS spin rate/torque), study units; every '
+                                   'time plot marks the mode transitions and capture, the limits where they apply.')
     p.add_argument('bag')
     p.add_argument('--out', help='output folder (default: plots/ beside the bag)')
+    p.add_argument('--format', choices=FORMATS, default='png', help='file format (default png)')
     p.set_defaults(func=_plot)
 
     p = sub.add_parser('info', help="a bag's topics, types, counts, sim-time span and scenario",

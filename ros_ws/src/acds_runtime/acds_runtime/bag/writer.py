@@ -44,6 +44,7 @@ from rosbags.rosbag2.storage_mcap import Channel, McapWriter, write_channel, wri
 from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
 from rosbags.typesys import Stores, get_typestore
 
+from . import COMPRESSIONS, STORAGE_NAMES
 from .recording import RecordingLock
 
 #: Wall seconds after which buffered messages are made durable.
@@ -54,9 +55,7 @@ FLUSH_MESSAGES = 2000
 MIN_FREE_BYTES = 64 * 2**20
 #: The sidecar with the run's scenario and parameters, written when recording starts.
 RUN_INFO_FILE = 'acds_run.yaml'
-STORAGES = {'mcap': StoragePlugin.MCAP, 'sqlite3': StoragePlugin.SQLITE3}
-#: ``--compression`` choices; the default is zstd for MCAP (rosbag2's and libmcap's), none for sqlite3.
-COMPRESSIONS = ('zstd', 'none')
+STORAGES = dict(zip(STORAGE_NAMES, (StoragePlugin.MCAP, StoragePlugin.SQLITE3), strict=True))
 #: The distribution a bag says it was written by (rosbag2 writes its ROS_DISTRO).
 ROS_DISTRO = 'jazzy'
 #: Topics never recorded (lockstep handshake plumbing).
