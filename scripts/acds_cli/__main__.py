@@ -56,6 +56,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     """Run a scenario through the full process graph and print its summary."""
     from acds_runtime.launcher import GraphRun, LaunchError
     from acds_runtime.preflight import preflight
+    from acds_runtime.report import format_summary
     from acds_runtime.summary import print_tables, write_summary_json
 
     scenario = load_scenario(args.scenario or DEFAULT_SCENARIO)
@@ -97,7 +98,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         signum = getattr(exc, 'signum', signal.SIGINT)
         print(f'\n[acds] stopped by {signal.Signals(signum).name}: all nodes stopped', file=sys.stderr)
         return 128 + signum
-    _print_summary(summary)
+    print('\n' + format_summary(summary))
     print_tables(summary)
     if args.summary_json:
         write_summary_json(Path(args.summary_json), summary)
@@ -107,21 +108,6 @@ def cmd_run(args: argparse.Namespace) -> int:
         print(f'[acds] bag {bag} (./scripts/acds info {bag}); {len(plots)} plots in {bag.parent / "plots"}',
               file=sys.stderr)
     return 0
-
-
-def _print_summary(summary: dict) -> None:
-    print(f'\n== {summary["scenario"]}: {summary["steps"]} steps, {summary["sim_minutes"]:.1f} min sim '
-          f'in {summary["wall_seconds"]:.1f} s wall ==')
-    for key, value in summary.items():
-        if key in ('scenario', 'steps', 'sim_minutes', 'wall_seconds'):
-            continue
-        if isinstance(value, float):
-            value = f'{value:.6g}'
-        elif isinstance(value, list) and value and isinstance(value[0], dict):
-            continue  # tables (transitions, passes) are printed by their summary module
-        elif isinstance(value, list):
-            value = ', '.join(f'{v:.6g}' if isinstance(v, float) else str(v) for v in value)
-        print(f'  {key:28s} {value}')
 
 
 def cmd_scenarios(_args: argparse.Namespace) -> int:
