@@ -9,7 +9,7 @@ PY="${ACDS_PYTHON:-python3}"
 STAMP="$VENV/.acds_setup_stamp"
 PKGS=(acds_common dynamics magnetometer_sim em_driver acds_controller ascs_mode_manager acds_runtime)
 
-want=$(cd "$ROOT" && cat requirements.lock ros_ws/src/*/setup.py | sha256sum | cut -c1-16)
+want=$(cd "$ROOT" && cat requirements.lock ros_ws/src/*/setup.py ros_ws/src/*/setup.cfg | sha256sum | cut -c1-16)
 if [[ -f "$STAMP" && "$(cat "$STAMP")" == "$want" && -x "$VENV/bin/python" ]]; then
   exit 0
 fi
@@ -20,6 +20,6 @@ fi
 "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -r "$ROOT/requirements.lock" 2> >(grep -v "is ignored: it is neither" >&2)
 args=()
 for p in "${PKGS[@]}"; do args+=(-e "$ROOT/ros_ws/src/$p"); done
-"$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation "${args[@]}" 2> >(grep -v "is ignored: it is neither" >&2)
+"$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation --use-pep517 "${args[@]}" 2> >(grep -v "is ignored: it is neither" >&2)
 echo "$want" > "$STAMP"
 echo "[setup] done" >&2

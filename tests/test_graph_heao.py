@@ -13,6 +13,7 @@ import time
 
 from acds_common import topics
 from acds_common.lockstep import COMMAND_QOS
+from acds_common.messages import WALL_CLOCK_PREFIX
 from acds_common.scenario import load_scenario
 from acds_runtime.testing import stream_digests, wait_for_messages
 from std_msgs.msg import String
@@ -27,13 +28,14 @@ def _status(msg):
 
 def diagnostics_by_node(msgs):
     """Per-node sequences of diagnostics: several nodes publish on the topic, so only each
-    publisher's own order is defined, not how the streams interleave."""
+    publisher's own order is defined, not how the streams interleave. Wall-clock keys (the time
+    owner's stage wall time) are left out: they measure the machine."""
     out: dict[str, list] = {}
     for m in msgs:
         for st in m.status:
             out.setdefault(st.name, []).append(
                 (m.header.stamp.sec, m.header.stamp.nanosec, st.level, st.message,
-                 tuple((kv.key, kv.value) for kv in st.values)))
+                 tuple((kv.key, kv.value) for kv in st.values if not kv.key.startswith(WALL_CLOCK_PREFIX))))
     return out
 
 

@@ -57,6 +57,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from acds_runtime.direct import DirectRun
     from acds_runtime.launcher import GraphRun, LaunchError
     from acds_runtime.preflight import preflight
+    from acds_runtime.report import format_summary
     from acds_runtime.summary import print_tables, write_summary_json
 
     scenario = load_scenario(args.scenario or DEFAULT_SCENARIO)
@@ -76,13 +77,19 @@ def cmd_run(args: argparse.Namespace) -> int:
         check_output_file('--summary-json', Path(args.summary_json))
     echo = (lambda line: None) if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
     bag = None if args.no_record else Path(args.record) if args.record else run_dir / 'bag'
+    if bag is not None:
+        from acds_runtime.bag.writer import BagError, check_target
+        try:
+            check_target(bag, args.storage, args.compression)
+        except BagError as exc:
+            raise UsageError(str(exc)) from None
     progress = Progress(scenario.control_period_s)
+    recording = dict(record=bag, record_storage=args.storage, record_compression=args.compression)
     if direct:
         run_dir.mkdir(parents=True, exist_ok=True)
-        engine = DirectRun(scenario, steps=steps, echo=echo, progress=progress, record=bag)
+        engine = DirectRun(scenario, steps=steps, echo=echo, progress=progress, **recording)
     else:
-        engine = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=None if not args.quiet else echo,
-                          progress=progress, record=bag)
+        engine = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=progress, **recording)
     print(f'[acds] scenario {scenario.name}: {engine.steps} steps of {scenario.control_period_s} s '
           f'({engine.steps * scenario.control_period_s / 60:.1f} min sim), '
           + ('direct engine (one process, no DDS)' if direct else f'nodes {", ".join(scenario.get("", "nodes"))}')
@@ -103,7 +110,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         stopped = 'the run stopped' if direct else 'all nodes stopped'
         print(f'\n[acds] stopped by {signal.Signals(signum).name}: {stopped}', file=sys.stderr)
         return 128 + signum
-    _print_summary(summary)
+    print('\n' + format_summary(summary))
     print_tables(summary)
     if args.summary_json:
         write_summary_json(Path(args.summary_json), summary)
@@ -113,21 +120,6 @@ def cmd_run(args: argparse.Namespace) -> int:
         print(f'[acds] bag {bag} (./scripts/acds info {bag}); {len(plots)} plots in {bag.parent / "plots"}',
               file=sys.stderr)
     return 0
-
-
-def _print_summary(summary: dict) -> None:
-    print(f'\n== {summary["scenario"]}: {summary["steps"]} steps, {summary["sim_minutes"]:.1f} min sim '
-          f'in {summary["wall_seconds"]:.1f} s wall ==')
-    for key, value in summary.items():
-        if key in ('scenario', 'steps', 'sim_minutes', 'wall_seconds') or value is None or isinstance(value, dict):
-            continue  # not applicable to this run (null), or a table its summary module prints
-        if isinstance(value, float):
-            value = f'{value:.6g}'
-        elif isinstance(value, list) and value and isinstance(value[0], dict):
-            continue  # tables (transitions, passes) are printed by their summary module
-        elif isinstance(value, list):
-            value = ', '.join(f'{v:.6g}' if isinstance(v, float) else str(v) for v in value)
-        print(f'  {key:28s} {value}')
 
 
 def cmd_scenarios(_args: argparse.Namespace) -> int:
@@ -172,6 +164,8 @@ def build_parser() -> argparse.ArgumentParser:
     g = p.add_mutually_exclusive_group()
     g.add_argument('--record', metavar='PATH', help='record the run into this rosbag2 bag (default RUN_DIR/bag)')
     g.add_argument('--no-record', action='store_true', help="don't record a bag (nor plot it)")
+    from .verbs.bag import add_bag_options
+    add_bag_options(p)
     p.add_argument('--rtf', type=real_time_factor, default=0.0,
                    help='pace at this real-time factor (default 0: as fast as possible)')
     p.add_argument('--run-dir', help='run folder (default runs/<scenario>_<time>); checked writable before the run')

@@ -34,7 +34,7 @@ EVENTS = topics.resolve(topics.EVENTS)
 #: transient-local history: a chunk whose start time is earlier than the chunks before it); SPILL more steps
 #: written without flushing (sqlite3: with a 2-page cache, so the uncommitted pages reach the database file);
 #: CHILD: start a sleeping child process (inheriting every inheritable descriptor). CLOSE: close the bag, else
-#: die without closing it. Prints {"flushed": {topic: n}, "child": pid}.
+#: die without closing it. COMPRESSION: zstd | none (default: the storage's). Prints {"flushed": {topic: n}, "child": pid}.
 WRITER = r'''
 import json, os, subprocess, sys
 from acds_runtime.bag import writer as bw
@@ -46,7 +46,8 @@ spec = json.loads(sys.argv[1])
 bw.FLUSH_MESSAGES = 10**9  # flushes only where the spec says
 ts = bw.typestore()
 w = bw.BagWriter(spec['path'], spec['storage'], {'scenario_name': 'fault_campaign', 'control_period_s': '0.5',
-                                                 'steps': str(spec['steps'])}, flush_period_s=1e9)
+                                                 'steps': str(spec['steps'])}, flush_period_s=1e9,
+                 compression=spec.get('compression'))
 w.note_publishers(topics.resolve(topics.WHEEL_MOMENTUM), ['reaction_wheels'])
 stamp = lambda k: Time(sec=k // 2, nanosec=(k % 2) * 500_000_000)
 clock = lambda k: ts.serialize_cdr(Clock(clock=stamp(k)), 'rosgraph_msgs/msg/Clock')
@@ -389,7 +390,7 @@ def test_info_streams_a_50_mb_bag(tmp_path, storage, closed):
     from acds_cli.bag.info import bag_info
 
     bag = tmp_path / 'big'
-    make_bag(bag, storage, steps=3200, payload=16_000, flush_every=32, close=closed)
+    make_bag(bag, storage, steps=3200, payload=16_000, flush_every=32, close=closed, compression='none')  # 50 MB on disk
     size = sum(f.stat().st_size for f in bag.iterdir())
     assert size > 50e6
     tracemalloc.start()

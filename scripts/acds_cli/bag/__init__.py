@@ -20,6 +20,9 @@ from __future__ import annotations
 import signal
 import threading
 
+#: ``plot --format`` choices.
+FORMATS = ('png', 'svg', 'pdf')
+
 
 def stop_on_signals() -> threading.Event:
     """An event set by SIGINT or SIGTERM (the recorder and the player stop cleanly on either)."""

@@ -60,13 +60,13 @@ def _known(topic: str) -> bool:
     return True
 
 
-def record(path: Path | str, *, storage: str = 'mcap', select: list[str] | None = None,
+def record(path: Path | str, *, storage: str = 'mcap', compression: str | None = None, select: list[str] | None = None,
            domain_id: int | None = None, run_dir: Path | None = None, stop: threading.Event | None = None,
            log: Any = None) -> BagWriter:
     """Record until ``stop`` is set (SIGINT/SIGTERM when run from the CLI); return the closed writer."""
     log = log or (lambda text: print(text, file=sys.stderr, flush=True))
     path = Path(path)
-    check_target(path, storage)
+    check_target(path, storage, compression)
     info: dict[str, str] = {}
     if run_dir is not None:
         found, info = run_folder_info(run_dir)
@@ -83,7 +83,7 @@ def record(path: Path | str, *, storage: str = 'mcap', select: list[str] | None 
     context = Context()
     rclpy.init(context=context, domain_id=domain_id, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     node = Node('acds_recorder', namespace=topics.NAMESPACE, context=context)
-    writer = BagWriter(path, storage, info)
+    writer = BagWriter(path, storage, info, compression=compression)
     sink = RecordingSink(writer, node)
     from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS
     for topic in wanted:
@@ -93,7 +93,8 @@ def record(path: Path | str, *, storage: str = 'mcap', select: list[str] | None 
         node.create_subscription(message_class(topics.type_of(topic)), topic, lambda d, t=topic: sink(t, d), qos, raw=True)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
-    log(f'[record] recording domain {domain_id} into {path} ({storage}); stop with Ctrl-C or SIGTERM')
+    log(f'[record] recording domain {domain_id} into {path} ({storage}, {writer.compression} compression); '
+        'stop with Ctrl-C or SIGTERM')
     try:
         while not stop.is_set() and context.ok() and not writer.error:
             executor.spin_once(timeout_sec=0.05)
@@ -133,7 +134,7 @@ def main_record(args: Any) -> int:
     """CLI body of ``acds record``."""
     stop = stop_on_signals()
     try:
-        writer = record(args.path, storage=args.storage, select=args.topics, domain_id=args.domain,
+        writer = record(args.path, storage=args.storage, compression=args.compression, select=args.topics, domain_id=args.domain,
                         run_dir=Path(args.run_dir) if args.run_dir else None, stop=stop)
     except BagError as exc:
         print(f'acds record: {exc}', file=sys.stderr)

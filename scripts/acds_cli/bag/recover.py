@@ -19,18 +19,19 @@ from acds_runtime.bag.writer import BagError, BagWriter, check_target
 from .reader import Bag, open_bag
 
 #: Sidecar keys that describe a writer's set-up, not the run (not copied as custom data).
-WRITER_KEYS = ('storage', 'flush_period_s', 'publishers', 'recovered')
+WRITER_KEYS = ('storage', 'compression', 'flush_period_s', 'publishers', 'recovered')
 
 
-def recover_bag(src: Path | str, dest: Path | str) -> tuple[Bag, Bag]:
-    """Write the repaired copy of ``src`` at ``dest``; return (``src`` as read, the copy). Raises :class:`BagError`."""
+def recover_bag(src: Path | str, dest: Path | str, compression: str | None = None) -> tuple[Bag, Bag]:
+    """Write the repaired copy of ``src`` at ``dest`` (``compression`` None: the storage's default); return
+    (``src`` as read, the copy). Raises :class:`BagError`."""
     src, dest = Path(src), Path(dest)
     bag = open_bag(src, use_metadata=False)
     if dest.resolve().is_relative_to(bag.path.resolve()):
         raise BagError(f'recover: {dest} is inside the bag {bag.path}: the copy must go elsewhere (SRC is never changed)')
-    check_target(dest, bag.storage)
+    check_target(dest, bag.storage, compression)
     info = {k: v for k, v in bag.info.items() if k not in WRITER_KEYS}
-    writer = BagWriter(dest, bag.storage, info)
+    writer = BagWriter(dest, bag.storage, info, compression=compression)
     try:
         publishers = yaml.safe_load(bag.info.get('publishers', '') or '{}') or {}
         for topic, names in publishers.items():

@@ -9,7 +9,19 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..bag import FORMATS
+
 STORAGE_HELP = 'mcap (default) or sqlite3'
+COMPRESSION_HELP = 'zstd (MCAP chunks, the default for mcap, as rosbag2 writes) or none (sqlite3: always none)'
+
+
+def add_bag_options(p: argparse.ArgumentParser, storage: bool = True) -> None:
+    """``--storage`` and ``--compression``, as every verb that writes a bag takes them."""
+    from acds_runtime.bag import COMPRESSIONS, STORAGE_NAMES
+
+    if storage:
+        p.add_argument('--storage', choices=STORAGE_NAMES, default='mcap', help=STORAGE_HELP)
+    p.add_argument('--compression', choices=COMPRESSIONS, help=COMPRESSION_HELP)
 
 
 def _record(args: argparse.Namespace) -> int:
@@ -82,7 +94,7 @@ def _plot(args: argparse.Namespace) -> int:
     from ..bag.plots import make_plots
 
     try:
-        paths = make_plots(args.bag, args.out)
+        paths = make_plots(args.bag, args.out, args.format)
     except BagError as exc:
         print(f'acds plot: {exc}', file=sys.stderr)
         return 2
@@ -112,7 +124,7 @@ def _recover(args: argparse.Namespace) -> int:
     from ..bag.recover import recover_bag
 
     try:
-        src, copy = recover_bag(args.src, args.dest)
+        src, copy = recover_bag(args.src, args.dest, args.compression)
     except BagError as exc:
         print(f'acds recover: {exc}', file=sys.stderr)
         return 2
@@ -129,7 +141,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    'a rosbag2 bag (MCAP by default) until SIGINT/SIGTERM. Buffered messages are '
                                    'flushed every second: a killed recorder loses at most the last second.')
     p.add_argument('path', help='bag folder to create (must not exist)')
-    p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap', help=STORAGE_HELP)
+    add_bag_options(p)
     p.add_argument('--topics', nargs='+', metavar='TOPIC', help='record only these topics (default: all)')
     p.add_argument('--domain', type=int, help='ROS domain id of the graph (printed by acds run, in RUN/domain_id)')
     p.add_argument('--run-dir', help='run folder of the graph: domain, scenario and parameters are read from it')
@@ -158,11 +170,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--set', nargs='+', metavar='PARAM:=VALUE', help='override node parameters (YAML values)')
     p.set_defaults(func=_compare)
 
-    p = sub.add_parser('plot', help="PNGs of the study's figures from a bag",
+    p = sub.add_parser('plot', help="the study's figures from a bag (PNG, SVG or PDF)",
                        description='Direction cosines, body rates, wheel momenta, magnetic moments, field/momentum '
-                                   'angle, mode timeline (and SSS spin rate/torque) as PNGs, study units.')
+                                   'angle, sun angle, mode timeline (and SSS spin rate/torque), study units; every '
+                                   'time plot marks the mode transitions and capture, the limits where they apply.')
     p.add_argument('bag')
     p.add_argument('--out', help='output folder (default: plots/ beside the bag)')
+    p.add_argument('--format', choices=FORMATS, default='png', help='file format (default png)')
     p.set_defaults(func=_plot)
 
     p = sub.add_parser('info', help="a bag's topics, types, counts, sim-time span and scenario",
@@ -179,4 +193,5 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    'acds custom data); SRC is only read.')
     p.add_argument('src', help='the bag folder (or its storage file) to repair')
     p.add_argument('dest', help='bag folder to create for the repaired copy (must not exist)')
+    add_bag_options(p, storage=False)
     p.set_defaults(func=_recover)

@@ -24,6 +24,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from acds_common import topics
+from acds_common.frames import BODY, ECI, FORMATION, MAGNETOMETER, vehicle_body
 
 #: The node that owns sim time (publishes ``/clock`` and the truth) of a single-vehicle graph, and every
 #: node that can own it (a formation's is ``formation_dynamics``).
@@ -134,13 +135,14 @@ def _rigid_body(_params: dict[str, Any]) -> NodeSpec:
             Input('wheel_hdot', topics.WHEEL_TORQUE, 'reaction_wheels'),
             Input('mode', topics.MODE, 'ascs_mode_manager'),
         )),),
-        (Output('odometry', topics.TRUTH_ODOMETRY, 'eci', 'body', **truth),
-         Output('b_body', topics.TRUTH_B_BODY, 'body', **truth),
-         Output('sun_cosines', topics.TRUTH_SUN_COSINES, 'sun_frame', **truth),
-         Output('torque_mag', topics.TRUTH_TORQUE_MAG, 'body', **truth),
-         Output('torque_gg', topics.TRUTH_TORQUE_GG, 'body', **truth),
-         Output('gyro', topics.GYRO, 'body', **truth),
-         Output('sun_sensor', topics.SUN_SENSOR, 'body', **truth)),
+        (Output('odometry', topics.TRUTH_ODOMETRY, ECI, BODY, **truth),
+         Output('b_body', topics.TRUTH_B_BODY, BODY, **truth),
+         Output('sun_cosines', topics.TRUTH_SUN_COSINES, BODY, **truth),  # the sun frame's z in body components
+         Output('torque_mag', topics.TRUTH_TORQUE_MAG, BODY, **truth),
+         Output('torque_gg', topics.TRUTH_TORQUE_GG, BODY, **truth),
+         Output('gyro', topics.GYRO, BODY, **truth),
+         Output('sun_sensor', topics.SUN_SENSOR, BODY, **truth),
+         Output('diagnostics', topics.DIAGNOSTICS, every_step=False)),
         time_owner=True)
 
 
@@ -152,8 +154,8 @@ def _reaction_wheels(params: dict[str, Any]) -> NodeSpec:
     return NodeSpec(
         'reaction_wheels', 'dynamics', 'dynamics.reaction_wheels_step:ReactionWheelsStep',
         (Stage('drive', (command,)),),
-        (Output('momentum', topics.WHEEL_MOMENTUM, 'body'),
-         Output('torque', topics.WHEEL_TORQUE, 'body'),
+        (Output('momentum', topics.WHEEL_MOMENTUM, BODY),
+         Output('torque', topics.WHEEL_TORQUE, BODY),
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
@@ -165,9 +167,9 @@ def _magnetometer_sim(_params: dict[str, Any]) -> NodeSpec:
             Input('dipole', topics.DIPOLE_AVG, 'em_driver', lag=1),
             Input('mode', topics.MODE, 'ascs_mode_manager', lag=1),
         )),),
-        (Output('volts', topics.MAG_VOLTS, 'magnetometer'),
-         Output('bias_volts', topics.MAG_BIAS_VOLTS, 'magnetometer'),
-         Output('field', topics.MAG_FIELD, 'magnetometer'),
+        (Output('volts', topics.MAG_VOLTS, MAGNETOMETER),
+         Output('bias_volts', topics.MAG_BIAS_VOLTS, MAGNETOMETER),
+         Output('field', topics.MAG_FIELD, MAGNETOMETER),
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
@@ -175,17 +177,17 @@ def _em_driver(params: dict[str, Any]) -> NodeSpec:
     source = _param(params, 'em_driver_command_source', 'acds_controller')
     rods = _param(params, 'em_driver_driver_kind', 'electromagnet') == 'torque_rod'
     # The torque rods' bus power and duty every step: the CubeSat summary's energy and duty (seed 003).
-    electrical = (Output('power', topics.COIL_POWER, 'body'), Output('duty', topics.COIL_DUTY, 'body')) if rods else ()
+    electrical = (Output('power', topics.COIL_POWER, BODY), Output('duty', topics.COIL_DUTY, BODY)) if rods else ()
     return NodeSpec(
         'em_driver', 'em_driver', 'em_driver.em_driver_step:EmDriverStep',
         (Stage('drive', (
             Input('command', topics.MOMENT_COMMAND, source),
             Input('mode', topics.MODE, 'ascs_mode_manager'),
         )),),
-        (Output('dipole_avg', topics.DIPOLE_AVG, 'body'),
-         Output('dipole_end', topics.DIPOLE_END, 'body'),
-         Output('coil_current', topics.COIL_CURRENT, 'body'),
-         Output('e_ft', topics.E_FT, 'body'),
+        (Output('dipole_avg', topics.DIPOLE_AVG, BODY),
+         Output('dipole_end', topics.DIPOLE_END, BODY),
+         Output('coil_current', topics.COIL_CURRENT, BODY),
+         Output('e_ft', topics.E_FT, BODY),
          *electrical,
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
@@ -204,8 +206,8 @@ def _acds_controller(_params: dict[str, Any]) -> NodeSpec:
             Input('wheel_hdot', topics.WHEEL_TORQUE, 'reaction_wheels', lag=1),
             Input('coil_current', topics.COIL_CURRENT, 'em_driver', lag=1),
         )),),
-        (Output('moment', topics.MOMENT_COMMAND, 'body'),
-         Output('volts', topics.WHEEL_VOLTS, 'body'),
+        (Output('moment', topics.MOMENT_COMMAND, BODY),
+         Output('volts', topics.WHEEL_VOLTS, BODY),
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
@@ -218,7 +220,7 @@ def _ascs_mode_manager(params: dict[str, Any]) -> NodeSpec:
         stage = Stage('heao', (Input('gyro', topics.GYRO, 'rigid_body'),
                                Input('sun', topics.SUN_SENSOR, 'rigid_body')))
     outputs = (Output('mode', topics.MODE),
-               *((Output('moment', topics.MOMENT_COMMAND, 'body'),) if sss else ()),
+               *((Output('moment', topics.MOMENT_COMMAND, BODY),) if sss else ()),
                Output('events', topics.EVENTS, every_step=False, many=True),
                Output('diagnostics', topics.DIAGNOSTICS, every_step=False),
                Output('ack', topics.GROUND_ACK, every_step=False, lockstep=False, many=True))
@@ -241,10 +243,11 @@ def _formation_dynamics(params: dict[str, Any]) -> NodeSpec:
         inputs += [Input(f'{v}/dipole', f'{v}/{topics.DIPOLE_AVG}', f'{v}/em_driver'),
                    Input(f'{v}/wheel_h', f'{v}/{topics.WHEEL_MOMENTUM}', f'{v}/reaction_wheels'),
                    Input(f'{v}/wheel_hdot', f'{v}/{topics.WHEEL_TORQUE}', f'{v}/reaction_wheels')]
-        outputs += [Output(f'{v}/odometry', f'{v}/{topics.TRUTH_ODOMETRY}', 'formation', f'{v}_body', **truth),
-                    Output(f'{v}/gyro', f'{v}/{topics.GYRO}', f'{v}_body', **truth),
-                    Output(f'{v}/b_body', f'{v}/{topics.TRUTH_B_BODY}', f'{v}_body', **truth),
-                    Output(f'{v}/wrench', f'{v}/{topics.TRUTH_WRENCH}', f'{v}_body', **truth)]
+        body = vehicle_body(v)
+        outputs += [Output(f'{v}/odometry', f'{v}/{topics.TRUTH_ODOMETRY}', FORMATION, body, **truth),
+                    Output(f'{v}/gyro', f'{v}/{topics.GYRO}', body, **truth),
+                    Output(f'{v}/b_body', f'{v}/{topics.TRUTH_B_BODY}', body, **truth),
+                    Output(f'{v}/wrench', f'{v}/{topics.TRUTH_WRENCH}', body, **truth)]
     return NodeSpec('formation_dynamics', 'dynamics', 'dynamics.formation_step:FormationDynamicsStep',
                     (Stage('integrate', tuple(inputs)),), tuple(outputs), time_owner=True)
 
@@ -263,8 +266,8 @@ def _formation_controller(params: dict[str, Any]) -> NodeSpec:
     return NodeSpec('formation_controller', 'acds_controller',
                     'acds_controller.formation_controller_step:FormationControllerStep',
                     (Stage('control', tuple(inputs)),),
-                    (Output('moment', topics.MOMENT_COMMAND, 'body'),
-                     Output('wheel_torque', topics.WHEEL_TORQUE_COMMAND, 'body'),
+                    (Output('moment', topics.MOMENT_COMMAND, BODY),
+                     Output('wheel_torque', topics.WHEEL_TORQUE_COMMAND, BODY),
                      Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 

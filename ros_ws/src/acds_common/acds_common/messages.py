@@ -18,6 +18,9 @@ OK, WARN, ERROR, STALE = 0, 1, 2, 3
 #: Name of the mode manager's status inside the ``mode`` DiagnosticArray.
 MODE_STATUS = 'ascs_mode_manager'
 _ZERO_COV = (0.0,) * 9
+#: Diagnostic keys starting with this report wall-clock measurements (a stage's wall time): they
+#: describe the machine, not the data, and differ between two runs of the same scenario.
+WALL_CLOCK_PREFIX = 'wall_'
 
 
 def vec(value: Sequence[float] | None, default: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:

@@ -14,6 +14,9 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+import yaml
+
+from acds_common import topics
 from acds_common.graph import MONITOR_NAME, TIME_OWNERS
 from acds_common.scenario import FORMATION_VEHICLE_SECTIONS, MAX_STEPS, NODE_SECTIONS, REQUIRED, SCHEMA, Scenario
 
@@ -194,3 +197,20 @@ def node_parameters(scenario: Scenario, steps: int, rtf: float = 0.0,
         params.update((overrides or {}).get(inst, {}))
         out[inst] = {k: v for k, v in params.items() if v != []}  # rcl cannot type an empty list: node default
     return out
+
+
+class NoAliasDumper(yaml.SafeDumper):
+    """rcl's params-file parser rejects YAML aliases: write every value out."""
+
+    def ignore_aliases(self, data: Any) -> bool:
+        return True
+
+
+def parameters_yaml(params_by_node: dict[str, dict[str, Any]]) -> str:
+    """The ROS 2 parameters file of the given nodes (``/acds/<node>: ros__parameters: {...}``).
+
+    What the launcher writes to a run's ``params.yaml`` and ``acds params`` prints: any node
+    started with ``--ros-args --params-file FILE`` takes its own section.
+    """
+    return yaml.dump({f'{topics.NAMESPACE}/{n}': {'ros__parameters': p} for n, p in params_by_node.items()},
+                     Dumper=NoAliasDumper, sort_keys=True)

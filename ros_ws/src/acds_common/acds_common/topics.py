@@ -1,8 +1,11 @@
-"""Topic names of the ACDS graph (spec §2), all under the ``/acds`` namespace.
+"""Topic names of the ACDS graph (spec §2), under the ``/acds`` namespace.
 
 Every node runs in namespace ``/acds`` (a formation vehicle's nodes in ``/acds/<vehicle>``); names
-here are relative so they resolve in the node's namespace, except ``/clock`` and the lockstep
-handshake topics, which every node of a graph shares. Lockstep data topics carry a
+here are relative so they resolve in the node's namespace, except the lockstep handshake topics,
+which every node of a graph shares, and the two every ROS tool looks for at the root: ``/clock`` and
+``/diagnostics`` (``diagnostic_aggregator``, ``rqt_robot_monitor``: one ``DiagnosticStatus`` per node,
+named after it, level OK/WARN/ERROR, ``hardware_id`` the node). Frames: :mod:`acds_common.frames`.
+Lockstep data topics carry a
 ``std_msgs/Header`` whose stamp is the sim time t_k = k·Δt of the step they
 belong to. Units are SI unless the name says otherwise.
 """
@@ -18,7 +21,7 @@ TRUTH_B_BODY = 'truth/b_body'                   #: sensor_msgs/MagneticField: Ea
 TRUTH_SUN_COSINES = 'truth/sun_direction_cosines'  #: geometry_msgs/Vector3Stamped: (B13, B23, B33) vs the sun frame
 TRUTH_TORQUE_MAG = 'truth/torque_magnetic'      #: geometry_msgs/Vector3Stamped: M × B_true over the step, N·m (body)
 TRUTH_TORQUE_GG = 'truth/torque_gravity_gradient'  #: geometry_msgs/Vector3Stamped: N·m (body)
-GYRO = 'sensors/gyro'                           #: sensor_msgs/Imu: ideal rate gyros (angular_velocity, rad/s, body)
+GYRO = 'sensors/gyro'                           #: sensor_msgs/Imu: ideal rate gyros (angular_velocity, rad/s, body; covariance 0)
 TRUTH_WRENCH = 'truth/wrench'                   #: geometry_msgs/WrenchStamped: formation: external force + torque, body
 SUN_SENSOR = 'sensors/sun'                      #: geometry_msgs/Vector3Stamped: unit sun vector in body; zero vector = sun absent
 
@@ -51,7 +54,7 @@ GROUND_COMMAND = 'ground/command'               #: std_msgs/String: ground comma
 GROUND_ACK = 'ground/ack'                       #: std_msgs/String: acknowledgements and refusals with reasons
 EVENTS = 'events'                               #: std_msgs/String: mode transitions, automatic turn-on/off, with sim time
 
-DIAGNOSTICS = 'diagnostics'                     #: diagnostic_msgs/DiagnosticArray: health and telemetry of every node
+DIAGNOSTICS = '/diagnostics'                    #: diagnostic_msgs/DiagnosticArray: health and telemetry of every node
 MONITOR_ACK = '/acds/lockstep/monitor_ack'      #: rosgraph_msgs/Clock: the run monitor has received /clock step k
 
 #: Message type of every topic, as 'package/msg/Type' (used by the monitor, recorder and player).

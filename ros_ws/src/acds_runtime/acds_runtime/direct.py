@@ -51,13 +51,15 @@ class DirectRun:
 
     def __init__(self, scenario: Scenario, *, steps: int | None = None, echo: Callable[[str], None] | None = None,
                  progress: Callable[[int, int, float], None] | None = None, record: Path | None = None,
-                 record_storage: str = 'mcap', overrides: dict[str, dict[str, Any]] | None = None) -> None:
+                 record_storage: str = 'mcap', record_compression: str | None = None,
+                 overrides: dict[str, dict[str, Any]] | None = None) -> None:
         self.scenario = scenario
         self.steps = steps if steps is not None else scenario.total_steps()
         self.echo = echo or (lambda line: None)
         self.progress = progress
         self.record = Path(record) if record is not None else None
         self.record_storage = record_storage
+        self.record_compression = record_compression
         self.params = node_parameters(scenario, self.steps, 0.0, overrides)
         self.graph = build_graph(self.params)
         self.observer = RunObserver(scenario, self.graph)
@@ -99,7 +101,8 @@ class DirectRun:
             from .bag.writer import BagError, BagWriter, run_info
             try:
                 self._writer = BagWriter(self.record, self.record_storage, run_info(self.scenario, self.steps,
-                                                                                    self.params))
+                                                                                    self.params),
+                                         compression=self.record_compression)
             except BagError as exc:
                 raise LaunchError(str(exc)) from None
         t0 = time.monotonic()

@@ -28,7 +28,7 @@ import yaml
 from acds_common import topics
 from acds_common.graph import Graph, build_graph
 from acds_common.lockstep import LAUNCHER_PID_ENV
-from acds_common.parameters import node_parameters
+from acds_common.parameters import node_parameters, parameters_yaml
 from acds_common.scenario import Scenario
 
 from . import shm
@@ -41,13 +41,6 @@ FASTDDS_PROFILE = Path(__file__).with_name('fastdds_profile.xml')
 DOMAIN_LOCK_DIR = Path(os.environ.get('ACDS_DOMAIN_LOCK_DIR', '/tmp/acds_domains'))
 #: Domain IDs handed out to runs (0 stays free for a user's own ROS graph).
 DOMAIN_RANGE = range(11, 100)
-
-
-class _NoAliasDumper(yaml.SafeDumper):
-    """rcl's params-file parser rejects YAML aliases: write every value out."""
-
-    def ignore_aliases(self, data: Any) -> bool:
-        return True
 
 
 class LaunchError(RuntimeError):
@@ -141,19 +134,14 @@ class DomainLease:
         self._fh.close()
 
 
-def params_yaml(graph: Graph, params: dict[str, dict[str, Any]]) -> str:
-    """The ROS 2 parameters file of a run: each node's parameters under its fully qualified name."""
-    return yaml.dump({f'{spec.namespace}/{spec.name}': {'ros__parameters': params[inst]}
-                      for inst, spec in graph.nodes.items()}, Dumper=_NoAliasDumper, sort_keys=True)
-
-
 class GraphRun:
     """Run a scenario's node graph to completion (use as a context manager)."""
 
     def __init__(self, scenario: Scenario, run_dir: Path, *, steps: int | None = None, rtf: float = 0.0,
                  echo: Callable[[str], None] | None = None, progress: Callable[[int, int, float], None] | None = None,
                  overrides: dict[str, dict[str, Any]] | None = None,
-                 record: Path | None = None, record_storage: str = 'mcap', keep: bool = False):
+                 record: Path | None = None, record_storage: str = 'mcap', record_compression: str | None = None,
+                 keep: bool = False):
         self.scenario = scenario
         self.run_dir = Path(run_dir)
         self.steps = steps if steps is not None else scenario.total_steps()
@@ -164,6 +152,8 @@ class GraphRun:
         #: Record every topic into this rosbag2 bag (written by the run monitor, in lockstep).
         self.record = Path(record) if record is not None else None
         self.record_storage = record_storage
+        #: zstd | none (None: the storage's default, zstd chunks for MCAP).
+        self.record_compression = record_compression
         self.bag_writer: Any = None
         #: Keep every message in the run monitor (tests; a long run would grow without bound).
         self.keep = keep
@@ -207,7 +197,7 @@ class GraphRun:
         if self.record is not None:
             from .bag.writer import BagError, check_target
             try:
-                check_target(self.record, self.record_storage)
+                check_target(self.record, self.record_storage, self.record_compression)
             except BagError as exc:
                 raise LaunchError(str(exc)) from None
         self.run_dir.mkdir(parents=True, exist_ok=True)
@@ -223,13 +213,15 @@ class GraphRun:
         self.graph = build_graph(params)
         self.observer = RunObserver(self.scenario, self.graph)
         params_file = self.run_dir / 'params.yaml'
-        params_file.write_text(params_yaml(self.graph, params))
+        params_file.write_text(parameters_yaml(params))
         record = None
         if self.record is not None:
             from .bag.writer import BagError, BagWriter, RecordingSink, run_info
             try:
                 self.bag_writer = BagWriter(self.record, self.record_storage,
-                                            run_info(self.scenario, self.steps, params, self.lease.domain_id))
+                                            run_info(self.scenario, self.steps, params, self.lease.domain_id,
+                                                     self.run_dir.name),
+                                            compression=self.record_compression)
             except BagError as exc:
                 self.lease.close()
                 self.lease = None

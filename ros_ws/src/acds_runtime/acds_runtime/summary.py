@@ -37,8 +37,9 @@ from acds_common.rotations import quat_to_dcm
 from acds_common.units import nms_to_ftlbs, tesla_to_gauss
 
 #: Per-step topics the common (dynamics) summary reads.
-ODOMETRY, B_BODY, WHEEL_H = (topics.resolve(t) for t in (topics.TRUTH_ODOMETRY, topics.TRUTH_B_BODY,
-                                                          topics.WHEEL_MOMENTUM))
+ODOMETRY, B_BODY, WHEEL_H, WHEEL_HDOT, TORQUE_MAG, TORQUE_GG = (topics.resolve(t) for t in (
+    topics.TRUTH_ODOMETRY, topics.TRUTH_B_BODY, topics.WHEEL_MOMENTUM, topics.WHEEL_TORQUE, topics.TRUTH_TORQUE_MAG,
+    topics.TRUTH_TORQUE_GG))
 
 
 def _summary_modules() -> list:
@@ -51,9 +52,15 @@ def _summary_modules() -> list:
 
 
 class DynamicsSummary:
-    """Momentum and energy drift, final rates and momentum, the |B| range seen (every single-vehicle run)."""
+    """Final rates and momentum, the |B| range seen (every single-vehicle run); momentum and energy drift of torque-free runs.
 
-    topics = (ODOMETRY, B_BODY, WHEEL_H)
+    A run is torque-free when every step's magnetic, gravity-gradient and wheel torque is zero:
+    |H| in ECI and the rotational energy are then constants of the motion and their largest relative
+    change is integration error (``momentum_drift_rel``, ``energy_drift_rel``; null otherwise, where
+    the change is physics).
+    """
+
+    topics = (ODOMETRY, B_BODY, WHEEL_H, WHEEL_HDOT, TORQUE_MAG, TORQUE_GG)
 
     @staticmethod
     def applies(scenario: Any) -> bool:
@@ -71,9 +78,12 @@ class DynamicsSummary:
         self.final_h = 0.0
         self.b_min = math.inf
         self.b_max = 0.0
+        self.torque_free = True
 
     def step(self, _k: int, values: dict[str, Any]) -> None:
         """One step's truth."""
+        if self.torque_free and any(v is not None and any(v) for v in (values.get(t) for t in self.topics[3:])):
+            self.torque_free = False
         odom = values.get(ODOMETRY)
         if odom is not None:
             omega = np.array(odom.angular)
@@ -94,8 +104,9 @@ class DynamicsSummary:
     def contribute(self, summary: dict[str, Any]) -> None:
         """Add the dynamics keys."""
         summary.update({
-            'momentum_drift_rel': self.max_dh / self.h0 if self.h0 else 0.0,
-            'energy_drift_rel': self.max_de / self.e0 if self.e0 else 0.0,
+            'torque_free': self.torque_free,
+            'momentum_drift_rel': (self.max_dh / self.h0 if self.h0 else 0.0) if self.torque_free else None,
+            'energy_drift_rel': (self.max_de / self.e0 if self.e0 else 0.0) if self.torque_free else None,
             'final_rates_deg_s': [math.degrees(v) for v in self.final_rates],
             'final_momentum_ftlbs': float(nms_to_ftlbs(self.final_h)),
             'b_min_gauss': self.b_min if math.isfinite(self.b_min) else None,

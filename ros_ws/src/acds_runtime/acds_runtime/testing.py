@@ -43,14 +43,32 @@ def wait_for_messages(graph: GraphRun, topic: str, count: int, timeout_s: float 
 
 
 def stream_digests(monitor: Any) -> dict[str, str]:
-    """SHA-256 of each topic's kept message stream (for comparing two runs topic by topic)."""
+    """SHA-256 of each topic's kept message stream (for comparing two runs topic by topic).
+
+    ``/diagnostics`` has several publishers, so only each node's own order is defined, and the time
+    owner's statuses carry its wall time: its digest is over each node's statuses in that node's
+    order, wall-clock keys (:data:`acds_common.messages.WALL_CLOCK_PREFIX`) left out.
+    """
     import hashlib
+
+    from acds_common.cdr import Codec
+    from acds_common.messages import WALL_CLOCK_PREFIX
 
     out = {}
     for topic, msgs in sorted(monitor.snapshot().items()):
         h = hashlib.sha256()
-        for raw in msgs:
-            h.update(raw)
+        if topic == topics.resolve(topics.DIAGNOSTICS):
+            codec = Codec(topics.TYPES[topics.DIAGNOSTICS])
+            by_node: dict[str, list[Any]] = {}
+            for raw in msgs:
+                t_ns, statuses = codec.decode(raw)
+                for st in statuses:
+                    values = tuple(kv for kv in st.values if not kv[0].startswith(WALL_CLOCK_PREFIX))
+                    by_node.setdefault(st.name, []).append((t_ns, st._replace(values=values)))
+            h.update(repr(sorted(by_node.items())).encode())
+        else:
+            for raw in msgs:
+                h.update(raw)
         out[topic] = h.hexdigest()
     return out
 

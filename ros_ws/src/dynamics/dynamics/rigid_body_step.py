@@ -8,22 +8,41 @@ when the total step count is reached or when the ``mode`` of step k carries
 ``run_complete: true`` (stop at acquisition capture). A non-finite actuator input, or one
 beyond what the hardware can produce (:func:`~dynamics.configuration.actuator_limits`),
 fails the run naming the topic and the step.
+
+Health on ``/diagnostics`` (one ``DiagnosticStatus`` named ``rigid_body``) every
+:data:`DIAGNOSTICS_EVERY` steps: the state is finite, ‖q‖ − 1 of the attitude quaternion, and, for
+a run that has been torque-free so far (no gravity gradient, zero dipole, zero wheel torque: angular
+momentum in ECI and rotational energy are then constants of the motion, so their change is
+integration error), the relative drift of H_ECI and of the energy since step 0; WARN beyond
+:data:`QUATERNION_NORM_TOLERANCE` or :data:`DRIFT_TOLERANCE`. It also reports the wall time of the
+stage (``wall_*`` keys: measurements of the machine, not data; comparisons of runs skip them).
+
+The rate gyros are the study's ideal gyros (spec §3): ``sensors/gyro`` carries the true body
+rates with an all-zero ``angular_velocity_covariance``.
 """
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
 from acds_common import topics
 from acds_common.cdr import OdometryValue
-from acds_common.messages import MODE_STATUS, magnetic_field, status_value, vec, vector3
+from acds_common.messages import MODE_STATUS, OK, WALL_CLOCK_PREFIX, WARN, diagnostic, magnetic_field, status_value, vec, vector3
 from acds_common.stepper import StepError, Stepper
 
 from dynamics.configuration import actuator_limits, build_rigid_body
 from dynamics.rigid_body_model import Truth
 
-_ZERO_COV = (0.0,) * 9
+#: ``angular_velocity_covariance`` of the ideal gyros, rad²/s² (row-major 3×3).
+GYRO_COVARIANCE = (0.0,) * 9
+#: Integration health on /diagnostics every this many steps.
+DIAGNOSTICS_EVERY = 20
+#: WARN when the attitude quaternion's norm departs from 1 by more than this (renormalised every substep).
+QUATERNION_NORM_TOLERANCE = 1e-9
+#: WARN when a torque-free run's momentum or energy has drifted by more than this fraction of its initial value.
+DRIFT_TOLERANCE = 1e-6
 
 
 def run_complete(mode: Any) -> bool:
@@ -41,7 +60,7 @@ def truth_outputs(truth: Truth) -> dict[str, Any]:
         'sun_cosines': vector3(truth.sun_direction_cosines),
         'torque_mag': vector3(truth.torque_magnetic_body_nm),
         'torque_gg': vector3(truth.torque_gravity_gradient_body_nm),
-        'gyro': (omega, _ZERO_COV),
+        'gyro': (omega, GYRO_COVARIANCE),
         'sun_sensor': vector3(truth.sun_body_unit if truth.sun_present else (0.0, 0.0, 0.0)),
     }
 
@@ -57,10 +76,38 @@ class RigidBodyStep(Stepper):
         self.model = build_rigid_body(*(self.section(s) for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics')))
         self.limits = actuator_limits(self.section('em_driver'), self.section('wheels'))
         self._wheel_h = np.zeros(3)
+        #: Torque-free so far (external and wheel torques all zero): the drifts are integration error.
+        self.torque_free = not self.model.gravity_gradient
+        self._h0_eci: np.ndarray | None = None  # H in ECI and the rotational energy at t_0
+        self._e0_j = 0.0
+        self._wall_s = 0.0
+        self._wall_steps = 0
 
     def start(self) -> dict[str, Any]:
         """The truth of step 0."""
         return truth_outputs(self.model.truth(self._wheel_h))
+
+    def health(self, truth: Truth, wall_step_s: float) -> tuple:
+        """The integration health status of the step just integrated (module docstring)."""
+        state = np.concatenate([truth.q_body_to_eci, truth.omega_body_rad_s, truth.r_eci_m, truth.v_eci_m_s])
+        finite = bool(np.all(np.isfinite(state)))
+        norm_error = abs(float(np.linalg.norm(truth.q_body_to_eci)) - 1.0)
+        values: dict[str, object] = {'state_finite': str(finite).lower(), 'quaternion_norm_error': f'{norm_error:.3e}',
+                                     'torque_free': str(self.torque_free).lower()}
+        problems = [] if finite else ['non-finite state']
+        if norm_error > QUATERNION_NORM_TOLERANCE:
+            problems.append(f'quaternion norm off by {norm_error:.2e}')
+        if self.torque_free:
+            assert self._h0_eci is not None
+            h0 = float(np.linalg.norm(self._h0_eci))
+            drifts = {'momentum_drift_rel': float(np.linalg.norm(truth.h_total_eci_nms - self._h0_eci)) / h0 if h0 else 0.0,
+                      'energy_drift_rel': abs(truth.rotational_energy_j - self._e0_j) / self._e0_j if self._e0_j else 0.0}
+            values.update((key, f'{d:.3e}') for key, d in drifts.items())
+            problems += [f'{key} {d:.2e}' for key, d in drifts.items() if d > DRIFT_TOLERANCE]
+        values[f'{WALL_CLOCK_PREFIX}step_ms'] = f'{wall_step_s * 1e3:.3f}'
+        values[f'{WALL_CLOCK_PREFIX}mean_step_ms'] = f'{self._wall_s / max(self._wall_steps, 1) * 1e3:.3f}'
+        self._wall_s, self._wall_steps = 0.0, 0
+        return diagnostic(self.node, values, '; '.join(problems) or 'integration healthy', WARN if problems else OK)
 
     def integrate(self, k: int, _t: float, inp: dict[str, Any]) -> dict[str, Any]:
         """All actuator outputs of step k are in: integrate to t_k+1 and return its truth."""
@@ -81,6 +128,19 @@ class RigidBodyStep(Stepper):
                 raise StepError(f'{topics.resolve(topic)} at step {k} gives {value.tolist()} {unit}, beyond what '
                                 f'the hardware can produce (±{limit.tolist()} per axis): not from this graph\'s '
                                 'actuators; the run stops')
+        wall0 = time.perf_counter()
+        if self._h0_eci is None:  # the constants of the motion at t_0, with the wheels' momentum h(t_0)
+            truth0 = self.model.truth(h)
+            self._h0_eci, self._e0_j = truth0.h_total_eci_nms, truth0.rotational_energy_j
         self.model.advance(self.control_period_s, dipole, h, hdot)
         self._wheel_h = h + hdot * self.control_period_s
-        return truth_outputs(self.model.truth(self._wheel_h))
+        truth = self.model.truth(self._wheel_h)
+        out = truth_outputs(truth)
+        if self.torque_free and (np.any(dipole) or np.any(hdot)):
+            self.torque_free = False
+        wall = time.perf_counter() - wall0
+        self._wall_s += wall
+        self._wall_steps += 1
+        if k % DIAGNOSTICS_EVERY == 0:
+            out['diagnostics'] = self.health(truth, wall)
+        return out

@@ -1,4 +1,13 @@
-"""Write a rosbag2 bag (version 9) of raw CDR messages, with sim-time stamps and a flush policy.
+"""Write a rosbag2 bag (version 9) of raw CDR messages as rosbag2 Jazzy does, with sim-time stamps and a flush policy.
+
+As rosbag2 Jazzy writes (on top of rosbags' writer): MCAP chunks zstd-compressed by default
+(``compression='none'`` for plain chunks; sqlite3 bags are never compressed, as rosbag2's
+sqlite3 storage has no storage-level compression), ``ros_distro: jazzy`` in ``metadata.yaml``
+and in the storage's own copy of it, and, per MCAP channel, ``topic_type_hash`` (the RIHS01
+hash of the message type, rosbag2's ``type_description_hash``) beside ``offered_qos_profiles``.
+The two storage classes below extend rosbags' storage writers for that and for flushing; what
+they rely on in rosbags (its MCAP record helpers, the pending chunk, the sqlite connection) is
+pinned by ``tests/test_bag_format.py``, which fails if a rosbags upgrade breaks it.
 
 Flush policy (what survives a SIGKILL): messages are buffered in the current
 MCAP chunk (sqlite3: the current transaction) and made durable at most
@@ -22,15 +31,20 @@ import sqlite3
 import struct
 import threading
 import time
+from io import BytesIO
 from pathlib import Path
 from typing import Any
 
 import yaml
 from acds_common import topics
+from acds_common.parameters import NoAliasDumper
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
-from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
+from rosbags.rosbag2.storage_mcap import Channel, McapWriter, write_channel, write_string
+from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
 from rosbags.typesys import Stores, get_typestore
 
+from . import COMPRESSIONS, STORAGE_NAMES
 from .recording import RecordingLock
 
 #: Wall seconds after which buffered messages are made durable.
@@ -41,7 +55,9 @@ FLUSH_MESSAGES = 2000
 MIN_FREE_BYTES = 64 * 2**20
 #: The sidecar with the run's scenario and parameters, written when recording starts.
 RUN_INFO_FILE = 'acds_run.yaml'
-STORAGES = {'mcap': StoragePlugin.MCAP, 'sqlite3': StoragePlugin.SQLITE3}
+STORAGES = dict(zip(STORAGE_NAMES, (StoragePlugin.MCAP, StoragePlugin.SQLITE3), strict=True))
+#: The distribution a bag says it was written by (rosbag2 writes its ROS_DISTRO).
+ROS_DISTRO = 'jazzy'
 #: Topics never recorded (lockstep handshake plumbing).
 SKIP = {topics.resolve(topics.READY), topics.resolve(topics.MONITOR_ACK)}
 
@@ -140,11 +156,22 @@ def check_out_dir(path: Path, what: str = 'output folder') -> None:
     writable_parent(path, what)
 
 
-def check_target(path: Path, storage: str = 'mcap') -> None:
-    """Fail with a one-line :class:`BagError` if a bag cannot be written at ``path``."""
+def default_compression(storage: str) -> str:
+    """The compression a bag of ``storage`` gets when none is asked for (zstd chunks for MCAP)."""
+    return 'zstd' if storage == 'mcap' else 'none'
+
+
+def check_target(path: Path, storage: str = 'mcap', compression: str | None = None) -> None:
+    """Fail with a one-line :class:`BagError` if a bag cannot be written at ``path`` (``compression`` None: the
+    storage's default)."""
     path = Path(path)
     if storage not in STORAGES:
         raise BagError(f'bag {path}: unknown storage {storage!r} (choose {", ".join(STORAGES)})')
+    if compression is not None and compression not in COMPRESSIONS:
+        raise BagError(f'bag {path}: unknown compression {compression!r} (choose {", ".join(COMPRESSIONS)})')
+    if storage == 'sqlite3' and compression == 'zstd':
+        raise BagError(f'bag {path}: sqlite3 bags are not compressed (rosbag2 compresses only MCAP chunks in '
+                       'storage); use --storage mcap or --compression none')
     if path.exists():
         raise BagError(f'bag {path}: already exists, not overwriting (choose a new path)')
     parent = writable_parent(path, 'bag')
@@ -154,14 +181,12 @@ def check_target(path: Path, storage: str = 'mcap') -> None:
                        f'(a bag needs at least {MIN_FREE_BYTES / 2**20:.0f} MiB)')
 
 
-class _NoAliasDumper(yaml.SafeDumper):
-    def ignore_aliases(self, data: Any) -> bool:
-        return True
-
-
 def run_info(scenario: Any, steps: int, params: dict[str, Any] | None = None,
-             domain_id: int | None = None) -> dict[str, str]:
-    """The run description stored with a bag (all values are strings, as custom_data requires)."""
+             domain_id: int | None = None, run_id: str | None = None) -> dict[str, str]:
+    """The run description stored with a bag (all values are strings, as custom_data requires).
+
+    ``run_id``: the run folder's name (``<scenario>_<time>``), which plots put in their titles.
+    """
     info = {
         'scenario_name': scenario.name,
         'scenario': yaml.safe_dump(scenario.raw, sort_keys=False),
@@ -170,15 +195,73 @@ def run_info(scenario: Any, steps: int, params: dict[str, Any] | None = None,
         'nodes': ','.join(scenario.get('', 'nodes')),
     }
     if params is not None:
-        info['params'] = yaml.dump(params, Dumper=_NoAliasDumper, sort_keys=True)
+        info['params'] = yaml.dump(params, Dumper=NoAliasDumper, sort_keys=True)
     if domain_id is not None:
         info['domain_id'] = str(domain_id)
+    if run_id is not None:
+        info['run_id'] = run_id
     return info
 
 
-class _LockedWriter(Writer):
-    """The rosbags writer, holding the folder's recording lock from before the storage file exists."""
+def _jazzy(metadata_yaml: str) -> str:
+    """rosbags' serialized bag metadata with ``ros_distro`` set to :data:`ROS_DISTRO`."""
+    info = yaml.safe_load(metadata_yaml)
+    if info.get('ros_distro') is None:
+        raise BagError(f'rosbags wrote bag metadata without ros_distro: {sorted(info)}')
+    info['ros_distro'] = ROS_DISTRO
+    return yaml.safe_dump(info, sort_keys=False).strip()
 
+
+class _McapStorage(McapWriter):
+    """rosbags' MCAP storage with rosbag2 Jazzy's channel metadata and ``ros_distro``, and an explicit flush."""
+
+    def add_connection(self, connection: Any, offered_qos_profiles: str) -> None:
+        """A channel whose metadata is rosbag2's: ``offered_qos_profiles`` and ``topic_type_hash`` (RIHS01)."""
+        metadata = BytesIO()
+        for key, value in (('offered_qos_profiles', offered_qos_profiles), ('topic_type_hash', connection.digest)):
+            write_string(metadata, key)
+            write_string(metadata, value)
+        self.channels.append(Channel(connection.id, connection.msgtype, connection.topic,
+                                     connection.ext.serialization_format, metadata.getvalue()))
+        self.channel_stats[connection.id] = 0
+        write_channel(self.chunk.bio, self.channels[-1], self.schemas)
+
+    def flush(self) -> None:
+        """Close the pending chunk (if it holds messages) and hand the file's buffer to the OS."""
+        if self.chunk.msgs:
+            self.close_chunk()
+        self.bio.flush()
+
+    def close(self, version: int, metadata: str) -> None:
+        """Write the summary with the Jazzy metadata record."""
+        super().close(version, _jazzy(metadata))
+
+
+class _Sqlite3Storage(Sqlite3Writer):
+    """rosbags' sqlite3 storage saying ``ros_distro`` jazzy, writable from the subscriber's thread, with a flush."""
+
+    def __init__(self, path: Path, compression: CompressionMode) -> None:
+        super().__init__(path, compression)
+        self.conn.execute('UPDATE schema SET ros_distro = ?', (ROS_DISTRO,))
+        self.conn.commit()
+        self.conn.close()  # written from the subscriber's thread, not the one that opened it
+        self.conn = sqlite3.connect(f'file:{self.path}', uri=True, check_same_thread=False)
+        self.cursor = self.conn.cursor()
+
+    def flush(self) -> None:
+        """Commit the current transaction."""
+        self.conn.commit()
+
+    def close(self, version: int, metadata: str) -> None:
+        """Store the Jazzy metadata and close."""
+        super().close(version, _jazzy(metadata))
+
+
+class _LockedWriter(Writer):
+    """The rosbags writer with the storages above, holding the folder's recording lock from before the
+    storage file exists; ``metadata.yaml`` says ``ros_distro: jazzy``."""
+
+    STORAGE_PLUGINS = {StoragePlugin.MCAP: _McapStorage, StoragePlugin.SQLITE3: _Sqlite3Storage}
     recording: RecordingLock | None = None
 
     def open(self) -> None:
@@ -190,6 +273,15 @@ class _LockedWriter(Writer):
         except BaseException:
             self.release()
             raise
+
+    def close(self) -> None:
+        """Close the storage and write ``metadata.yaml`` (atomically replaced, with ros_distro jazzy)."""
+        super().close()
+        data = yaml.safe_load(self.metapath.read_text())
+        data['rosbag2_bagfile_information']['ros_distro'] = ROS_DISTRO
+        tmp = self.metapath.with_suffix('.yaml.tmp')
+        tmp.write_text(yaml.safe_dump(data, sort_keys=False))
+        tmp.replace(self.metapath)
 
     def release(self) -> None:
         """Drop the recording lock (the recording is over, closed or not)."""
@@ -206,13 +298,16 @@ class BagWriter:
     """
 
     def __init__(self, path: Path | str, storage: str = 'mcap', info: dict[str, str] | None = None,
-                 flush_period_s: float = FLUSH_PERIOD_S) -> None:
+                 flush_period_s: float = FLUSH_PERIOD_S, compression: str | None = None) -> None:
         self.path = Path(path)
         self.storage = storage
-        check_target(self.path, storage)
+        check_target(self.path, storage, compression)
+        self.compression = compression or default_compression(storage)
         self.flush_period_s = flush_period_s
         self._lock = threading.Lock()
         self._writer = _LockedWriter(self.path, version=9, storage_plugin=STORAGES[storage])
+        if self.compression == 'zstd':
+            self._writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
         self.info = dict(info or {})
         self.publishers: dict[str, set[str]] = {}
         self.counts: dict[str, int] = {}
@@ -226,12 +321,6 @@ class BagWriter:
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self._writer.open()
-            if storage == 'sqlite3':  # written from the subscriber's thread, not the one that opened it
-                st = self._writer.storage
-                st.conn.commit()
-                st.conn.close()
-                st.conn = sqlite3.connect(f'file:{st.path}', uri=True, check_same_thread=False)
-                st.cursor = st.conn.cursor()
             self._write_run_info()
         except OSError as exc:
             self._writer.release()
@@ -250,8 +339,8 @@ class BagWriter:
         if self.publishers:
             info['publishers'] = self._publishers_yaml()
         tmp = self.path / f'{RUN_INFO_FILE}.tmp'
-        tmp.write_text(yaml.safe_dump({'storage': self.storage, 'flush_period_s': self.flush_period_s, **info},
-                                      sort_keys=False))
+        tmp.write_text(yaml.safe_dump({'storage': self.storage, 'compression': self.compression,
+                                       'flush_period_s': self.flush_period_s, **info}, sort_keys=False))
         tmp.replace(self.path / RUN_INFO_FILE)
 
     # ---- writing ------------------------------------------------------------------------------------
@@ -311,12 +400,7 @@ class BagWriter:
         storage = self._writer.storage
         if storage is None:
             return
-        if self.storage == 'mcap':
-            if storage.chunk.msgs:
-                storage.close_chunk()
-            storage.bio.flush()
-        else:
-            storage.conn.commit()
+        storage.flush()
         self._pending = 0
         self._last_flush = time.monotonic()
         self.flushed_counts = dict(self.counts)

@@ -1,0 +1,87 @@
+"""Plots an ACS engineer reads at a glance (issue 12 §5), from a bag of a short acquisition to capture.
+
+Every time plot marks the mode transitions and the capture (labelled vertical lines at the
+summary's times), the rate plots carry the Mode 1B thresholds, the moment plots ± the maximum
+moment, the sun-angle plot the 10° capture cone; its curve (from the attitude and the scenario's
+sun) agrees with arccos B33 of the truth direction cosines; titles name the scenario and the run;
+``--format`` writes PNG, SVG or PDF.
+"""
+
+from __future__ import annotations
+
+import math
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+from acds_cli.bag.plots import figures, make_plots
+from acds_cli.bag.reader import open_bag
+from acds_common import topics
+from acds_common.scenario import load_scenario
+from acds_runtime.bag.writer import BagError, typestore
+from acds_runtime.direct import DirectRun
+
+
+@pytest.fixture(scope='module')
+def acquisition(tmp_path_factory):
+    """A direct-engine bag of heao_b_acquisition_short (Mode 1A → 1B → capture in ~200 steps) and its summary."""
+    bag = tmp_path_factory.mktemp('plots') / 'bag'
+    result = DirectRun(load_scenario('heao_b_acquisition_short'), record=bag).run()
+    return bag, result.summary
+
+
+def _event_lines(ax) -> list[float]:
+    return sorted(line.get_xdata()[0] for line in ax.lines if line.get_label().startswith('_event'))
+
+
+def _hline_levels(ax) -> set[float]:
+    return {round(float(line.get_ydata()[0]), 9) for line in ax.lines
+            if len(set(line.get_ydata())) == 1 and not line.get_label().startswith('_event')}
+
+
+def test_every_time_plot_marks_transitions_capture_and_limits(acquisition):
+    bag_path, summary = acquisition
+    events = [tr['t_min'] for tr in summary['mode_transitions']]
+    assert [tr['to'] for tr in summary['mode_transitions']] == ['mode_1b', 'capture']
+    figs = dict(figures(open_bag(bag_path)))
+    try:
+        assert {'fig_4-14_direction_cosines', 'fig_4-15_roll_response', 'fig_4-16_pitch_response',
+                'fig_4-17_yaw_response', 'fig_4-18_magnetics', 'sun_angle', 'mode_timeline'} <= set(figs)
+        for stem, fig in figs.items():
+            title = fig._suptitle.get_text()
+            assert 'heao_b_acquisition_short' in title and f'run {bag_path.name}' in title, (stem, title)
+            for ax in fig.axes:
+                assert _event_lines(ax) == pytest.approx(events), stem
+            labels = {t.get_text().strip() for t in fig.axes[0].texts}
+            assert {'mode_1b', 'capture'} <= labels, (stem, labels)
+        thresholds = (0.573, 0.115, 0.115)
+        for stem, limit in zip(('fig_4-15_roll_response', 'fig_4-16_pitch_response', 'fig_4-17_yaw_response'),
+                               thresholds, strict=True):
+            rate_ax, *_, moment_ax = figs[stem].axes
+            assert _hline_levels(rate_ax) == {limit, -limit}, stem
+            assert _hline_levels(moment_ax) == {2000.0, -2000.0}, stem
+        sun_ax = figs['sun_angle'].axes[0]
+        assert _hline_levels(sun_ax) == {10.0}
+        t_min, angle = (np.asarray(a) for a in (sun_ax.lines[0].get_xdata(), sun_ax.lines[0].get_ydata()))
+        bag = open_bag(bag_path)
+        b33 = np.array([typestore().deserialize_cdr(d, bag.types[topics.resolve(topics.TRUTH_SUN_COSINES)]).vector.z
+                        for _t, d in ((t, d) for _topic, t, d in bag.messages([topics.TRUTH_SUN_COSINES]))])
+        assert angle == pytest.approx(np.degrees(np.arccos(np.clip(b33, -1, 1))), abs=1e-6)
+        at_capture = angle[np.argmin(np.abs(t_min - events[1]))]
+        assert at_capture < 10.0, at_capture
+        assert math.isclose(angle[0], 10.0, abs_tol=0.5)  # the scenario starts 10° off the sun
+    finally:
+        for fig in figs.values():
+            plt.close(fig)
+
+
+@pytest.mark.parametrize(('fmt', 'magic'), [('png', b'\x89PNG'), ('svg', b'<?xml'), ('pdf', b'%PDF')])
+def test_plot_format(acquisition, tmp_path, fmt, magic):
+    paths = make_plots(acquisition[0], tmp_path / fmt, fmt)
+    assert paths and all(p.suffix == f'.{fmt}' and p.read_bytes().startswith(magic) for p in paths)
+
+
+def test_unknown_format_is_refused_before_reading(tmp_path):
+    with pytest.raises(BagError, match='choose one of png, svg, pdf'):
+        make_plots(tmp_path / 'no_bag', tmp_path / 'out', 'jpg')
+    assert not (tmp_path / 'out').exists()

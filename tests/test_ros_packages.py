@@ -1,0 +1,156 @@
+"""The workspace packages behave like ROS 2 packages (issue 12 §1).
+
+* ``colcon build`` (colcon from PyPI, into a temporary folder, no symlinks) installs every
+  console script where ``ros2 run PKG EXE`` looks for it, ``install/PKG/lib/PKG/EXE``, and the
+  installed executable runs (it answers a bad parameter as a node does, exit 2);
+* each ``package.xml`` declares exactly what the package's code needs at run time: the imports of
+  its modules (an AST scan, tests excluded) mapped to ROS package keys, the message packages of
+  the topics its nodes publish and read, ``rclpy`` for a package with node executables.
+"""
+
+from __future__ import annotations
+
+import ast
+import os
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from importlib import metadata
+from pathlib import Path
+
+import pytest
+from acds_common import topics
+from acds_common.graph import NODES
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / 'ros_ws' / 'src'
+PACKAGES = sorted(p.name for p in SRC.iterdir() if (p / 'package.xml').is_file())
+VENV_BIN = Path(sys.executable).parent
+#: Python distributions → their ROS package keys (rosdep names).
+PYTHON_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml', 'matplotlib': 'python3-matplotlib',
+               'pytest': 'python3-pytest', 'rosbags': 'python3-rosbags-pip', 'rclpy': 'rclpy'}
+#: Packages whose code publishes or subscribes to any graph topic by its type name
+#: (``acds_common.lockstep.message_class``: the node host, and the runtime's monitor and recorder).
+EVERY_TOPIC = {'acds_common', 'acds_runtime'}
+#: Packages that start every node (the launcher runs each node's executable, the direct engine
+#: imports each stepper by its ``package.module:Class`` path).
+EVERY_NODE = {'acds_runtime'}
+
+
+def _message_package(type_name: str) -> str:
+    return type_name.split('/')[0]
+
+
+def _imports(package: str) -> set[str]:
+    """Top-level modules imported by the package's modules (tests excluded)."""
+    found: set[str] = set()
+    for path in (SRC / package / package).rglob('*.py'):
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Import):
+                found.update(alias.name.split('.')[0] for alias in node.names)
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                found.add(node.module.split('.')[0])
+    return found
+
+
+def _node_message_packages(package: str) -> set[str]:
+    """Message packages of every topic the package's nodes publish or read (both mode-manager systems)."""
+    out: set[str] = set()
+    for make in NODES.values():
+        for params in ({}, {'modes_system': 'sss', 'em_driver_command_source': 'ascs_mode_manager'}):
+            spec = make(params)
+            if spec.package != package:
+                continue
+            out.update(_message_package(o.msg_type) for o in spec.outputs)
+            out.update(_message_package(topics.TYPES[i.topic]) for st in spec.stages for i in st.inputs)
+            if spec.ground_commands:
+                out.add(_message_package(topics.TYPES[topics.GROUND_COMMAND]))
+    return out
+
+
+def required_dependencies(package: str) -> set[str]:
+    """What ``package`` needs at run time, as ROS package keys."""
+    needed: set[str] = set()
+    for module in _imports(package) - {package, '__future__'}:
+        if module in sys.stdlib_module_names:
+            continue
+        if module in PACKAGES or module.endswith('_msgs') or module == 'rcl_interfaces':
+            needed.add(module)
+        elif module in PYTHON_KEYS:
+            needed.add(PYTHON_KEYS[module])
+        else:
+            raise AssertionError(f'{package} imports {module}: add its ROS package key to PYTHON_KEYS')
+    needed |= _node_message_packages(package)
+    if package in EVERY_TOPIC:
+        needed |= {_message_package(t) for t in topics.TYPES.values()}
+    if package in EVERY_NODE:
+        needed |= {make({}).package for make in NODES.values()}
+    if console_scripts(package):
+        needed.add('rclpy')  # a node executable is an rclpy process
+    return needed
+
+
+def declared_dependencies(package: str) -> set[str]:
+    """The ``<exec_depend>`` and ``<depend>`` entries of the package's ``package.xml``."""
+    root = ET.parse(SRC / package / 'package.xml').getroot()
+    return {e.text.strip() for tag in ('exec_depend', 'depend') for e in root.iter(tag)}
+
+
+def console_scripts(package: str) -> list[str]:
+    """Console-script names the package's distribution declares (its setup.py entry points)."""
+    return sorted(ep.name for ep in metadata.distribution(package).entry_points if ep.group == 'console_scripts')
+
+
+def test_every_package_has_node_executables_as_the_graph_needs():
+    executables = {exe: pkg for pkg in PACKAGES for exe in console_scripts(pkg)}
+    for make in NODES.values():
+        spec = make({})
+        assert executables.get(spec.name) == spec.package, f'node {spec.name}: no console script in {spec.package}'
+
+
+@pytest.mark.parametrize('package', PACKAGES)
+def test_package_xml_declares_what_the_code_imports(package):
+    required, declared = required_dependencies(package), declared_dependencies(package)
+    assert not required - declared, f'{package}/package.xml misses <exec_depend> {sorted(required - declared)}'
+    assert not declared - required, f'{package}/package.xml declares unused {sorted(declared - required)}'
+
+
+def test_dependency_scan_sees_what_the_issue_found_missing():
+    """The scan is not vacuous: the dependencies issue 12 found missing are required by it."""
+    assert 'nav_msgs' in required_dependencies('dynamics')
+    assert 'nav_msgs' in required_dependencies('acds_controller')
+    assert {'rcl_interfaces', 'python3-yaml'} <= required_dependencies('acds_common')
+
+
+def _tree_state() -> str:
+    return subprocess.run(['git', 'status', '--porcelain', '--ignored', '--', 'ros_ws/src'], cwd=ROOT,
+                          capture_output=True, text=True, check=True).stdout
+
+
+@pytest.mark.slow
+def test_colcon_build_installs_executables_where_ros2_run_looks(tmp_path):
+    before = _tree_state()
+    proc = subprocess.run(
+        [str(VENV_BIN / 'colcon'), '--log-base', str(tmp_path / 'log'), 'build', '--base-paths', str(SRC),
+         '--build-base', str(tmp_path / 'build'), '--install-base', str(tmp_path / 'install'),
+         '--event-handlers', 'console_direct-'],
+        cwd=tmp_path, capture_output=True, text=True, timeout=600, check=False)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert f'{len(PACKAGES)} packages finished' in proc.stdout + proc.stderr
+    install = tmp_path / 'install'
+    site = [str(p) for p in sorted(install.glob('*/lib/python3*/site-packages'))]
+    assert len(site) == len(PACKAGES)
+    for package in PACKAGES:
+        assert (install / package / 'share' / 'ament_index' / 'resource_index' / 'packages' / package).is_file()
+        assert (install / package / 'share' / package / 'package.xml').is_file()
+        assert not (install / package / 'bin').exists(), f'{package}: executables in bin/, where ros2 run never looks'
+        for exe in console_scripts(package):
+            path = install / package / 'lib' / package / exe
+            assert path.is_file() and not path.is_symlink() and os.access(path, os.X_OK), f'{package} {exe}: {path}'
+    # the installed executable is the node: it starts rclpy and refuses an unknown parameter (exit 2)
+    env = {**os.environ, 'PYTHONPATH': os.pathsep.join(site), 'ROS_LOG_DIR': str(tmp_path / 'ros_log')}
+    run = subprocess.run([str(install / 'dynamics' / 'lib' / 'dynamics' / 'reaction_wheels'), '--ros-args',
+                          '-p', 'no_such_parameter:=1.0'], env=env, capture_output=True, text=True, timeout=60,
+                         check=False)
+    assert run.returncode == 2 and 'unknown parameter(s) no_such_parameter' in run.stderr, run.stderr
+    assert _tree_state() == before, 'colcon build wrote into the source tree'
