@@ -22,6 +22,7 @@ from .arguments import (
     real_time_factor,
     step_count,
 )
+from .verbs.montecarlo import add_sample_options, sample_for_run
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_SCENARIO = 'heao_b_acquisition'
@@ -58,7 +59,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from acds_runtime.preflight import preflight
     from acds_runtime.summary import print_tables, write_summary_json
 
-    scenario = load_scenario(args.scenario or DEFAULT_SCENARIO)
+    scenario, sample_text = sample_for_run(load_scenario(args.scenario or DEFAULT_SCENARIO), args)
     preflight(scenario)
     steps = args.steps
     if args.until_min is not None:
@@ -70,6 +71,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     check_output_dir('--run-dir' if args.run_dir else 'run folder', run_dir)
     if args.summary_json:
         check_output_file('--summary-json', Path(args.summary_json))
+    if sample_text is not None:  # the drawn scenario with how it was drawn (the launcher adds scenario.yaml)
+        run_dir.mkdir(parents=True, exist_ok=True)
+        (run_dir / 'sample.yaml').write_text(sample_text)
     quiet = args.quiet
     echo = (lambda line: None) if quiet else None
     bag = None if args.no_record else Path(args.record) if args.record else run_dir / 'bag'
@@ -163,6 +167,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help='pace at this real-time factor (default 0: as fast as possible)')
     p.add_argument('--run-dir', help='run folder (default runs/<scenario>_<time>); checked writable before the run')
     p.add_argument('--quiet', action='store_true', help="don't forward the nodes' output")
+    add_sample_options(p, run=True)
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser('scenarios', help='list the shipped scenarios', description='List the shipped scenarios.')
