@@ -154,14 +154,14 @@ def paired_table(cases: list[dict[str, Any]], runs: int, seed: int) -> str:
             return '>' + format(c['censored_above'], '.4g') if v is None else f'{v:.1f}'
 
         def rfmt(v: float | None) -> str:
-            return '—' if v is None else f'{v:.2f}'
+            return ('∞' if c['pairs'] else '—') if v is None else f'{v:.2f}'
         ci = c['ratio_ci90']
         interval = f'[{rfmt(ci[0])}, {rfmt(ci[1])}]'
         return (f'{c["censored"]:>4d} {fmt(c["median"]):>7s} {fmt(c["p10"]):>7s}–{fmt(c["p90"]):<7s} '
                 f'{rfmt(c["ratio_median"]):>5s} {interval:<14s}')
     lines = [f'paired perturbation study: {runs} draws of the open conditions (seed {seed}); sample i of every case '
              'is the same draw; times in minutes; ratio = paired median ratio to the first case, [bootstrap 90 %]; '
-             '>T = censored (not reached when the runs ended)']
+             '>T = censored (not reached when the runs ended), ∞ = a ratio among censored pairs']
     head = f'{"case":28s} {"n":>3s} ' + ' '.join(f'| {t:^49s}' for _k, t in PAIRED)
     sub = f'{"":28s} {"":>3s} ' + ' '.join(f'| {"cens":>4s} {"median":>7s} {"p10–p90":^15s} {"ratio [90 %]":<20s}'
                                             for _ in PAIRED)

@@ -113,9 +113,9 @@ def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:
     if scheduler is None:
         cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None,
                                silence_logs=logging.ERROR)
-        return Client(cluster), cluster
+        return Client(cluster, set_as_default=False), cluster
     try:
-        client = Client(scheduler, timeout='20s')
+        client = Client(scheduler, timeout='20s', set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
         raise MonteCarloError(f'--scheduler {scheduler}: cannot reach the Dask scheduler ({exc})') from None
     try:
@@ -160,7 +160,7 @@ def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, s
                    for key, ix in indices.items()]
         results: list[dict[str, Any] | None] = [None] * len(texts)
         done = 0
-        for future in as_completed(futures):
+        for future in as_completed(futures, loop=client.loop):
             try:
                 summary = future.result()
             except Exception as exc:  # noqa: BLE001 (a sample that failed on every try is reported, not dropped)

@@ -78,6 +78,8 @@ DISTRIBUTIONS = {
     'h_parallel_b': 'h_parallel_b(): so3() turned to put I·ω0 along B at t0, quaternion keys only',
 }
 _DIST = re.compile(r'^\s*([a-z_0-9]+)\s*\((.*)\)\s*$', re.S)
+#: libyaml's emitter when present (the same text as PyYAML's, faster).
+_DUMPER = getattr(yaml, 'CSafeDumper', yaml.SafeDumper)
 #: Largest seed (the schema's bound on the scenario's ``seed``; also the largest study seed).
 MAX_SEED = 2**31 - 1
 
@@ -464,18 +466,19 @@ class Sampler:
         raw['name'] = name
         raw['description'] = f'Monte Carlo sample {index} of seed {self.seed} of {self.base.name}'
         label = f'{self.base.name} sample {self.seed}:{index}'
-        scenario = scenario_from_text(self._text(raw, index, drawn), label)
+        text = self._text(raw, index)
+        scenario = scenario_from_text(text, label)
         for var in self.variables:
-            if var.dist.kind == 'h_parallel_b':
+            if var.dist.kind == 'h_parallel_b':  # once the rest of the sample is known
                 drawn[var.key.label] = h_parallel_b_attitude(scenario)
                 _set(raw, var.key, drawn[var.key.label])
-                scenario = scenario_from_text(self._text(raw, index, drawn), label)
-        text = self._text(raw, index, drawn)
+                text = self._text(raw, index)
+                scenario = scenario_from_text(text, label)
         return Sample(self.seed, index, drawn, text, scenario)
 
-    def _text(self, raw: dict[str, Any], index: int, drawn: dict[str, Any]) -> str:
+    def _text(self, raw: dict[str, Any], index: int) -> str:
         head = [f'# Monte Carlo sample {index} of seed {self.seed}, derived from {self.base.name} ({self.base.path}).',
                 '# Drawn: ' + '; '.join(f'{v.text}' for v in self.variables) + '.']
         if self.command:
             head.append(f'# Rerun through the full graph: {self.command}')
-        return '\n'.join(head) + '\n' + yaml.safe_dump(raw, sort_keys=False)
+        return '\n'.join(head) + '\n' + yaml.dump(raw, Dumper=_DUMPER, sort_keys=False)
