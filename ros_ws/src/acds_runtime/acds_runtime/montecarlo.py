@@ -171,6 +171,9 @@ def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, s
             bar.update(len(indices[future.key]))
             if on_result is not None:
                 on_result(done)
+        missing = [i for i, r in enumerate(results) if r is None]
+        if missing:  # as_completed yields every future; this would be a Dask bug, said rather than hidden
+            raise MonteCarloError(f'samples {missing} came back from no task')
         return [r for r in results if r is not None], execution
     finally:
         client.close()
