@@ -22,6 +22,7 @@ from .arguments import (
     real_time_factor,
     step_count,
 )
+from .verbs.montecarlo import add_sample_options, sample_for_run
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_SCENARIO = 'heao_b_acquisition'
@@ -60,7 +61,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from acds_runtime.report import format_summary
     from acds_runtime.summary import print_tables, write_summary_json
 
-    scenario = load_scenario(args.scenario or DEFAULT_SCENARIO)
+    scenario, sample_text = sample_for_run(load_scenario(args.scenario or DEFAULT_SCENARIO), args)
     preflight(scenario)
     steps = args.steps
     if args.until_min is not None:
@@ -75,6 +76,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     check_output_dir('--run-dir' if args.run_dir else 'run folder', run_dir)
     if args.summary_json:
         check_output_file('--summary-json', Path(args.summary_json))
+    if sample_text is not None:  # the drawn scenario with how it was drawn (the launcher adds scenario.yaml)
+        run_dir.mkdir(parents=True, exist_ok=True)
+        (run_dir / 'sample.yaml').write_text(sample_text)
     echo = (lambda line: None) if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
     bag = None if args.no_record else Path(args.record) if args.record else run_dir / 'bag'
     if bag is not None:
@@ -170,6 +174,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help='pace at this real-time factor (default 0: as fast as possible)')
     p.add_argument('--run-dir', help='run folder (default runs/<scenario>_<time>); checked writable before the run')
     p.add_argument('--quiet', action='store_true', help="don't forward the nodes' output")
+    add_sample_options(p, run=True)
     p.add_argument('--engine', choices=('graph', 'direct'), default='graph',
                    help='graph: one process per node over DDS (default); direct: the same steppers in this process, '
                         'no DDS — bit-identical data, faster')

@@ -1,6 +1,16 @@
 """``acds sweep SCENARIO... [--jobs N] [--json PATH]``: run scenarios in parallel, print one table.
 
-Each scenario runs in its own subprocess (``python -m acds_cli run NAME --quiet
+With ``--runs N`` it is a paired perturbation study instead (:func:`cmd_paired`): every scenario
+runs on the same N drawn open conditions (``acds montecarlo``'s sampler and seed: sample i of every
+case is the same draw — common random numbers), and the table gives per case the median and the
+10–90 % range of the time on magnetics only and of the acquisition time, and the paired median
+ratio to the first scenario (case 1) with a seeded bootstrap 90 % interval
+(``acds_runtime.dispersion_report``). Table 4-7 case 4 is defined by a geometry, not an attitude
+(the body momentum along B at t0), so in a paired study its attitude is each sample's drawn attitude
+turned by the smallest rotation that puts I·ω0 on B (``h_parallel_b()``). A ``--vary`` key that a
+case itself sets differently from case 1 (case 11's rates) keeps the case's value for that case.
+
+Without ``--runs``, each scenario runs in its own subprocess (``python -m acds_cli run NAME --quiet
 --summary-json FILE``), so every run has its own rclpy contexts and its own ROS domain
 (the launcher leases one per run). ``table-4-7`` stands for the eleven acquisition cases
 of Table 4-7. ``--json`` writes the list of summary objects (a failed run appears as
@@ -21,7 +31,8 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
-from ..arguments import check_output_file, positive_int, positive_minutes
+from ..arguments import UsageError, check_output_dir, check_output_file, positive_int, positive_minutes
+from .montecarlo import add_execution_options, add_sample_options, draw_samples, records_of, rows_of, study_command
 
 #: Shorthands for scenario lists.
 GROUPS = {
@@ -29,6 +40,12 @@ GROUPS = {
     'normal-mode': ['heao_a_scan_no_unloading', 'heao_a_scan_unloading',
                     'heao_b_point_no_unloading', 'heao_b_point_unloading'],
 }
+
+
+#: Draws a paired study adds for a case, beyond the default open conditions (module doc).
+CASE_VARY = {'heao_b_case4': ['spacecraft.initial_quaternion_xyzw=h_parallel_b()']}
+#: The paired study's quantities: (row key, column title).
+PAIRED = (('time_magnetics_only_min', 'time on magnetics only'), ('acquisition_time_min', 'acquisition time'))
 
 
 def expand(names: list[str]) -> list[str]:
@@ -88,6 +105,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from acds_common.scenario import load_scenario
     from acds_runtime.preflight import preflight
 
+    if args.runs is not None:
+        return cmd_paired(args)
+    for flag in ('vary', 'scheduler', 'out'):
+        if getattr(args, flag):
+            raise UsageError(f'--{flag} belongs to a paired study: give --runs N with it')
     names = expand(args.scenarios)
     for name in names:
         preflight(load_scenario(name))  # fail fast (exit 2, one line) on a bad scenario before anything runs
@@ -108,6 +130,132 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return 0 if all('error' not in s for s in summaries) else 1
 
 
+def _case_vary(case: Any, reference: Any, vary: list[str]) -> tuple[list[str], list[str]]:
+    """A case's draws: its own (CASE_VARY) and the user's, less those of keys the case sets itself; and the
+    skipped ones."""
+    from acds_runtime.sampling import parse_vary
+
+    own = CASE_VARY.get(case.name, [])
+    kept, skipped = list(own), []
+    for text in vary:
+        key = parse_vary(text).key
+        if case.get(key.section, key.name) != reference.get(key.section, key.name) or \
+                any(parse_vary(o).key.stream == key.stream for o in own):
+            skipped.append(text)
+        else:
+            kept.append(text)
+    return kept, skipped
+
+
+def paired_table(cases: list[dict[str, Any]], runs: int, seed: int) -> str:
+    """The paired study's table (study units: minutes)."""
+    def cell(c: dict[str, Any]) -> str:
+        def fmt(v: float | None) -> str:
+            return '>' + format(c['censored_above'], '.4g') if v is None else f'{v:.1f}'
+
+        def rfmt(v: float | None) -> str:
+            return ('∞' if c['pairs'] else '—') if v is None else f'{v:.2f}'
+        ci = c['ratio_ci90']
+        interval = f'[{rfmt(ci[0])}, {rfmt(ci[1])}]'
+        return (f'{c["censored"]:>4d} {fmt(c["median"]):>7s} {fmt(c["p10"]):>7s}–{fmt(c["p90"]):<7s} '
+                f'{rfmt(c["ratio_median"]):>5s} {interval:<14s}')
+    lines = [f'paired perturbation study: {runs} draws of the open conditions (seed {seed}); sample i of every case '
+             'is the same draw; times in minutes; ratio = paired median ratio to the first case, [bootstrap 90 %]; '
+             '>T = censored (not reached when the runs ended), ∞ = a ratio among censored pairs']
+    head = f'{"case":28s} {"n":>3s} ' + ' '.join(f'| {t:^49s}' for _k, t in PAIRED)
+    sub = f'{"":28s} {"":>3s} ' + ' '.join(f'| {"cens":>4s} {"median":>7s} {"p10–p90":^15s} {"ratio [90 %]":<20s}'
+                                            for _ in PAIRED)
+    lines += [head, sub, '-' * len(sub)]
+    for case in cases:
+        lines.append(f'{case["scenario"]:28s} {case["n"]:>3d} ' +
+                     ' '.join(f'| {cell(case["quantities"][k])}' for k, _t in PAIRED))
+        if case['failed']:
+            lines.append(f'{"":28s} {case["failed"]} sample(s) FAILED (see --out samples.csv)')
+    return '\n'.join(lines)
+
+
+def cmd_paired(args: argparse.Namespace) -> int:
+    """Every scenario on the same ``--runs`` draws; the paired table (module doc)."""
+    from acds_common.scenario import load_scenario
+    from acds_runtime import dispersion_report as dr
+    from acds_runtime.montecarlo import MonteCarloError, run_samples
+    from acds_runtime.sampling import SamplingError
+
+    names = expand(args.scenarios)
+    scenarios = [load_scenario(n) for n in names]
+    out = Path(args.out) if args.out else None
+    if out is not None:
+        check_output_dir('--out', out)
+    if args.json:
+        check_output_file('--json', Path(args.json))
+    steps_by_case, samples_by_case = [], []
+    for sc in scenarios:
+        try:
+            vary, skipped = _case_vary(sc, scenarios[0], args.vary)
+        except SamplingError as exc:
+            raise UsageError(str(exc)) from None
+        for text in skipped:
+            print(f'[sweep] {sc.name}: --vary {text} not applied (the case sets that key itself)', file=sys.stderr)
+        _sampler, samples = draw_samples(sc, args.seed, args.runs, vary, '')
+        samples_by_case.append(samples)
+        steps_by_case.append(None if args.until_min is None else max(1, round(args.until_min * 60 /
+                                                                               sc.control_period_s)))
+    print(f'[sweep] paired study: {len(names)} case(s) × {args.runs} draws (seed {args.seed}), engine {args.engine}',
+          file=sys.stderr, flush=True)
+    t0 = time.monotonic()
+    summaries: list[list[dict[str, Any]]] = []
+    try:  # one batch per run length (every case the same unless control periods differ)
+        for steps in sorted(set(steps_by_case), key=lambda s: -1 if s is None else s):
+            idx = [i for i, s in enumerate(steps_by_case) if s == steps]
+            got, execution = run_samples([s.text for i in idx for s in samples_by_case[i]], engine=args.engine,
+                                         steps=steps, jobs=args.jobs, scheduler=args.scheduler,
+                                         progress=not args.quiet)
+            for n, i in enumerate(idx):
+                summaries.append((i, got[n * args.runs:(n + 1) * args.runs]))
+    except MonteCarloError as exc:
+        raise UsageError(str(exc)) from None
+    by_case = dict(summaries)
+    wall = time.monotonic() - t0
+    rows_by_case = [rows_of(records_of(samples_by_case[i], by_case[i])) for i in range(len(names))]
+    cases = []
+    ref_rows = rows_by_case[0]
+    for name, rows in zip(names, rows_by_case, strict=True):
+        both = [i for i in range(args.runs) if 'error' not in rows[i] and 'error' not in ref_rows[i]]
+        quantities = {}
+        for key, title in PAIRED:
+            quantity = dr.Quantity(key, title, 'min', 'all', True)
+            vals, censor_at = dr.values_of(rows, quantity)
+            q = {'median': dr.percentile(vals, 50), 'p10': dr.percentile(vals, 10), 'p90': dr.percentile(vals, 90),
+                 'censored': len(censor_at), 'censored_above': min(censor_at) if censor_at else None}
+            q.update(dr.paired_ratio(dr.values_of([rows[i] for i in both], quantity)[0],
+                                     dr.values_of([ref_rows[i] for i in both], quantity)[0], args.seed))
+            quantities[key] = q
+        failed = sum('error' in r for r in rows)
+        cases.append({'scenario': name, 'n': len(rows) - failed, 'failed': failed, 'quantities': quantities})
+    print(paired_table(cases, args.runs, args.seed))
+    print(f'\n[sweep] {len(names)} case(s) × {args.runs} draws in {wall:.0f} s wall ({_execution(execution)})',
+          file=sys.stderr)
+    result = {'command': study_command(['sweep', *args.scenarios], args), 'seed': args.seed, 'runs': args.runs,
+              'engine': args.engine, 'until_min': args.until_min, 'wall_seconds': wall,
+              'execution': _execution(execution), 'cases': cases}
+    if args.json:
+        dr.write_json(Path(args.json), result)
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        dr.write_json(out / 'sweep.json', result)
+        all_rows = [{'case': name, **row} for name, rows in zip(names, rows_by_case, strict=True) for row in rows]
+        all_records = [{'case': name, **rec} for i, name in enumerate(names)
+                       for rec in records_of(samples_by_case[i], by_case[i])]
+        dr.write_rows(out, all_rows, all_records)
+        (out / 'report.md').write_text(f'# Paired perturbation study\n\n`{result["command"]}`\n\n```\n'
+                                       f'{paired_table(cases, args.runs, args.seed)}\n```\n')
+    return 0 if all(c['failed'] == 0 for c in cases) else 1
+
+
+def _execution(execution: Any) -> str:
+    return f'{execution.where}, {execution.workers} worker(s)'
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``sweep`` verb."""
     p = sub.add_parser('sweep', help='run scenarios in parallel and print one table (table-4-7: the eleven cases)',
@@ -117,4 +265,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--jobs', '-j', type=positive_int, default=2, help='runs at a time (default 2)')
     p.add_argument('--json', metavar='PATH', help='write the list of summary objects as JSON (non-finite as null)')
     p.add_argument('--until-min', type=positive_minutes, help='cap every run at this sim time, minutes (> 0)')
+    p.add_argument('--runs', type=positive_int,
+                   help='paired study: run every scenario on the same N drawn open conditions (module doc)')
+    add_execution_options(p)
+    add_sample_options(p, run=False)
+    p.add_argument('--out', metavar='DIR', help='paired study: write sweep.json, samples.csv/json and report.md here')
+    p.add_argument('--quiet', action='store_true', help='paired study: no progress bar')
     p.set_defaults(func=cmd_sweep)

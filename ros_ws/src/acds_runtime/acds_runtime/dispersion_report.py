@@ -1,0 +1,402 @@
+"""Dispersion statistics and reports: percentiles with censoring, rank sensitivities, paired ratios (issue 11).
+
+Rows. One per sample: its index and name, the drawn values (a vector key flattened to ``key[i]``),
+the derived geometry at t0 (:func:`acds_runtime.sampling.initial_geometry`), and the run summary's
+Table 4-7 keys in study units (minutes, ft-lb-sec, A·m²).
+
+Censoring. A sample that has not reached an event when its run ends is *censored* at the run's
+length, never dropped: for a time quantity its value is "> T" (T = the run's sim minutes), ordered
+above every time that was reached. Percentiles use numpy's default ("linear", Hyndman–Fan type 7)
+interpolation between order statistics with the censored values as +∞: a percentile whose
+interpolation touches a censored value is not known and is reported as null (printed "> T", T the
+shortest censoring time). The time quantities and their sample sets:
+
+- time on magnetics only (separation → Mode 1B): every sample; censored if Mode 1B was not reached;
+- acquisition time (separation → capture): every sample; censored if capture was not reached;
+- time on wheels + magnetics (Mode 1B → capture): the samples that reached Mode 1B; censored if
+  capture was not reached after it.
+
+Final stored wheel momentum is the Table 4-7 column *at capture*: its percentiles are over the
+captured samples only (``n`` says how many). Peaks (wheel |h|, moment command) are over the whole
+of every run. Failed runs (an error) are counted and listed, and take part in nothing.
+
+Sensitivity. Spearman's rank correlation of acquisition time (and time on magnetics only) with each
+drawn variable and each derived angle, censored samples ranked above every reached time (ties
+averaged). With n samples, |ρ| > 1.96/√(n − 1) is unlikely (5 %) under no dependence. Drawn angles
+(node RA, Greenwich angle, orbit phase) are circular: a ρ near 0 there does not exclude a
+dependence; the derived geometry is what the physics acts through.
+
+Paired ratios (common random numbers). For cases run on the same draws, the ratio case/reference of
+each sample pair; the median ratio and a percentile-bootstrap 90 % interval (resampling the pairs,
+:data:`BOOTSTRAP_RESAMPLES` times, from a generator seeded by the study seed). A pair where only the
+case is censored has ratio +∞, only the reference censored 0 (the case was faster by an unknown
+factor), both censored: dropped from the ratio and counted.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .summary import summary_json
+
+#: Percentiles reported for every quantity.
+PERCENTILES = (5, 10, 25, 50, 75, 90, 95)
+#: Bootstrap resamples of the paired median ratio.
+BOOTSTRAP_RESAMPLES = 2000
+#: Spawn key of the bootstrap's generator under the study seed (sample streams use (index, ...)).
+BOOTSTRAP_STREAM = 0xB0075
+#: Time keys whose None means "not reached by the end of the run" (censored), and when the sample counts.
+TIME_KEYS = ('time_magnetics_only_min', 'acquisition_time_min', 'time_wheels_magnetics_min')
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """A reported quantity: row key, label, study unit, which samples count, whether None means censored."""
+
+    key: str
+    label: str
+    unit: str
+    when: str  # 'all' | 'captured' | 'mode_1b'
+    censored: bool
+
+
+QUANTITIES = (
+    Quantity('time_magnetics_only_min', 'time on magnetics only', 'min', 'all', True),
+    Quantity('time_wheels_magnetics_min', 'time on wheels + magnetics', 'min', 'mode_1b', True),
+    Quantity('acquisition_time_min', 'acquisition time', 'min', 'all', True),
+    Quantity('final_wheel_momentum_ftlbs', 'final stored wheel momentum (at capture)', 'ft-lb-sec', 'captured',
+             False),
+    Quantity('peak_wheel_momentum_rss_ftlbs', 'peak wheel momentum |h|', 'ft-lb-sec', 'all', False),
+    Quantity('peak_moment_am2', 'peak moment command (largest axis)', 'A·m²', 'all', False),
+    Quantity('orbit_dipole_inclination_deg', 'orbit inclination to the dipole axis at t0', 'deg', 'all', False),
+    Quantity('initial_h_b_angle_deg', 'angle between body momentum and B at t0', 'deg', 'all', False),
+    Quantity('initial_sun_angle_deg', 'z-body to sun angle at t0', 'deg', 'all', False),
+)
+#: Quantities whose sensitivity to the drawn variables is reported.
+SENSITIVITY_OF = ('acquisition_time_min', 'time_magnetics_only_min')
+
+
+# ------------------------------------------------------------------------------------------ rows
+
+
+def flatten(drawn: dict[str, Any]) -> dict[str, Any]:
+    """Drawn values with each vector key split into ``key[i]`` columns."""
+    out: dict[str, Any] = {}
+    for key, value in drawn.items():
+        if isinstance(value, list):
+            out.update({f'{key}[{i}]': v for i, v in enumerate(value)})
+        else:
+            out[key] = value
+    return out
+
+
+def make_row(index: int, name: str, drawn: dict[str, Any], geometry: dict[str, Any],
+             summary: dict[str, Any]) -> dict[str, Any]:
+    """One sample's flat row (module doc)."""
+    row: dict[str, Any] = {'index': index, 'name': name, **flatten(drawn), **geometry}
+    if 'error' in summary:
+        row['error'] = summary['error']
+        return row
+    peak_h = summary.get('peak_wheel_momentum_ftlbs') or {}
+    peak_m = summary.get('peak_moment_am2') or {}
+    row.update({
+        'time_magnetics_only_min': summary.get('time_magnetics_only_min'),
+        'time_wheels_magnetics_min': summary.get('time_wheels_magnetics_min'),
+        'acquisition_time_min': summary.get('acquisition_time_min'),
+        'mode_1b_reached': summary.get('time_magnetics_only_min') is not None,
+        'captured': summary.get('acquisition_time_min') is not None,
+        'sim_minutes': summary.get('sim_minutes'),
+        'final_wheel_momentum_ftlbs': summary.get('final_wheel_momentum_ftlbs'),
+        **{f'peak_wheel_momentum_{a}_ftlbs': peak_h.get(a) for a in ('x', 'y', 'z', 'rss')},
+        **{f'peak_moment_{a}_am2': peak_m.get(a) for a in ('x', 'y', 'z')},
+        'peak_moment_am2': max(peak_m.values()) if peak_m else None,
+        'wheel_saturation_time_min': summary.get('wheel_saturation_time_min'),
+        'final_mode': summary.get('final_mode'),
+        'truth_digest': summary.get('truth_digest'),
+        'wall_seconds': summary.get('wall_seconds'),
+    })
+    return row
+
+
+def values_of(rows: Sequence[dict[str, Any]], q: Quantity) -> tuple[np.ndarray, list[float]]:
+    """The quantity's values over the samples that count (module doc), +∞ for censored, and the
+    censoring times (run minutes) of the censored ones."""
+    vals, censor_at = [], []
+    for row in rows:
+        if 'error' in row:
+            continue
+        if q.when == 'captured' and not row.get('captured'):
+            continue
+        if q.when == 'mode_1b' and row.get('time_magnetics_only_min') is None:
+            continue
+        v = row.get(q.key)
+        if v is None and q.censored:
+            vals.append(math.inf)
+            censor_at.append(row['sim_minutes'])
+        elif v is not None:
+            vals.append(float(v))
+    return np.array(vals, dtype=float), censor_at
+
+
+# ------------------------------------------------------------------------------------ statistics
+
+
+def _interpolate(sorted_rows: np.ndarray, p: float) -> np.ndarray:
+    """Type-7 percentile ``p`` of each row of a row-sorted 2-D array; +∞ where it touches a censored value."""
+    n = sorted_rows.shape[1]
+    h = (n - 1) * p / 100.0
+    lo, hi = math.floor(h), math.ceil(h)
+    a, b = sorted_rows[:, lo], sorted_rows[:, hi]
+    with np.errstate(invalid='ignore'):
+        out = a + (h - lo) * (b - a)
+    return np.where(np.isinf(b), math.inf, out)
+
+
+def percentile(values: np.ndarray, p: float) -> float | None:
+    """Percentile ``p`` of ``values`` (+∞ = censored), None when not known (module doc) or no values."""
+    if len(values) == 0:
+        return None
+    v = float(_interpolate(np.sort(values)[None, :], p)[0])
+    return v if math.isfinite(v) else None
+
+
+def describe(rows: Sequence[dict[str, Any]], q: Quantity) -> dict[str, Any]:
+    """``{"p5": …, …, "p95": …, "n", "censored", "censored_above", "unit"}`` of one quantity."""
+    vals, censor_at = values_of(rows, q)
+    out: dict[str, Any] = {f'p{p}': percentile(vals, p) for p in PERCENTILES}
+    out.update(n=len(vals), censored=len(censor_at), censored_above=min(censor_at) if censor_at else None,
+               unit=q.unit)
+    return out
+
+
+def percentiles(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """:func:`describe` of every quantity the rows have."""
+    return {q.key: describe(rows, q) for q in QUANTITIES if any(q.key in r for r in rows)}
+
+
+def ranks(x: np.ndarray) -> np.ndarray:
+    """Ranks 1…n, ties given their average rank (+∞ ties with +∞)."""
+    order = np.argsort(x, kind='mergesort')
+    r = np.empty(len(x))
+    r[order] = np.arange(1, len(x) + 1)
+    xs = x[order]
+    start = 0
+    for i in range(1, len(x) + 1):
+        if i == len(x) or xs[i] != xs[start]:
+            if i - start > 1:
+                r[order[start:i]] = (start + 1 + i) / 2.0
+            start = i
+    return r
+
+
+def spearman(x: np.ndarray, y: np.ndarray) -> float | None:
+    """Spearman's ρ of two equal-length arrays (None when either is constant or n < 3)."""
+    if len(x) < 3:
+        return None
+    rx, ry = ranks(np.asarray(x, float)), ranks(np.asarray(y, float))
+    rx, ry = rx - rx.mean(), ry - ry.mean()
+    den = math.sqrt(float(rx @ rx) * float(ry @ ry))
+    return float(rx @ ry) / den if den > 0 else None
+
+
+def sensitivity(rows: Sequence[dict[str, Any]], drawn_columns: Sequence[str]) -> dict[str, dict[str, float | None]]:
+    """{quantity: {variable: ρ}} over the samples that ran (module doc), strongest first."""
+    ok = [r for r in rows if 'error' not in r]
+    geometry = [q.key for q in QUANTITIES if q.unit == 'deg']
+    out: dict[str, dict[str, float | None]] = {}
+    for target in SENSITIVITY_OF:
+        y = np.array([math.inf if r.get(target) is None else float(r[target]) for r in ok])
+        rhos = {}
+        for col in [*drawn_columns, *geometry]:
+            if all(isinstance(r.get(col), (int, float)) and not isinstance(r.get(col), bool) for r in ok):
+                rho = spearman(np.array([float(r[col]) for r in ok]), y)
+                if rho is not None:
+                    rhos[col] = rho
+        out[target] = dict(sorted(rhos.items(), key=lambda kv: -abs(kv[1])))
+    return out
+
+
+def paired_ratio(case: np.ndarray, ref: np.ndarray, seed: int) -> dict[str, Any]:
+    """Median of the paired ratios case/ref (+∞ = censored) and its bootstrap 90 % interval (module doc)."""
+    ratios = []
+    dropped = 0
+    for c, r in zip(case, ref, strict=True):
+        if math.isinf(c) and math.isinf(r):
+            dropped += 1
+        elif math.isinf(c) or (r == 0 and c > 0):
+            ratios.append(math.inf)
+        elif math.isinf(r):
+            ratios.append(0.0)
+        else:
+            ratios.append(1.0 if c == r == 0 else c / r)
+    x = np.array(ratios)
+    out: dict[str, Any] = {'ratio_median': percentile(x, 50), 'ratio_ci90': [None, None], 'pairs': len(x),
+                           'pairs_dropped': dropped}
+    if len(x):
+        rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(BOOTSTRAP_STREAM,)))
+        boot = np.sort(x[rng.integers(len(x), size=(BOOTSTRAP_RESAMPLES, len(x)))], axis=1)
+        medians = _interpolate(boot, 50)
+        out['ratio_ci90'] = [percentile(medians, 5), percentile(medians, 95)]
+    return out
+
+
+def pick_sample(rows: Sequence[dict[str, Any]], key: str, p: float) -> tuple[int, float]:
+    """The sample whose ``key`` is nearest its ``p``-th percentile (ties: the lowest index), and that value.
+
+    Raises ValueError when the percentile is censored or there is no value.
+    """
+    q = next((q for q in QUANTITIES if q.key == key), None)
+    if q is None:
+        raise ValueError(f'unknown quantity {key!r} (known: {", ".join(q.key for q in QUANTITIES)})')
+    target = percentile(values_of(rows, q)[0], p)
+    if target is None:
+        raise ValueError(f'the {p:g}th percentile of {key} is not known (censored: the runs ended before it; '
+                         'run longer or pick a lower percentile)')
+    best = min((r for r in rows if 'error' not in r and r.get(key) is not None),
+               key=lambda r: (abs(float(r[key]) - target), r['index']))
+    return best['index'], target
+
+
+# ----------------------------------------------------------------------------------------- output
+
+
+def _fmt(v: float | None, above: float | None, spec: str = '.1f') -> str:
+    if v is None:
+        return f'>{above:.4g}' if above is not None else '—'
+    return format(v, spec)
+
+
+def percentile_table(stats: dict[str, dict[str, Any]]) -> str:
+    """The percentile table in study units (text)."""
+    head = f'{"quantity":44s} {"unit":9s} {"n":>4s} {"cens":>4s} ' + ' '.join(f'{"p" + str(p):>7s}' for p in PERCENTILES)
+    lines = [head, '-' * len(head)]
+    labels = {q.key: q.label for q in QUANTITIES}
+    for key, s in stats.items():
+        spec = '.0f' if s['unit'] == 'A·m²' else '.2f' if s['unit'] == 'ft-lb-sec' else '.1f'
+        lines.append(f'{labels[key]:44s} {s["unit"]:9s} {s["n"]:4d} {s["censored"]:4d} ' +
+                     ' '.join(f'{_fmt(s[f"p{p}"], s["censored_above"], spec):>7s}' for p in PERCENTILES))
+    return '\n'.join(lines)
+
+
+def write_rows(out: Path, rows: Sequence[dict[str, Any]], records: Sequence[dict[str, Any]]) -> None:
+    """``samples.csv`` (flat rows) and ``samples.json`` (per sample: drawn values, geometry, full summary)."""
+    columns: list[str] = []
+    for row in rows:
+        columns += [k for k in row if k not in columns]
+    with open(out / 'samples.csv', 'w', newline='') as fh:
+        writer = csv.DictWriter(fh, fieldnames=columns, restval='')
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: '' if v is None else v for k, v in row.items()})
+    write_json(out / 'samples.json', list(records))
+
+
+def plot_distributions(out: Path, rows: Sequence[dict[str, Any]], stats: dict[str, dict[str, Any]]) -> list[Path]:
+    """One PNG per quantity: histogram of the values reached and the empirical CDF over all that count
+    (censored samples raise no step: the CDF ends below 1 by their share); and acquisition time against
+    the orbit's inclination to the dipole axis."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+    paths = []
+    for q in QUANTITIES:
+        if q.key not in stats or stats[q.key]['n'] == 0:
+            continue
+        vals, censor_at = values_of(rows, q)
+        reached = np.sort(vals[np.isfinite(vals)])
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4))
+        ax1.hist(reached, bins=max(5, min(30, int(math.sqrt(len(vals))) * 2)), color='tab:blue', edgecolor='white')
+        ax1.set_xlabel(f'{q.label} [{q.unit}]')
+        ax1.set_ylabel('samples')
+        title = f'{len(vals)} samples'
+        if censor_at:
+            title += f'; {len(censor_at)} not reached by {min(censor_at):.0f} min (censored, not shown)'
+        ax1.set_title(title, fontsize=9)
+        y = np.arange(1, len(reached) + 1) / len(vals)
+        ax2.step(reached, y, where='post', color='tab:blue')
+        for p in (10, 50, 90):
+            v = stats[q.key][f'p{p}']
+            if v is not None:
+                ax2.axvline(v, color='grey', lw=0.8, ls='--')
+                ax2.text(v, 0.02 + p / 200, f' p{p}', fontsize=8, color='grey')
+        ax2.set_ylim(0, 1)
+        ax2.set_xlabel(f'{q.label} [{q.unit}]')
+        ax2.set_ylabel('fraction of samples ≤ x')
+        ax2.grid(alpha=0.3)
+        fig.suptitle(q.label)
+        fig.tight_layout()
+        path = out / f'{q.key}.png'
+        fig.savefig(path, dpi=90)
+        plt.close(fig)
+        paths.append(path)
+    ok = [r for r in rows if 'error' not in r and r.get('orbit_dipole_inclination_deg') is not None]
+    if ok and any('acquisition_time_min' in r for r in ok):
+        fig, ax = plt.subplots(figsize=(6, 4))
+        reached = [r for r in ok if r.get('acquisition_time_min') is not None]
+        ax.scatter([r['orbit_dipole_inclination_deg'] for r in reached], [r['acquisition_time_min'] for r in reached],
+                   s=12, label='captured')
+        cens = [r for r in ok if r.get('acquisition_time_min') is None]
+        if cens:
+            ax.scatter([r['orbit_dipole_inclination_deg'] for r in cens], [r['sim_minutes'] for r in cens], s=18,
+                       marker='^', color='tab:red', label='not captured (at run end)')
+        ax.set_xlabel('orbit inclination to the dipole axis at t0 [deg]')
+        ax.set_ylabel('acquisition time [min]')
+        ax.legend(fontsize=8)
+        ax.grid(alpha=0.3)
+        fig.tight_layout()
+        path = out / 'acquisition_vs_inclination.png'
+        fig.savefig(path, dpi=90)
+        plt.close(fig)
+        paths.append(path)
+    return paths
+
+
+def write_report(out: Path, spec: dict[str, Any], rows: Sequence[dict[str, Any]], stats: dict[str, dict[str, Any]],
+                 sens: dict[str, dict[str, float | None]], plots: Sequence[Path]) -> Path:
+    """``report.md``: what was drawn and run, the percentile table, the plots, the rank sensitivities."""
+    n_ok = sum('error' not in r for r in rows)
+    lines = [f'# Monte Carlo dispersion of `{spec["scenario"]}`', '',
+             f'- command: `{spec["command"]}`',
+             f'- samples: {spec["runs"]} (seed {spec["seed"]}), {n_ok} ran, {len(rows) - n_ok} failed; engine '
+             f'{spec["engine"]}; {spec["execution"]}; wall time {spec["wall_seconds"]:.0f} s',
+             f'- run length: {spec["run_length"]}',
+             '- drawn: ' + '; '.join(f'`{v}`' for v in spec['vary']),
+             '- a sample is reproducible alone: `' + spec['rerun'].replace('{index}', 'K') + '` (K the sample index)',
+             '',
+             '## Percentiles (study units)', '',
+             'Censored samples (event not reached when the run ended) count as longer than every reached time; '
+             'a percentile that falls among them reads "> T" (null in `percentiles.json`). Final wheel momentum '
+             'is over the captured samples, time on wheels + magnetics over those that reached Mode 1B.', '',
+             '```', percentile_table(stats), '```', '']
+    failed = [r for r in rows if 'error' in r]
+    if failed:
+        lines += ['## Failed samples', ''] + [f'- sample {r["index"]}: {r["error"].splitlines()[0]}' for r in failed]
+        lines.append('')
+    lines += ['## Distributions', ''] + [f'![{p.stem}]({p.name})' for p in plots] + ['']
+    band = 1.96 / math.sqrt(max(n_ok - 1, 1))
+    lines += ['## Sensitivity (Spearman rank correlation)', '',
+              f'|ρ| above {band:.2f} (1.96/√(n−1), n = {n_ok}) is unlikely without a dependence. Drawn angles are '
+              'circular, so ρ ≈ 0 there does not exclude one; the derived angles at t0 are what the physics acts '
+              'through. Censored samples rank above every reached time.', '']
+    for target, rhos in sens.items():
+        lines += [f'### {target}', '', '| variable | ρ |', '|---|---|']
+        lines += [f'| `{k}` | {v:+.3f} |' for k, v in rhos.items() if v is not None]
+        if not rhos:
+            lines.append('| (none: the quantity has one value over every sample, e.g. all censored) | |')
+        lines.append('')
+    path = out / 'report.md'
+    path.write_text('\n'.join(lines))
+    return path
+
+
+def write_json(path: Path, obj: Any) -> None:
+    """Strict JSON, indented (a non-finite number as null, as every summary file)."""
+    path.write_text(summary_json(obj)[0])

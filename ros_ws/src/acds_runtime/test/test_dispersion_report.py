@@ -1,0 +1,76 @@
+"""Dispersion statistics (issue 11): censoring-aware percentiles, rank correlation, paired bootstrap, the pick rule."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from acds_runtime import dispersion_report as dr
+
+INF = math.inf
+
+
+def _row(i, mag, acq, sim=100.0, **kw):
+    return {'index': i, 'name': f's{i}', 'time_magnetics_only_min': mag, 'acquisition_time_min': acq,
+            'time_wheels_magnetics_min': None if mag is None or acq is None else acq - mag,
+            'captured': acq is not None, 'sim_minutes': sim, 'final_wheel_momentum_ftlbs': 1.0 if acq else 9.0, **kw}
+
+
+def test_percentiles_match_numpy_and_a_censored_tail_is_unknown():
+    x = np.array([3.0, 1.0, 4.0, 1.5, 9.0, 2.6, 5.0])
+    for p in dr.PERCENTILES:
+        assert dr.percentile(x, p) == pytest.approx(np.percentile(x, p))
+    cens = np.array([3.0, 1.0, 4.0, INF, INF])  # two not reached
+    assert dr.percentile(cens, 50) == 4.0  # sorted 1, 3, 4, ∞, ∞
+    assert dr.percentile(cens, 70) is None  # interpolates toward a censored value
+    assert dr.percentile(np.array([]), 50) is None
+
+
+def test_describe_counts_censored_and_uses_the_right_sample_sets():
+    rows = [_row(0, 10.0, 50.0), _row(1, 20.0, None, sim=80.0), _row(2, None, None, sim=90.0), _row(3, 5.0, 30.0),
+            {'index': 4, 'name': 's4', 'error': 'boom'}]
+    acq = dr.describe(rows, dr.QUANTITIES[2])
+    assert (acq['n'], acq['censored'], acq['censored_above']) == (4, 2, 80.0)
+    assert acq['p25'] == pytest.approx(np.percentile([30, 50, 1e9, 1e9], 25))
+    assert acq['p75'] is None
+    wheels = dr.describe(rows, dr.QUANTITIES[1])  # only samples that reached Mode 1B
+    assert (wheels['n'], wheels['censored']) == (3, 1)
+    final_h = dr.describe(rows, dr.QUANTITIES[3])  # only captured samples
+    assert (final_h['n'], final_h['p50']) == (2, 1.0)
+    assert set(acq) >= {f'p{p}' for p in dr.PERCENTILES}
+
+
+def test_spearman_ranks_ties_and_censored_values():
+    x = np.arange(10.0)
+    assert dr.spearman(x, x ** 3) == pytest.approx(1.0)
+    assert dr.spearman(x, -x) == pytest.approx(-1.0)
+    assert dr.spearman(x, np.ones(10)) is None
+    y = np.array([1, 2, 3, 4, 5, 6, 7, 8, INF, INF])
+    assert dr.spearman(x, y) == pytest.approx(np.corrcoef(x, [1, 2, 3, 4, 5, 6, 7, 8, 9.5, 9.5])[0, 1])
+    assert list(dr.ranks(np.array([2.0, 1.0, 2.0]))) == [2.5, 1.0, 2.5]
+
+
+def test_paired_ratio_and_its_bootstrap_interval():
+    rng = np.random.default_rng(3)
+    ref = rng.uniform(50, 150, 40)
+    case = ref * 1.3 * rng.uniform(0.95, 1.05, 40)
+    out = dr.paired_ratio(case, ref, seed=5)
+    assert out['ratio_median'] == pytest.approx(np.median(case / ref))
+    lo, hi = out['ratio_ci90']
+    assert lo < out['ratio_median'] < hi and 1.25 < lo and hi < 1.35
+    assert dr.paired_ratio(case, ref, seed=5) == out  # seeded
+    cens = dr.paired_ratio(np.array([INF, 10.0, INF, 20.0]), np.array([INF, INF, 5.0, 10.0]), seed=1)
+    assert (cens['pairs'], cens['pairs_dropped']) == (3, 1)  # both censored: dropped; the others ordered
+    assert cens['ratio_median'] == 2.0  # sorted ratios 0, 2, ∞
+
+
+def test_pick_sample_is_nearest_the_percentile():
+    rows = [_row(i, 1.0, float(t)) for i, t in enumerate([40, 10, 30, 20, 50, 60, 70, 80, 90, 100])]
+    index, target = dr.pick_sample(rows, 'acquisition_time_min', 90)
+    assert target == pytest.approx(np.percentile([10, 20, 30, 40, 50, 60, 70, 80, 90, 100], 90))
+    assert rows[index]['acquisition_time_min'] == 90.0
+    rows[9] = _row(9, 1.0, None)
+    rows[8] = _row(8, 1.0, None)
+    with pytest.raises(ValueError, match='censored'):
+        dr.pick_sample(rows, 'acquisition_time_min', 90)
