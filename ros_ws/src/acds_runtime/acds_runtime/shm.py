@@ -3,7 +3,7 @@
 A participant keeps its SHM segments (``fastrtps_<16 hex>``) and ports (``fastrtps_port<N>``,
 semaphore ``sem.fastrtps_port<N>_mutex``) with lock files beside them (``…_el`` / ``…_sl``)
 that it holds with ``flock`` while it lives. A SIGKILLed process cannot remove its files; the
-kernel releases its locks, so "lock file free" means "zombie" (what ``fastdds shm clean`` decides;
+kernel releases its locks, so "no lock file held" means "zombie" (what ``fastdds shm clean`` decides;
 a port file without any lock file is left alone: a live participant may still use it).
 :func:`clean_run` removes the
 zombies among the entries that appeared while a run went (a snapshot taken at its start), so
@@ -57,18 +57,22 @@ def _young(path: Path) -> bool:
 
 
 def clean_run(before: set[str], shm_dir: Path = SHM_DIR) -> list[str]:
-    """Remove the zombie segments and ports created since ``before``; return the names removed."""
+    """Remove the zombie segments and ports created since ``before``; return the names removed.
+
+    An entry is a zombie only when none of its lock files (``_el``, ``_sl``) is held or young: a live
+    participant may hold just one of them (the other run of a parallel test session, on its own
+    domain, creates its entries meanwhile too, and they are in ``new``)."""
     new = snapshot(shm_dir) - before
+    bases = sorted({m.group(1) for m in map(_LOCK.match, new) if m is not None})
     removed: list[str] = []
-    for name in sorted(new):
-        m = _LOCK.match(name)
-        if m is None or _young(shm_dir / name) or _held(shm_dir / name):
+    for base in bases:
+        locks = [shm_dir / f'{base}_{kind}' for kind in ('el', 'sl') if (shm_dir / f'{base}_{kind}').exists()]
+        if not locks or any(_young(p) or _held(p) for p in locks):
             continue
-        base = m.group(1)
-        victims = [name, base, f'{base}_el', f'{base}_sl']
+        victims = [base, f'{base}_el', f'{base}_sl']
         if base.startswith('fastrtps_port'):
             victims.append(f'sem.{base}_mutex')
-        for victim in dict.fromkeys(victims):
+        for victim in victims:
             if victim in new:
                 try:
                     (shm_dir / victim).unlink()
