@@ -119,10 +119,17 @@ def _rigid_body(_params: dict[str, Any]) -> NodeSpec:
          Output('sun_sensor', topics.SUN_SENSOR, 'body', **truth)))
 
 
-def _reaction_wheels(_params: dict[str, Any]) -> NodeSpec:
+def _cmg(params: dict[str, Any]) -> bool:
+    """Whether the momentum store is the AAP Workshop's CMGs (``wheels.kind: cmg``) rather than wheels."""
+    return _param(params, 'wheels_kind', 'wheels') == 'cmg'
+
+
+def _reaction_wheels(params: dict[str, Any]) -> NodeSpec:
+    stage = (Stage('gimbal', (Input('torque', topics.CMG_TORQUE, 'acds_controller'),)) if _cmg(params)
+             else Stage('drive', (Input('volts', topics.WHEEL_VOLTS, 'acds_controller'),)))
     return NodeSpec(
         'reaction_wheels', 'dynamics', 'dynamics.reaction_wheels_step:ReactionWheelsStep',
-        (Stage('drive', (Input('volts', topics.WHEEL_VOLTS, 'acds_controller'),)),),
+        (stage,),
         (Output('momentum', topics.WHEEL_MOMENTUM, 'body'),
          Output('torque', topics.WHEEL_TORQUE, 'body'),
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
@@ -157,7 +164,10 @@ def _em_driver(params: dict[str, Any]) -> NodeSpec:
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
-def _acds_controller(_params: dict[str, Any]) -> NodeSpec:
+def _acds_controller(params: dict[str, Any]) -> NodeSpec:
+    store = ((Output('cmg_torque', topics.CMG_TORQUE, 'body'), Output('sampled_momentum', topics.SAMPLED_MOMENTUM,
+                                                                      'body'))
+             if _cmg(params) else (Output('volts', topics.WHEEL_VOLTS, 'body'),))
     return NodeSpec(
         'acds_controller', 'acds_controller', 'acds_controller.controller_step:ControllerStep',
         (Stage('control', (
@@ -172,15 +182,18 @@ def _acds_controller(_params: dict[str, Any]) -> NodeSpec:
             Input('coil_current', topics.COIL_CURRENT, 'em_driver', lag=1),
         )),),
         (Output('moment', topics.MOMENT_COMMAND, 'body'),
-         Output('volts', topics.WHEEL_VOLTS, 'body'),
+         *store,
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
 def _ascs_mode_manager(params: dict[str, Any]) -> NodeSpec:
-    sss = _param(params, 'modes_system', 'heao') == 'sss'
+    system = _param(params, 'modes_system', 'heao')
+    sss = system == 'sss'
     if sss:
         stage = Stage('sss', (Input('volts', topics.MAG_VOLTS, 'magnetometer_sim'),
                               Input('bias', topics.MAG_BIAS_VOLTS, 'magnetometer_sim')))
+    elif system == 'aap':
+        stage = Stage('aap', ())  # paced by /clock: the Workshop's modes change by ground command only
     else:
         stage = Stage('heao', (Input('gyro', topics.GYRO, 'rigid_body'),
                                Input('sun', topics.SUN_SENSOR, 'rigid_body')))
