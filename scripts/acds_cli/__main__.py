@@ -113,6 +113,9 @@ def _print_summary(summary: dict) -> None:
             value = f'{value:.6g}'
         elif isinstance(value, list) and value and isinstance(value[0], dict):
             continue  # tables (transitions, passes) are printed by their summary module
+        elif isinstance(value, dict) and any(isinstance(v, list) and v and isinstance(v[0], dict)
+                                             for v in value.values()):
+            continue  # a report with a table (the dump report's orbits): printed by its summary module
         elif isinstance(value, list):
             value = ', '.join(f'{v:.6g}' if isinstance(v, float) else str(v) for v in value)
         print(f'  {key:28s} {value}')
