@@ -36,6 +36,15 @@ class DumpSeries:
     day: array = field(default_factory=lambda: array('b'))
 
 
+def check_workshop(scenario: Any, where: str = '') -> None:
+    """BagError unless ``scenario`` is an AAP Workshop run (what the dump report reads)."""
+    from acds_runtime.summaries import aap
+
+    if not aap.applies(scenario):
+        raise BagError(f'{where}scenario {scenario.name} is not an AAP Workshop run (wheels.kind cmg with the '
+                       'acds_controller): no dump report')
+
+
 def report_from_bag(bag_path: Path | str) -> tuple[dict[str, Any], DumpSeries, Any]:
     """(the summary with ``dump_report``, the plot series, the recorded scenario) of a Workshop run's bag.
 
@@ -44,16 +53,13 @@ def report_from_bag(bag_path: Path | str) -> tuple[dict[str, Any], DumpSeries, A
     from acds_common.graph import build_graph
     from acds_common.parameters import node_parameters
     from acds_runtime.launcher import per_step_topics
-    from acds_runtime.summaries import aap
     from acds_runtime.summary import RunObserver
 
     bag = open_bag(bag_path)
     scenario = bag.scenario()
     if scenario is None:
         raise BagError(f'bag {bag.path}: holds no scenario (not recorded by acds): cannot build the dump report')
-    if not aap.applies(scenario):
-        raise BagError(f'bag {bag.path}: scenario {scenario.name} is not an AAP Workshop run (wheels.kind cmg with '
-                       'the acds_controller): no dump report')
+    check_workshop(scenario, f'bag {bag.path}: ')
     steps = int(bag.info.get('steps', '0') or 0) or scenario.total_steps()
     observer = RunObserver(scenario, per_step_topics(build_graph(node_parameters(scenario, steps))))
     moment = DIPOLE if bag.has(topics.DIPOLE_AVG) else COMMAND

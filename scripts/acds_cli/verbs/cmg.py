@@ -204,7 +204,7 @@ def cmd_dump_report(args: argparse.Namespace) -> int:
     from acds_runtime.summary import write_summary_json
 
     from ..arguments import check_output_file
-    from ..bag.dump_report import plot_dump, report_from_bag
+    from ..bag.dump_report import check_workshop, plot_dump, report_from_bag
 
     source = Path(args.source)
     is_bag = source.is_dir() or source.suffix in ('.mcap', '.db3')
@@ -224,6 +224,7 @@ def cmd_dump_report(args: argparse.Namespace) -> int:
             from ..__main__ import ROOT, Progress
 
             scenario = _scenario_with_sets(args.source, args.set or [])
+            check_workshop(scenario)
             preflight(scenario)
             out = Path(args.out) if args.out else ROOT / 'runs' / f'{scenario.name}_dump_{time.strftime("%Y%m%d_%H%M%S")}'
             check_out_dir(out)
