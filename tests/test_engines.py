@@ -1,8 +1,9 @@
 """The direct engine and the per-process graph give the same data, bit for bit (spec §2; issue 10 §2).
 
 Each case runs one scenario through both engines: the summaries — truth digest, every Table 4-7
-column, transitions, SSS passes, the torque-rod detumble keys — must be equal key by key (wall time aside), and a bag recorded
-by the direct engine must hold the very bytes the graph's nodes published.
+column, transitions, SSS passes, the torque-rod detumble keys, the Workshop dump report — must be
+equal key by key (wall time aside), and a bag recorded by the direct engine must hold the very bytes
+the graph's nodes published.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from acds_common.scenario import load_scenario
 from acds_runtime.direct import DirectRun
 
 CASES = [('heao_b_acquisition_short', None), ('heao_b_point_unloading', 200), ('sss_a_pass_test', 600),
-         ('oresat_detumble', 200)]
+         ('oresat_detumble', 200), ('aap_workshop_pop_test', None)]
 
 
 def _comparable(summary: dict) -> dict:

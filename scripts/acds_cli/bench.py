@@ -117,7 +117,7 @@ def core_rate(steps: int) -> float:
     from dynamics.configuration import build_rigid_body
 
     sc = load_scenario(SCENARIO)
-    model = build_rigid_body(*(sc.values[s] for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics')))
+    model = build_rigid_body(*(sc.values[s] for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics', 'disturbance')))
     dipole, zero = np.array([100.0, -50.0, 20.0]), np.zeros(3)
     dt = sc.control_period_s
     t0 = time.perf_counter()

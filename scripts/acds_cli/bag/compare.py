@@ -16,9 +16,7 @@ by field: floats within ``tolerance`` (absolute; 0 = bit-identical), everything 
 from __future__ import annotations
 
 import math
-import os
 import sys
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -102,12 +100,7 @@ def node_parameters(bag: Bag, node: str, scenario: str | None = None,
     elif node in recorded:
         params = dict(recorded[node])
     elif bag.info.get('scenario'):
-        with tempfile.NamedTemporaryFile('w', suffix='.yaml', delete=False) as fh:
-            fh.write(bag.info['scenario'])
-        try:
-            params = graph_parameters(load_scenario(fh.name), steps, 0.0).get(node)
-        finally:
-            os.unlink(fh.name)
+        params = graph_parameters(bag.scenario(), steps, 0.0).get(node)
         if params is None:
             raise BagError(f'bag {bag.path}: its scenario has no node {node}')
     else:

@@ -90,6 +90,26 @@ class Bag:
     source: Any = field(default=None, repr=False)
     _stats: dict[str, TopicStats] | None = field(default=None, repr=False)
 
+    def scenario(self) -> Any:
+        """The recorded run's scenario (:class:`acds_common.scenario.Scenario`, from the merged YAML the writer
+        stored), or None when the bag holds none. A stored scenario that no longer loads is a BagError."""
+        import os
+        import tempfile
+
+        from acds_common.scenario import ScenarioError, load_scenario
+
+        text = self.info.get('scenario')
+        if not text:
+            return None
+        with tempfile.NamedTemporaryFile('w', suffix='.yaml', delete=False) as fh:
+            fh.write(text)
+        try:
+            return load_scenario(fh.name)
+        except ScenarioError as exc:
+            raise BagError(f'bag {self.path}: its recorded scenario does not load: {exc}') from None
+        finally:
+            os.unlink(fh.name)
+
     def count(self, topic: str) -> int:
         """Number of messages of ``topic`` (relative or absolute name)."""
         return self.counts.get(topics.resolve(topic), 0)

@@ -14,7 +14,9 @@ Seed: 002_heao_acds_study.txt §4.3 (tilted dipole 11° / 20° from Greenwich, o
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -161,6 +163,13 @@ class Orbit:
         # Perifocal (or node-line) frame to ECI: R3(Ω) R1(i) R3(ω or u0).
         self._pqw_to_eci = rot_z(cfg.raan_rad) @ rot_x(cfg.inclination_rad) @ rot_z(self._arg0)
 
+    def node_time_s(self) -> float:
+        """A time (s) at which the orbit passes its ascending node: the argument of latitude (for an
+        elliptical orbit its mean value ω + M) is zero there, −u0/n; orbits counted from the node start here."""
+        u0 = self.cfg.arg_latitude0_rad if self.cfg.kind == "circular" else (
+            self.cfg.arg_perigee_rad + self.cfg.mean_anomaly0_rad)
+        return -u0 / self.mean_motion_rad_s
+
     def position_velocity_eci(self, t_s: float) -> tuple[np.ndarray, np.ndarray]:
         """Position (m) and velocity (m/s) in ECI at time ``t_s`` (s from scenario start)."""
         t_s = finite_float("t_s", t_s)
@@ -239,6 +248,41 @@ class TiltedDipoleField:
         rhat = r / rn
         m_hat = -self.dipole_axis_eci(t_s)
         return (self._k / rn ** 3) * (3.0 * float(m_hat @ rhat) * rhat - m_hat)
+
+
+def gravity_gradient_torque_nm(inertia_kg_m2: np.ndarray, r_body_m: np.ndarray) -> np.ndarray:
+    """Gravity-gradient torque T_gg = 3 μ/r³ · r̂_b × (I r̂_b), N·m (spec §3); ``r_body_m`` is the geocentric
+    position of the spacecraft in body axes (m), ``inertia_kg_m2`` its 3×3 tensor. The rigid body integrates
+    this formula (in its small-vector kernel); an on-board computer uses it as a torque model."""
+    r = finite_vector3("r_body_m", r_body_m)
+    rn = math.sqrt(float(r @ r))
+    if not rn > 0.0:
+        raise EnvironmentModelError("gravity gradient needs a position away from the Earth's centre")
+    r_hat = r / rn
+    return 3.0 * units.EARTH_MU_M3_S2 / rn ** 3 * np.cross(r_hat, np.asarray(inertia_kg_m2, dtype=float) @ r_hat)
+
+
+# ------------------------------------------------------------------------------ from scenario sections
+
+
+def orbit_from_section(orbit: Mapping[str, Any]) -> Orbit:
+    """The orbit of a scenario ``orbit`` section (SI values, ``acds_common.scenario.SCHEMA['orbit']``).
+
+    The dynamics and the on-board computer (the controller's field prediction) build theirs here, so
+    both fly the same orbit from the same keys.
+    """
+    return Orbit(OrbitConfig(
+        kind=orbit['kind'], inclination_rad=orbit['inclination'], raan_rad=orbit['raan'],
+        altitude_m=orbit['altitude'], arg_latitude0_rad=orbit['arg_latitude0'],
+        perigee_altitude_m=orbit['perigee_altitude'], apogee_radius_m=orbit['apogee_radius'],
+        arg_perigee_rad=orbit['arg_perigee'], mean_anomaly0_rad=orbit['mean_anomaly0']))
+
+
+def field_from_section(earth: Mapping[str, Any]) -> TiltedDipoleField:
+    """The tilted-dipole field of a scenario ``earth`` section (SI values), for the dynamics and on board."""
+    return TiltedDipoleField(EarthFieldConfig(
+        dipole_moment_am2=earth['dipole_moment'], tilt_rad=earth['dipole_tilt'],
+        dipole_longitude_rad=earth['dipole_longitude'], greenwich_angle0_rad=earth['greenwich_angle0']))
 
 
 # ------------------------------------------------------------------------------------------------ sun

@@ -146,14 +146,21 @@ def _rigid_body(_params: dict[str, Any]) -> NodeSpec:
         time_owner=True)
 
 
+def _cmg(params: dict[str, Any]) -> bool:
+    """Whether the momentum store is the AAP Workshop's CMGs (``wheels.kind: cmg``) rather than wheels."""
+    return _param(params, 'wheels_kind', 'wheels') == 'cmg'
+
+
 def _reaction_wheels(params: dict[str, Any]) -> NodeSpec:
-    if _param(params, 'wheels_drive', 'volts') == 'torque':  # torque-commanded wheels (a formation vehicle)
-        command = Input('torque', topics.WHEEL_TORQUE_COMMAND, 'formation_controller')
+    if _cmg(params):  # the Workshop's CMGs: the controller's momentum-rate command (seed 000)
+        stage = Stage('gimbal', (Input('torque', topics.CMG_TORQUE, 'acds_controller'),))
+    elif _param(params, 'wheels_drive', 'volts') == 'torque':  # torque-commanded wheels (a formation vehicle)
+        stage = Stage('drive', (Input('torque', topics.WHEEL_TORQUE_COMMAND, 'formation_controller'),))
     else:
-        command = Input('volts', topics.WHEEL_VOLTS, 'acds_controller')
+        stage = Stage('drive', (Input('volts', topics.WHEEL_VOLTS, 'acds_controller'),))
     return NodeSpec(
         'reaction_wheels', 'dynamics', 'dynamics.reaction_wheels_step:ReactionWheelsStep',
-        (Stage('drive', (command,)),),
+        (stage,),
         (Output('momentum', topics.WHEEL_MOMENTUM, BODY),
          Output('torque', topics.WHEEL_TORQUE, BODY),
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
@@ -192,7 +199,9 @@ def _em_driver(params: dict[str, Any]) -> NodeSpec:
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
-def _acds_controller(_params: dict[str, Any]) -> NodeSpec:
+def _acds_controller(params: dict[str, Any]) -> NodeSpec:
+    store = ((Output('cmg_torque', topics.CMG_TORQUE, BODY), Output('sampled_momentum', topics.SAMPLED_MOMENTUM, BODY))
+             if _cmg(params) else (Output('volts', topics.WHEEL_VOLTS, BODY),))
     return NodeSpec(
         'acds_controller', 'acds_controller', 'acds_controller.controller_step:ControllerStep',
         (Stage('control', (
@@ -207,15 +216,18 @@ def _acds_controller(_params: dict[str, Any]) -> NodeSpec:
             Input('coil_current', topics.COIL_CURRENT, 'em_driver', lag=1),
         )),),
         (Output('moment', topics.MOMENT_COMMAND, BODY),
-         Output('volts', topics.WHEEL_VOLTS, BODY),
+         *store,
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
 def _ascs_mode_manager(params: dict[str, Any]) -> NodeSpec:
-    sss = _param(params, 'modes_system', 'heao') == 'sss'
+    system = _param(params, 'modes_system', 'heao')
+    sss = system == 'sss'
     if sss:
         stage = Stage('sss', (Input('volts', topics.MAG_VOLTS, 'magnetometer_sim'),
                               Input('bias', topics.MAG_BIAS_VOLTS, 'magnetometer_sim')))
+    elif system == 'aap':
+        stage = Stage('aap', ())  # paced by /clock: the Workshop's modes change by ground command only
     else:
         stage = Stage('heao', (Input('gyro', topics.GYRO, 'rigid_body'),
                                Input('sun', topics.SUN_SENSOR, 'rigid_body')))

@@ -97,6 +97,9 @@ FIELD = {'gauss': u.GAUSS_T, 't': 1.0}
 COUPLING = {'g_per_am2': u.GAUSS_T, 't_per_am2': 1.0}
 TIME = {'s': 1.0, 'min': 60.0}
 MOMENT_OF_INERTIA = {**INERTIA, 'g_mm2': u.G_MM2_KG_M2}
+TORQUE = {'ft_lb': u.FT_LB_NM, 'nm': 1.0}
+#: The seed-000 dump gain k: amp-turn-m² per (ft-lb-sec · Wb/m²), or SI A·m²/(N·m·s·T) = 1/(s·T²).
+DUMP_GAIN = {'am2_per_ftlbs_t': u.dump_gain_seed_to_si(1.0), 'per_s_t2': 1.0}
 
 #: Every key a scenario may hold, by section ('' is the top level).
 SCHEMA: dict[str, dict[str, Field]] = {
@@ -156,8 +159,11 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'substeps': Field('int', 'RK4 substeps per control period', 10, lo=1, hi=10000),
     },
     'wheels': {
-        'drive': Field('str', 'volts: square-law drive from the controller\'s volts (HEAO, spec §4); torque: '
-                       'torque-commanded wheels (EMFFORCE, seed 004 slide 74) along torque_axes', 'volts',
+        'kind': Field('str', 'momentum store: wheels (square-law reaction wheels, spec §4) or cmg (ideal control '
+                      'moment gyros, seed 000: the momentum rate the attitude loop asks, spherical capacity)',
+                      'wheels', choices=('wheels', 'cmg')),
+        'drive': Field('str', 'kind wheels: volts, square-law drive from the controller\'s volts (HEAO, spec §4); '
+                       'torque, torque-commanded wheels (EMFFORCE, seed 004 slide 74) along torque_axes', 'volts',
                        choices=('volts', 'torque')),
         'layout': Field('str', 'volts drive: three_orthogonal or four_cant20 (spec §4)', 'three_orthogonal',
                         choices=('three_orthogonal', 'four_cant20')),
@@ -169,8 +175,24 @@ SCHEMA: dict[str, dict[str, Field]] = {
                        MOMENTUM, lo=0.0, hi=1e6),
         'failed_wheel': Field('int', 'index of a failed wheel of the 4-wheel cluster, −1 for none', -1,
                               lo=-1, hi=3),
-        'initial_momentum': _q('initial wheel momentum, body axes', [0.0, 0.0, 0.0], 'nms', MOMENTUM,
-                               length=3, lo=-1e3, hi=1e3),
+        'initial_momentum': _q('initial wheel (or CMG) momentum, body axes', [0.0, 0.0, 0.0], 'nms', MOMENTUM,
+                               length=3, lo=-1e5, hi=1e5),
+        'cmg_capacity': _q('kind cmg: |h| capacity of the CMG momentum envelope (seed 000 §5: nearly 12,000 '
+                           'ft-lb-sec)', 12000.0 * u.FT_LB_S_NMS, 'nms', MOMENTUM, lo=1.0, hi=1e6),
+    },
+    'disturbance': {
+        'bias_momentum_per_orbit': _q('body-fixed disturbance: the bias momentum it delivers per orbit (a constant '
+                                      'torque = this / orbit period), body axes; the gravity gradient is the '
+                                      "rigid body's own (dynamics.gravity_gradient)", [0.0, 0.0, 0.0], 'nms',
+                                      MOMENTUM, length=3, lo=-1e6, hi=1e6),
+        'once_per_orbit_cos': _q('body-fixed cyclic torque, once per orbit: the cos u part (u = argument of '
+                                 'latitude)', [0.0, 0.0, 0.0], 'nm', TORQUE, length=3, lo=-1e3, hi=1e3),
+        'once_per_orbit_sin': _q('body-fixed cyclic torque, once per orbit: the sin u part', [0.0, 0.0, 0.0], 'nm',
+                                 TORQUE, length=3, lo=-1e3, hi=1e3),
+        'twice_per_orbit_cos': _q('body-fixed cyclic torque, twice per orbit: the cos 2u part', [0.0, 0.0, 0.0],
+                                  'nm', TORQUE, length=3, lo=-1e3, hi=1e3),
+        'twice_per_orbit_sin': _q('body-fixed cyclic torque, twice per orbit: the sin 2u part', [0.0, 0.0, 0.0],
+                                  'nm', TORQUE, length=3, lo=-1e3, hi=1e3),
     },
     # ---- magnetics hardware (spec §5, §6) -------------------------------------------------------
     'magnetometer': {
@@ -214,7 +236,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'coil_moment_per_amp_am2': Field('floats', 'per-axis dipole per ampere (Table 4-3: 2062/0.727)',
                                          [2062 / 0.727] * 3, length=3, lo=1e-3, hi=1e5),
         'coil_max_moment_am2': Field('floats', 'per-axis saturation of the commanded dipole', [2062.0] * 3,
-                                     length=3, lo=1e-3, hi=1e5),
+                                     length=3, lo=1e-3, hi=1e6),
         'supply_v': Field('float', 'power bus, V', 28.0, lo=1.0, hi=100.0),
         'epsilon': Field('float', 'hysteresis half-band ε (fraction of I_c)', 0.01, lo=1e-4, hi=0.5),
         'band_floor_a': Field('float', 'absolute floor of the band half-width (comparator offset), A', 4e-4,
@@ -245,7 +267,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'unloading_gain_mode_1b_per_s_g2': Field('float', 'unloading gain in Mode 1B', 0.05, lo=0.0, hi=10.0),
         'unloading_gain_scan_per_s_g2': Field('float', 'unloading gain, celestial scan', 0.01, lo=0.0, hi=10.0),
         'unloading_gain_point_per_s_g2': Field('float', 'unloading gain, celestial point', 0.02, lo=0.0, hi=10.0),
-        'max_moment_am2': Field('float', 'per-axis moment command saturation', 2000.0, lo=1e-3, hi=1e5),
+        'max_moment_am2': Field('float', 'per-axis moment command saturation', 2000.0, lo=1e-3, hi=1e6),
         # seed 003 gain design, k_ω = (4π/T_orb)(sin ξ + 1) J_min: the on-board design values (defaults: the seed's)
         'detumble_orbit_period': _q('b_cross_omega gain: orbit period T_orb (seed 003: ISS, 5560.8 s)', 5560.8, 's',
                                     TIME, lo=1e3, hi=1e6),
@@ -269,11 +291,31 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'adc_bits': Field('int', 'transfer assembly ADC width, bits', 10, lo=8, hi=24),
         'telemetry_every': Field('int', 'DPA/TA telemetry on diagnostics every N steps (and at every event)',
                                  20, lo=1, hi=10**6),
+        # ---- AAP Workshop CMG momentum dump (seed 000), with wheels.kind cmg
+        'dump_law': Field('str', 'Workshop dump law: khb (M = k H_s × B), khb_shifted (k (H_s − H_0) × B), '
+                          'min_energy (eq. 3 on the predicted field), none (CMG hold only)', 'khb',
+                          choices=('khb', 'khb_shifted', 'min_energy', 'none')),
+        'dump_gain': _q('dump gain k (seed 000 §5: 4e6 amp-turn-m² per ft-lb-sec per Wb/m²)',
+                        u.dump_gain_seed_to_si(4e6), 'per_s_t2', DUMP_GAIN, lo=0.0, hi=1e12),
+        'dump_h_0': _q('khb_shifted: the shift H_0 of the region H_s settles in (§3)', [0.0, 0.0, 0.0], 'nms',
+                       MOMENTUM, length=3, lo=-1e5, hi=1e5),
+        'dump_bias_momentum': _q('bias momentum H_b per orbit known on board (§3): what min_energy dumps and the '
+                                 '§5 initialisation uses', [0.0, 0.0, 0.0], 'nms', MOMENTUM, length=3,
+                                 lo=-1e6, hi=1e6),
+        'dump_h_s_init': Field('str', 'first H_s sample: measured (the CMG momentum as it is) or min_energy '
+                               '(§5: k H_s of the first orbit set to eq. 3\'s bracket, kept as an offset)',
+                               'measured', choices=('measured', 'min_energy')),
+        'cmg_hold_bandwidth': _q('CMG attitude-hold closed-loop bandwidth ω_n (not in the seed)', 0.05, 'rad_s',
+                                 RATE, lo=1e-6, hi=10.0),
+        'cmg_hold_damping': Field('float', 'CMG attitude-hold damping ratio ζ (not in the seed)', 0.7,
+                                  lo=0.0, hi=10.0),
     },
     'modes': {
-        'system': Field('str', 'which mode logic runs: heao or sss', 'heao', choices=('heao', 'sss')),
-        'initial_mode': Field('str', 'mode at separation', 'mode_1a',
-                              choices=('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point')),
+        'system': Field('str', 'which mode logic runs: heao, sss or aap (the AAP Workshop CMG hold and magnetic '
+                        'dump, seed 000)', 'heao', choices=('heao', 'sss', 'aap')),
+        'initial_mode': Field('str', 'mode at separation (aap: cmg_hold or cmg_dump)', 'mode_1a',
+                              choices=('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point',
+                                       'cmg_hold', 'cmg_dump')),
         'rate_thresholds': _q('Mode 1A→1B body-rate thresholds |ω_x|, |ω_y|, |ω_z|',
                               [0.573 * _DEG, 0.115 * _DEG, 0.115 * _DEG], 'rad_s', RATE, length=3, lo=0.0, hi=1.0),
         'capture_cone': _q('acquisition capture: z within this angle of the sun', 10 * _DEG, 'rad', ANGLE,
@@ -356,11 +398,11 @@ SCHEMA: dict[str, dict[str, Field]] = {
 
 #: Which scenario sections each node receives as parameters.
 NODE_SECTIONS: dict[str, tuple[str, ...]] = {
-    'rigid_body': ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics', 'em_driver', 'wheels'),
+    'rigid_body': ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics', 'em_driver', 'wheels', 'disturbance'),
     'reaction_wheels': ('wheels',),
     'magnetometer_sim': ('magnetometer',),
     'em_driver': ('em_driver',),
-    'acds_controller': ('spacecraft', 'controller', 'magnetometer', 'wheels'),
+    'acds_controller': ('spacecraft', 'controller', 'magnetometer', 'wheels', 'orbit', 'earth'),
     'ascs_mode_manager': ('modes', 'sss'),
     'formation_dynamics': ('orbit', 'earth', 'sun', 'dynamics', 'formation'),
     'formation_controller': ('orbit', 'formation'),
@@ -713,6 +755,8 @@ def _check_graph(path: Path, sc: Scenario) -> None:
                             'vehicle lists its own nodes (vehicles[].nodes)')
     if not sc.formation and 'formation_dynamics' in sc.get('', 'nodes'):
         raise ScenarioError(f'{path}: nodes: formation_dynamics needs a vehicles list')
+    if not sc.formation:
+        _check_workshop(path, sc)
     steps = round(sc.duration_s() / sc.control_period_s)
     if steps > MAX_STEPS:
         raise ScenarioError(f'{path}: duration / control_period give {steps:,} steps, more than the {MAX_STEPS:,} '
@@ -760,6 +804,20 @@ def _validate_vehicles(path: Path, data: dict[str, Any]) -> list[dict[str, Any]]
                                                  label=f'vehicles.{name}.{section}')
         out.append(vehicle)
     return out
+
+#: Mode names of the AAP Workshop (``modes.system: aap``, seed 000).
+WORKSHOP_MODES = ('cmg_hold', 'cmg_dump')
+
+
+def _check_workshop(path: Path, sc: Scenario) -> None:
+    """The Workshop mode logic drives CMGs, and only it does; its modes are its own."""
+    system, initial, kind = sc.get('modes', 'system'), sc.get('modes', 'initial_mode'), sc.get('wheels', 'kind')
+    if (system == 'aap') != (initial in WORKSHOP_MODES):
+        raise ScenarioError(f'{path}: modes.initial_mode: {initial!r} with modes.system {system!r} (the Workshop '
+                            f'modes {", ".join(WORKSHOP_MODES)} belong to system aap, and only they)')
+    if 'ascs_mode_manager' in sc.get('', 'nodes') and (system == 'aap') != (kind == 'cmg'):
+        raise ScenarioError(f'{path}: wheels.kind: {kind!r} with modes.system {system!r} (the aap mode logic holds '
+                            'the attitude with CMGs, wheels.kind cmg; the heao and sss logic drive wheels)')
 
 
 def load_scenario(name_or_path: str) -> Scenario:

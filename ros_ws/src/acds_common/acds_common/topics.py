@@ -38,6 +38,8 @@ MAG_BIAS_VOLTS = 'magnetometer/bias_volts'      #: geometry_msgs/Vector3Stamped:
 MOMENT_COMMAND = 'controller/moment_command'    #: geometry_msgs/Vector3Stamped: commanded dipole, body, A·m²
 WHEEL_VOLTS = 'controller/wheel_volts'          #: geometry_msgs/Vector3Stamped: wheel drive volts per body axis, V
 WHEEL_TORQUE_COMMAND = 'controller/wheel_torque'  #: geometry_msgs/Vector3Stamped: wanted ḣ of torque-driven wheels, body, N·m
+CMG_TORQUE = 'controller/cmg_torque'            #: geometry_msgs/Vector3Stamped: commanded CMG momentum rate ḣ, body, N·m
+SAMPLED_MOMENTUM = 'controller/sampled_momentum'  #: geometry_msgs/Vector3Stamped: H_s the dump law uses (step k), body, N·m·s
 
 # em_driver (step k)
 DIPOLE_AVG = 'em_driver/dipole_avg'             #: geometry_msgs/Vector3Stamped: achieved dipole averaged over the step, A·m²
@@ -77,6 +79,8 @@ TYPES: dict[str, str] = {
     MOMENT_COMMAND: 'geometry_msgs/msg/Vector3Stamped',
     WHEEL_VOLTS: 'geometry_msgs/msg/Vector3Stamped',
     WHEEL_TORQUE_COMMAND: 'geometry_msgs/msg/Vector3Stamped',
+    CMG_TORQUE: 'geometry_msgs/msg/Vector3Stamped',
+    SAMPLED_MOMENTUM: 'geometry_msgs/msg/Vector3Stamped',
     DIPOLE_AVG: 'geometry_msgs/msg/Vector3Stamped',
     DIPOLE_END: 'geometry_msgs/msg/Vector3Stamped',
     COIL_CURRENT: 'geometry_msgs/msg/Vector3Stamped',

@@ -94,6 +94,16 @@ def rad_s_to_rpm(w):
     return w * 60.0 / (2.0 * math.pi)
 
 
+def dump_gain_seed_to_si(k):
+    """Seed 000's dump gain k, amp-turn-m² per (ft-lb-sec · Wb/m²), to SI A·m²/(N·m·s·T) = 1/(s·T²)."""
+    return k / FT_LB_S_NMS
+
+
+def dump_gain_si_to_seed(k):
+    """SI dump gain, 1/(s·T²), to seed 000's amp-turn-m² per (ft-lb-sec · Wb/m²)."""
+    return k * FT_LB_S_NMS
+
+
 #: Study gain unit (s·G²)⁻¹ with B in G and H in ft-lb-s gives M in ft-lb/G;
 #: 1 ft-lb/G = 13558.2 A·m² (spec §7).
 FTLB_PER_GAUSS_AM2 = FT_LB_NM / GAUSS_T

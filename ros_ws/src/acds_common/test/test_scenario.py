@@ -34,7 +34,7 @@ def test_units_convert_to_si_and_defaults_fill_in(tmp_path):
     params = sc.node_parameters('rigid_body')
     assert params['orbit_altitude_m'] == pytest.approx(333360.0)
     assert set(params) == {f.param_name(s, n) for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics', 'em_driver',
-                                                      'wheels')
+                                                      'wheels', 'disturbance')
                            for n, f in SCHEMA[s].items()}
 
 

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from acds_common.units import FT_LB_S_NMS, nms_to_ftlbs
+from acds_common.units import dump_gain_seed_to_si, nms_to_ftlbs
 
 from acds_controller.magnetic_laws import ControllerError, as_vector3, check_gain, saturate
 
@@ -47,7 +47,7 @@ PREDICTION_SAMPLES = 720
 
 def k_to_si(k_seed: float) -> float:
     """The seed's k (amp-turn-m² per ft-lb-sec per Wb/m²) in SI, A·m²/(N·m·s·T) = s⁻¹·T⁻²: k / 1.3558179."""
-    return check_gain(k_seed, 'k (amp-turn-m² per ft-lb-sec per Wb/m²)', 0.0, 1e12) / FT_LB_S_NMS
+    return dump_gain_seed_to_si(check_gain(k_seed, 'k (amp-turn-m² per ft-lb-sec per Wb/m²)', 0.0, 1e12))
 
 
 def khb_moment(h_s_nms: np.ndarray, b_t: np.ndarray, k_seed: float = K_SEED,
@@ -283,14 +283,93 @@ class OrbitStats:
         return self.delta_h_s_nms - self.magnetic_momentum_nms
 
 
-def _rms(m2: np.ndarray, w: np.ndarray) -> float | None:
-    """Time-weighted rms from squared magnitudes, None over an empty stretch (e.g. no orbital night)."""
-    total = float(w.sum())
-    return None if total == 0.0 else math.sqrt(float((w * m2).sum()) / total)
+def _rms(total_m2_s: float, duration_s: float) -> float | None:
+    """Time-weighted rms from ∫|M|² dt over a stretch, None over an empty stretch (e.g. no orbital night)."""
+    return None if duration_s == 0.0 else math.sqrt(total_m2_s / duration_s)
 
 
-def _whole_orbit_rms(m2: np.ndarray, w: np.ndarray) -> float:
-    return math.sqrt(float((w * m2).sum()) / float(w.sum()))
+class _OpenOrbit:
+    """The running sums of the orbit being accumulated (what its :class:`OrbitStats` needs, nothing more)."""
+
+    def __init__(self, n: int, t_s: float, h_s_nms: np.ndarray, h_store_nms: np.ndarray | None) -> None:
+        self.n, self.t_start_s = n, t_s
+        self.h_s_nms, self.h_store_nms = h_s_nms.copy(), None if h_store_nms is None else h_store_nms.copy()
+        self.w = {True: 0.0, False: 0.0}  # day → seconds
+        self.m2 = {True: 0.0, False: 0.0}  # day → ∫|M|² dt
+        self.m2_max = 0.0
+        self.gram = np.zeros((3, 3))
+        self.magnetic = np.zeros(3)
+        self.last_w = 0.0
+
+    def add(self, w: float, m: np.ndarray, b: np.ndarray, day: bool, torque: np.ndarray) -> None:
+        m2 = float(m @ m)
+        self.last_w = w
+        self.w[day] += w
+        self.m2[day] += w * m2
+        self.m2_max = max(self.m2_max, m2)
+        self.gram += w * (float(b @ b) * np.eye(3) - np.outer(b, b))
+        self.magnetic += w * torque
+
+    def close(self, delta_h_s_nms: np.ndarray, h_b_nms: np.ndarray, k_seed: float | None) -> OrbitStats:
+        duration = self.w[True] + self.w[False]
+        c, _ = min_energy_vector(self.gram, h_b_nms)
+        return OrbitStats(
+            orbit=self.n, t_start_s=self.t_start_s, duration_s=duration, night_s=self.w[False], day_s=self.w[True],
+            m_n_am2=_rms(self.m2[False], self.w[False]), m_d_am2=_rms(self.m2[True], self.w[True]),
+            m_o_am2=math.sqrt((self.m2[True] + self.m2[False]) / duration), m_m_am2=math.sqrt(self.m2_max),
+            h_s_nms=self.h_s_nms, delta_h_s_nms=np.asarray(delta_h_s_nms, dtype=float),
+            magnetic_momentum_nms=self.magnetic.copy(),
+            # ∫ |c × B|² dt = cᵀ W c with the same weights: eq. (3)'s M_o on this orbit's own field
+            min_energy_m_o_am2=math.sqrt(max(0.0, float(c @ self.gram @ c)) / duration),
+            loop_gains=None if k_seed is None else loop_gains(self.gram, k_seed))
+
+
+class OrbitAccumulator:
+    """Streaming per-orbit statistics over control steps, in bounded memory (what :func:`orbit_stats` does on arrays).
+
+    ``clock``: the orbit boundaries; ``h_b_nms``: the bias momentum per orbit the minimum-energy comparison
+    dumps (Table 2, on each orbit's own field); ``k_seed``: when given, each orbit carries the sampled loop's
+    gains (eigenvalues of k W). Feed :meth:`add` once per control step in time order; an orbit is closed
+    (its :class:`OrbitStats` appended to :attr:`stats`) by the first step of a later orbit, whose H_s sample
+    gives ΔH_s, or at the end by :meth:`finish`.
+    """
+
+    def __init__(self, clock: OrbitClock, h_b_nms: np.ndarray, k_seed: float | None = None) -> None:
+        self.clock = clock
+        self.h_b_nms = as_vector3(h_b_nms, 'h_b_nms')
+        self.k_seed = k_seed
+        self.stats: list[OrbitStats] = []
+        self._open: _OpenOrbit | None = None
+
+    def add(self, t_s: float, weight_s: float, m_am2: np.ndarray, b_body_t: np.ndarray, day: bool,
+            h_s_nms: np.ndarray, torque_nm: np.ndarray | None = None, h_store_nms: np.ndarray | None = None) -> None:
+        """One control step at ``t_s`` held for ``weight_s`` s: moment M (A·m²), field B (T), orbital day or not,
+        the H_s the step used (N·m·s); ``torque_nm`` the step's mean magnetic torque (default M × B);
+        ``h_store_nms`` the CMG momentum at the step (lets :meth:`finish` close the last orbit)."""
+        n = self.clock.index(t_s)
+        h_s = as_vector3(h_s_nms, 'h_s_nms')
+        m, b = as_vector3(m_am2, 'm_am2'), as_vector3(b_body_t, 'b_body_t')
+        if self._open is not None and n != self._open.n:
+            if n < self._open.n:
+                raise ControllerError(f'time went back from orbit {self._open.n} to orbit {n} (t = {t_s} s)')
+            self.stats.append(self._open.close(h_s - self._open.h_s_nms, self.h_b_nms, self.k_seed))
+            self._open = None
+        if self._open is None:
+            self._open = _OpenOrbit(n, float(t_s), h_s, None if h_store_nms is None else as_vector3(h_store_nms,
+                                                                                                   'h_store_nms'))
+        self._open.add(float(weight_s), m, b, bool(day), np.cross(m, b) if torque_nm is None
+                       else as_vector3(torque_nm, 'torque_nm'))
+
+    def finish(self, t_end_s: float, h_store_end_nms: np.ndarray) -> None:
+        """Close the open orbit at the end of the data if it ran to its end (within half a step of the boundary,
+        the data's last step being held to ``t_end_s``): ΔH_s from the CMG momentum at the end."""
+        o = self._open
+        if o is None or o.h_store_nms is None:
+            return
+        if t_end_s >= self.clock.start_s(o.n + 1) - 0.5 * o.last_w:
+            self.stats.append(o.close(as_vector3(h_store_end_nms, 'h_store_end_nms') - o.h_store_nms, self.h_b_nms,
+                                      self.k_seed))
+        self._open = None
 
 
 def orbit_stats(t_s: np.ndarray, m_am2: np.ndarray, b_body_t: np.ndarray, day: np.ndarray, h_s_nms: np.ndarray,
@@ -301,7 +380,7 @@ def orbit_stats(t_s: np.ndarray, m_am2: np.ndarray, b_body_t: np.ndarray, day: n
     orbital day; ``h_s_nms`` (N, 3) the sampled H_s each step used; ``h_b_nms`` the bias momentum per orbit
     (for the minimum-energy comparison of Table 2, evaluated on each orbit's own field); ``k_seed``: when
     given, each orbit also carries the sampled loop's gains (eigenvalues of k W). Only orbits followed by a
-    sample of the next orbit (so that ΔH_s is known) are reported.
+    sample of the next orbit (so that ΔH_s is known) are reported. Zero-order-hold weights (:func:`hold_weights`).
     """
     t = np.asarray(t_s, dtype=float)
     m = np.asarray(m_am2, dtype=float)
@@ -313,32 +392,10 @@ def orbit_stats(t_s: np.ndarray, m_am2: np.ndarray, b_body_t: np.ndarray, day: n
                              ('h_s_nms', hs, (n_steps, 3))):
         if arr.shape != shape:
             raise ControllerError(f'{name} must have shape {shape} to match t_s, got {arr.shape}')
-    h_b = as_vector3(h_b_nms, 'h_b_nms')
-    w_hold = hold_weights(t)
-    orbit_of = np.array([clock.index(x) for x in t])
-    m2 = np.einsum('ki,ki->k', m, m)
-    torque = np.cross(m, b)
-    out = []
-    for n in range(int(orbit_of[0]), int(orbit_of[-1])):
-        sel = orbit_of == n
-        nxt = np.flatnonzero(orbit_of == n + 1)
-        if not sel.any() or nxt.size == 0:
-            continue
-        w = w_hold[sel]
-        first = int(np.flatnonzero(sel)[0])
-        night_sel, day_sel = ~dayv[sel], dayv[sel]
-        gram = field_gramian(b[sel], w)
-        c, _ = min_energy_vector(gram, h_b)
-        m_min = np.cross(c, b[sel])
-        out.append(OrbitStats(
-            orbit=n, t_start_s=float(t[first]), duration_s=float(w.sum()), night_s=float(w[night_sel].sum()),
-            day_s=float(w[day_sel].sum()), m_n_am2=_rms(m2[sel][night_sel], w[night_sel]),
-            m_d_am2=_rms(m2[sel][day_sel], w[day_sel]), m_o_am2=_whole_orbit_rms(m2[sel], w),
-            m_m_am2=float(np.sqrt(m2[sel].max())), h_s_nms=hs[first].copy(), delta_h_s_nms=hs[nxt[0]] - hs[first],
-            magnetic_momentum_nms=(w[:, None] * torque[sel]).sum(axis=0),
-            min_energy_m_o_am2=_whole_orbit_rms(np.einsum('ki,ki->k', m_min, m_min), w),
-            loop_gains=None if k_seed is None else loop_gains(gram, k_seed)))
-    return out
+    acc = OrbitAccumulator(clock, h_b_nms, k_seed)
+    for row in zip(t, hold_weights(t), m, b, dayv, hs, strict=True):
+        acc.add(*row)
+    return acc.stats
 
 
 def _largest(values: list[float | None]) -> float | None:

@@ -13,9 +13,11 @@ I ω̇ = −ω × (I ω + h) − ḣ + T_ext (spec §3, CMGs in place of wheels)
     ḣ = I (ω_n² θ + 2 ζ ω_n ω) − ω × (I ω + h) + T_ff
 
 makes I ω̇ = −I (ω_n² θ + 2 ζ ω_n ω) + (T_ext − T_ff): with the feedforward T_ff equal to the external torque
-the error obeys θ̈ + 2ζω_n θ̇ + ω_n² θ = 0, and the CMGs absorb T_ext exactly. On board T_ff is the magnetic
-torque M × B the computer itself commands (M known, B measured); the aerodynamic and gravity-gradient
-torques are left to the feedback, which holds them with a steady error I⁻¹ T / ω_n².
+the error obeys θ̈ + 2ζω_n θ̇ + ω_n² θ = 0, and the CMGs absorb T_ext exactly. On board T_ff is what the
+computer knows of the external torque: the magnetic torque M × B it commands itself (M known, B measured)
+and, in the Workshop computer (:mod:`acds_controller.workshop`), the gravity-gradient torque of its orbit
+model; what it does not know (the aerodynamic torque) is left to the feedback, which holds it with a
+steady error I⁻¹ T / ω_n².
 """
 
 from __future__ import annotations

@@ -1,9 +1,11 @@
-"""Scenario sections → the transfer assembly and DPA cores (pure, no rclpy).
+"""Scenario sections → the transfer assembly and DPA cores, or the Workshop computer (pure, no rclpy).
 
-The controller stepper receives the ``spacecraft``, ``controller`` and
-``magnetometer`` scenario sections as SI values ({field: value}, see
+The controller stepper receives the ``spacecraft``, ``controller``, ``magnetometer``,
+``wheels``, ``orbit`` and ``earth`` scenario sections as SI values ({field: value}, see
 ``acds_common.scenario.SCHEMA``) and builds its cores here; the launcher's
-pre-flight builds the same stepper before any process starts.
+pre-flight builds the same stepper before any process starts. With ``wheels.kind``
+cmg it builds the AAP Workshop computer (:func:`build_workshop`, seed 000) instead of
+the HEAO DPA.
 
 The seed-003 gains are design values the scenario states, as a flight program would carry
 them, not quantities taken from the simulated orbit or body: k_ω = (4π/T_orb)(sin ξ + 1)J_min
@@ -19,16 +21,21 @@ from typing import Any
 
 import numpy as np
 from acds_common.coupling import coupling_from_section
+from acds_common.environment import EnvironmentModelError, field_from_section, orbit_from_section
 from acds_common.inertia import inertia_tensor
+from acds_common.units import dump_gain_si_to_seed
 from acds_common.validation import scenario_key
 
 from acds_controller.b_cross_omega import detumble_gain, dump_gain_per_s
+from acds_controller.cmg_dump import DumpLawConfig, OrbitClock
+from acds_controller.cmg_hold import HoldGains
 from acds_controller.dpa import Dpa, DpaConfig
 from acds_controller.magnetic_laws import ControllerError
 from acds_controller.transfer_assembly import TransferAssembly
 from acds_controller.wheel_laws import HEAO_A_ACQUISITION, HEAO_B_ACQUISITION, HEAO_B_ACQUISITION_PRELIMINARY
+from acds_controller.workshop import FieldPrediction, WorkshopComputer, WorkshopConfig
 
-__all__ = ['WHEEL_GAIN_SETS', 'build_dpa']
+__all__ = ['WHEEL_GAIN_SETS', 'build_dpa', 'build_workshop', 'dump_law_config']
 
 #: Scenario ``controller.wheel_gains`` → Table 4-2 acquisition gain set.
 WHEEL_GAIN_SETS = {'heao_a': HEAO_A_ACQUISITION, 'heao_b': HEAO_B_ACQUISITION,
@@ -66,3 +73,31 @@ def _build(sc: dict[str, Any], c: dict[str, Any], mag: dict[str, Any]) -> tuple[
                                             c['detumble_j_min']),
         dump_gain_per_s=dump_gain_per_s(c['dump_time'], c['magnetic_inclination'], c['dump_residual_fraction'])))
     return ta, dpa
+
+
+def dump_law_config(c: dict[str, Any]) -> DumpLawConfig | None:
+    """The dump law of the ``controller`` section (None for ``dump_law: none``), k back in the seed's units."""
+    if c['dump_law'] == 'none':
+        return None
+    return DumpLawConfig(law=c['dump_law'], k_seed=dump_gain_si_to_seed(c['dump_gain']),
+                         h_0_nms=tuple(c['dump_h_0']), max_moment_am2=c['max_moment_am2'],
+                         h_b_nms=tuple(c['dump_bias_momentum']))
+
+
+def build_workshop(sc: dict[str, Any], c: dict[str, Any], orbit: dict[str, Any],
+                   earth: dict[str, Any]) -> tuple[TransferAssembly, WorkshopComputer]:
+    """Transfer assembly and the AAP Workshop computer (seed 000) from the spacecraft, controller, orbit and earth
+    sections (SI). The on-board field prediction flies the controller's own copy of the orbit and field models;
+    orbits are counted from the ascending node (:meth:`acds_common.environment.Orbit.node_time_s`)."""
+    with scenario_key('orbit', EnvironmentModelError):
+        orbit_model = orbit_from_section(orbit)
+    with scenario_key('earth', EnvironmentModelError):
+        field = field_from_section(earth)
+    with scenario_key('controller', ControllerError):
+        cfg = WorkshopConfig(
+            inertia_kg_m2=inertia_tensor(*sc['inertia']) * sc['inertia_scale'],
+            target_q_body_to_eci=np.array(c['target_quaternion_xyzw']), dump=dump_law_config(c),
+            hold=HoldGains(c['cmg_hold_bandwidth'], c['cmg_hold_damping']), h_s_init=c['dump_h_s_init'])
+        clock = OrbitClock(orbit_model.period_s, orbit_model.node_time_s())
+        computer = WorkshopComputer(cfg, clock, FieldPrediction(orbit_model, field, cfg.target_q_body_to_eci))
+        return TransferAssembly(adc_bits=c['adc_bits']), computer

@@ -1,4 +1,4 @@
-"""acds_controller stepper: transfer assembly + DPA, one control period per lockstep step (spec §7).
+"""acds_controller stepper: transfer assembly + DPA (spec §7), or the AAP Workshop computer (seed 000).
 
 Stage ``dpa`` of step k takes the magnetometer volts and bias volts (k), gyro rates (k), sun
 sensor (k), the ``mode`` of the mode manager (k, with any forwarded ``command/acds_controller``
@@ -15,6 +15,16 @@ Absent sources: no magnetometer → zero sensed field (the magnetic laws command
 mode manager → ``mode_1a`` (magnetics-only rate reduction); no wheels → zero wheel momentum.
 A non-finite input is rejected with a diagnostic and the step commands zero moment and zero
 wheel volts.
+
+With ``wheels.kind`` cmg the node is the AAP Workshop's computer
+(:mod:`acds_controller.workshop`): the same stage and inputs (the wheel inputs are the CMG
+momentum and rate), modes ``cmg_dump`` / ``cmg_hold`` / ``standby`` (``cmg_dump`` when no mode
+manager is in the graph), and every step ``moment`` (A·m², the dump law's command to the coils),
+``cmg_torque`` (N·m, the momentum rate the attitude hold asks of the CMGs) and
+``sampled_momentum`` (N·m·s, the H_s the dump law used); no wheel volts. Workshop telemetry
+(H_s, its initialisation offset, attitude error, the predicted per-orbit loop gains) on
+``diagnostics`` every ``controller.telemetry_every`` steps. A non-finite input commands zero
+moment and zero CMG torque for the step (H_s held), with a diagnostic.
 """
 
 from __future__ import annotations
@@ -25,9 +35,10 @@ import numpy as np
 from acds_common.messages import WARN, diagnostic, mode_status, vec, vector3
 from acds_common.stepper import Stepper
 
-from acds_controller.configuration import build_dpa
+from acds_controller.configuration import build_dpa, build_workshop
 from acds_controller.dpa import MODES, Dpa
 from acds_controller.magnetic_laws import ControllerError
+from acds_controller.workshop import WORKSHOP_MODES
 
 #: Excess-coil-current alarm: |I| above this multiple of the current of the maximum moment.
 EXCESS_CURRENT_FACTOR = 1.1
@@ -53,6 +64,13 @@ def apply_command(dpa: Dpa, text: str) -> str:
     raise ControllerError(f'command {text!r} is not "law <slot> <name>" or "gain <name> <value>"')
 
 
+def _check_finite(inputs: tuple[tuple[str, np.ndarray], ...]) -> None:
+    """Raise :class:`ControllerError` naming the first input that is not finite."""
+    for name, v in inputs:
+        if not np.all(np.isfinite(v)):
+            raise ControllerError(f'{name} input is not finite: {v.tolist()}')
+
+
 class ControllerStep(Stepper):
     """Transfer assembly and digital processor of the HEAO ACDS."""
 
@@ -62,11 +80,19 @@ class ControllerStep(Stepper):
         super().__init__(params, log)
         c = self.section('controller')
         self.telemetry_period = c['telemetry_every']
+        self.workshop = None
+        if self.section('wheels')['kind'] == 'cmg':
+            self.ta, self.workshop = build_workshop(self.section('spacecraft'), c, self.section('orbit'),
+                                                    self.section('earth'))
+            self._h_s = _ZERO
+            return
         self.ta, self.dpa = build_dpa(self.section('spacecraft'), c, self.section('magnetometer'))
         self.excess_current_a = EXCESS_CURRENT_FACTOR * c['max_moment_am2'] / self.ta.moment_per_amp_am2_per_a
 
-    def control(self, k: int, _t: float, inp: dict[str, Any]) -> dict[str, Any]:
-        """Stage ``control``: one DPA control period (commands applied first, inputs checked)."""
+    def control(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
+        """Stage ``control``: one DPA (or Workshop computer) control period (commands applied first, inputs checked)."""
+        if self.workshop is not None:
+            return self._workshop_control(k, t_s, inp)
         warnings: list[tuple[str, dict[str, str]]] = []
         mode, commands = mode_status(inp['mode'], self.node)
         for text in commands:
@@ -84,6 +110,10 @@ class ControllerStep(Stepper):
         except ControllerError as exc:
             warnings.append((f'input rejected, zero commands this step: {exc}', {}))
             result = {'moment': _ZERO, 'volts': _ZERO}
+        return self._warned(k, result, warnings)
+
+    def _warned(self, k: int, result: dict[str, Any], warnings: list[tuple[str, dict[str, str]]]) -> dict[str, Any]:
+        """The step's outputs with its warnings logged and put first on ``diagnostics``."""
         if warnings:
             for message, _values in warnings:
                 self.log('warn', f'step {k}: {message}')
@@ -92,19 +122,53 @@ class ControllerStep(Stepper):
                 + result.get('diagnostics', ())
         return result
 
+    def _workshop_control(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
+        """One control period of the Workshop computer (seed 000): H_s, the dump law, the CMG hold."""
+        assert self.workshop is not None
+        warnings: list[tuple[str, dict[str, str]]] = []
+        mode, commands = mode_status(inp['mode'], self.node)
+        for text in commands:
+            warnings.append((f'command refused: {text!r}: the Workshop computer takes no forwarded commands',
+                             {'command': text}))
+        if mode is None:
+            mode = 'cmg_dump'
+        elif mode not in WORKSHOP_MODES:
+            warnings.append((f'{mode!r} is not a Workshop mode ({", ".join(WORKSHOP_MODES)}): standby', {'mode': mode}))
+            mode = 'standby'
+        try:
+            volts, bias, omega, h = (vec(inp['mag_volts'], (2.5, 2.5, 2.5)), vec(inp['mag_bias'], (2.5, 2.5, 2.5)),
+                                     vec(None if inp['gyro'] is None else inp['gyro'][0]), self._store_momentum(inp))
+            _check_finite((('magnetometer volts', volts), ('bias volts', bias), ('gyro', omega),
+                           ('CMG momentum', h)))
+            if inp['odometry'] is None:
+                raise ControllerError('the CMG attitude hold needs the attitude reference truth/odometry')
+            out = self.workshop.step(t_s, mode, self.ta.sense(volts, bias), omega, np.array(inp['odometry'].orientation),
+                                     h)
+            self._h_s = vector3(out.h_s_nms)
+            result: dict[str, Any] = {'moment': vector3(out.moment_am2), 'cmg_torque': vector3(out.cmg_rate_nm),
+                                      'sampled_momentum': self._h_s}
+            if k % self.telemetry_period == 0:
+                result['diagnostics'] = diagnostic(self.node, out.telemetry)
+        except ControllerError as exc:
+            warnings.append((f'input rejected, zero commands this step: {exc}', {}))
+            result = {'moment': _ZERO, 'cmg_torque': _ZERO, 'sampled_momentum': self._h_s}
+        return self._warned(k, result, warnings)
+
+    def _store_momentum(self, inp: dict[str, Any]) -> np.ndarray:
+        """h(t_k) of the wheels or CMGs from their step k−1 outputs (lag 1): h_{k−1} + ḣ_{k−1}·Δt, exactly."""
+        return vec(inp['wheel_h']) + vec(inp['wheel_hdot']) * self.control_period_s
+
     def _dpa_step(self, k: int, mode: str, inp: dict[str, Any]) -> dict[str, Any]:
         volts = vec(inp['mag_volts'], (2.5, 2.5, 2.5))
         bias = vec(inp['mag_bias'], (2.5, 2.5, 2.5))
         omega = vec(None if inp['gyro'] is None else inp['gyro'][0])
         sun = vec(inp['sun'])
         dt = self.control_period_s
-        h = vec(inp['wheel_h']) + vec(inp['wheel_hdot']) * dt
+        h = self._store_momentum(inp)
         q = None if inp['odometry'] is None else np.array(inp['odometry'].orientation)
         coil = vec(inp['coil_current'])
-        for name, v in (('magnetometer volts', volts), ('bias volts', bias), ('gyro', omega),
-                        ('sun sensor', sun), ('wheel momentum', h), ('coil current', coil)):
-            if not np.all(np.isfinite(v)):
-                raise ControllerError(f'{name} input is not finite: {v.tolist()}')
+        _check_finite((('magnetometer volts', volts), ('bias volts', bias), ('gyro', omega), ('sun sensor', sun),
+                       ('wheel momentum', h), ('coil current', coil)))
         b = self.ta.sense(volts, bias)
         out = self.dpa.step(mode, b, omega, sun, h, q, dt)
         result: dict[str, Any] = {'moment': vector3(out.moment_command_am2), 'volts': vector3(out.wheel_volts_v)}

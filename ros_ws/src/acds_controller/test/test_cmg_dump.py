@@ -10,6 +10,7 @@ from acds_common.units import FT_LB_S_NMS, ftlbs_to_nms, nms_to_ftlbs
 from acds_controller.cmg_dump import (
     CmgDumpLaw,
     DumpLawConfig,
+    OrbitAccumulator,
     OrbitClock,
     SampledMomentum,
     dump_report,
@@ -246,6 +247,38 @@ def test_dump_report_takes_the_largest_over_orbits_in_seed_units() -> None:
     assert row['M_m_am2'] >= row['M_o_am2'] >= min(row['M_n_am2'], row['M_d_am2'])
     no_night = dump_report(orbit_stats(t, m, b, np.ones(t.size, dtype=bool), h_s, clock, H_B_POP))
     assert no_night['M_n_am2'] is None and no_night['per_orbit'][0]['night_s'] == 0.0
+
+
+def test_streaming_accumulator_closes_the_last_orbit_at_the_end_and_takes_the_step_torques() -> None:
+    """The streaming form (what the run summary uses): the same orbits as on arrays; ``finish`` closes the last
+    orbit only when the data ran to its end (the CMG momentum then gives ΔH_s); a given step torque (the rigid
+    body's exact step mean) replaces M × B in ∫ M × B dt."""
+    dt = 20.0
+    clock = OrbitClock(T_ORB)
+    law = CmgDumpLaw(DumpLawConfig('khb', k_seed=1e5), clock)
+    t, m, b, h_s = _ideal_hold_run(law, _rotating_field, H_B_POP, 3, dt)
+    day = np.ones(t.size, dtype=bool)
+    keep = t < 3 * T_ORB  # the data stop just before the third orbit's end: no next sample
+    acc = OrbitAccumulator(clock, H_B_POP, k_seed=1e5)
+    for row in zip(t[keep], hold_weights(t)[keep], m[keep], b[keep], day[keep], h_s[keep], strict=True):
+        acc.add(*row, h_store_nms=row[5])
+    arrays = orbit_stats(t, m, b, day, h_s, clock, H_B_POP, k_seed=1e5)
+    assert [s.orbit for s in acc.stats] == [0, 1] and [s.orbit for s in arrays] == [0, 1, 2]
+    for a, s in zip(acc.stats, arrays, strict=False):
+        assert a.m_o_am2 == s.m_o_am2 and np.array_equal(a.delta_h_s_nms, s.delta_h_s_nms)
+    h_end = h_s[~keep][0]
+    acc.finish(float(t[keep][-1] + dt), h_end)
+    assert [s.orbit for s in acc.stats] == [0, 1, 2]
+    assert np.allclose(acc.stats[2].delta_h_s_nms, h_end - h_s[keep][-1])
+    short = OrbitAccumulator(clock, H_B_POP)
+    for x, w, mk, bk, hk in zip(t[:100], hold_weights(t)[:100], m[:100], b[:100], h_s[:100], strict=True):
+        short.add(x, w, mk, bk, True, hk, torque_nm=np.array([0.0, 0.0, 1.0]), h_store_nms=hk)
+    short.finish(float(t[99] + dt), h_s[100])
+    assert short.stats == []  # a third of an orbit is not an orbit
+    doubled = OrbitAccumulator(clock, H_B_POP)
+    for x, w, mk, bk, hk in zip(t, hold_weights(t), m, b, h_s, strict=True):
+        doubled.add(x, w, mk, bk, True, hk, torque_nm=2.0 * np.cross(mk, bk))
+    assert np.allclose(doubled.stats[0].magnetic_momentum_nms, 2.0 * arrays[0].magnetic_momentum_nms)
 
 
 def test_bad_inputs_are_named() -> None:

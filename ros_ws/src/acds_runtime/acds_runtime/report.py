@@ -3,7 +3,8 @@
 Keys carry their unit in the name (``_min``, ``_ftlbs``, ``_deg_s``, ``_gauss``, ``_am2``,
 ``_dyne_cm``, ``_rel``); each row is ``label  value  unit``, a per-axis value as ``x / y / z``
 (and ``/ rss``), a missing value as ``—``. Tables (lists of records: transitions, passes,
-events) are printed by their summary modules (:func:`acds_runtime.summary.print_tables`). The
+events; reports holding records: a formation's vehicles, the dump report's orbits) are printed by
+their summary modules (:func:`acds_runtime.summary.print_tables`). The
 momentum and energy drift rows appear only for torque-free runs, where they are integration error.
 """
 
@@ -61,6 +62,9 @@ def summary_rows(summary: dict[str, Any]) -> list[tuple[str, str, str]]:
             continue
         if isinstance(value, list) and value and isinstance(value[0], dict):
             continue  # a table: its module prints it
+        if isinstance(value, dict) and any(isinstance(v, dict) or (isinstance(v, list) and v and isinstance(v[0], dict))
+                                           for v in value.values()):
+            continue  # a report with its own tables (the formation's vehicles, the dump report's orbits)
         label, unit, fmt = _unit(key)
         label = LABELS.get(key, label)
         if isinstance(value, dict):

@@ -1,8 +1,9 @@
 """ascs_mode_manager stepper: the on-board mode logic (spec §8).
 
 One node; parameter ``modes_system`` selects the part that runs: ``heao`` (Mode 1A → 1B →
-cruise, :mod:`ascs_mode_manager.heao_part`, stage ``heao``) or ``sss`` (perigee automatic
-turn-on, :mod:`ascs_mode_manager.sss_part`, stage ``sss``). The stepper owns what both
+cruise, :mod:`ascs_mode_manager.heao_part`, stage ``heao``), ``sss`` (perigee automatic
+turn-on, :mod:`ascs_mode_manager.sss_part`, stage ``sss``) or ``aap`` (the AAP Workshop's CMG
+hold and magnetic dump, :mod:`ascs_mode_manager.aap_part`, stage ``aap``). The stepper owns what both
 share: the ground-command intake (:mod:`ascs_mode_manager.ground_commands`: the scenario's
 schedule and the live commands the host receives on ``ground/command``) and the answers on
 ``ground/ack`` (output ``ack``: every command is answered, accepted or refused with the
@@ -32,6 +33,9 @@ class ModeManagerStep(Stepper):
         if self.modes['system'] == 'sss':
             from ascs_mode_manager.sss_part import SssPart
             self.part: Any = SssPart(self)
+        elif self.modes['system'] == 'aap':
+            from ascs_mode_manager.aap_part import AapPart
+            self.part = AapPart(self)
         else:
             from ascs_mode_manager.heao_part import HeaoPart
             self.part = HeaoPart(self)
@@ -59,4 +63,8 @@ class ModeManagerStep(Stepper):
 
     def sss(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Stage ``sss`` (SSS ASCS logic)."""
+        return self._stage(k, t_s, inp)
+
+    def aap(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
+        """Stage ``aap`` (AAP Workshop mode logic)."""
         return self._stage(k, t_s, inp)

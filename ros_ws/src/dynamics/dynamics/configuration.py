@@ -16,40 +16,57 @@ from typing import Any
 
 import numpy as np
 from acds_common.environment import (
-    EarthFieldConfig,
     EnvironmentModelError,
     Orbit,
-    OrbitConfig,
     Sun,
     SunConfig,
-    TiltedDipoleField,
+    field_from_section,
+    orbit_from_section,
 )
 from acds_common.inertia import InertiaError, inertia_tensor
 from acds_common.torque_rod_record import TorqueRodRecordError, dipole_bound_am2, read_torque_rod_record
 from acds_common.validation import scenario_key
 
+from dynamics.cmg_model import CmgConfig, ControlMomentGyros
+from dynamics.disturbances import DisturbanceTorque, Harmonic
 from dynamics.errors import DynamicsError
 from dynamics.rigid_body_model import RigidBodyModel
 from dynamics.wheels_model import ReactionWheels, WheelsConfig
 
-__all__ = ['ActuatorLimits', 'actuator_limits', 'build_rigid_body', 'build_torque_wheels', 'build_wheels']
+__all__ = ['ActuatorLimits', 'actuator_limits', 'build_cmgs', 'build_disturbance', 'build_momentum_store',
+           'build_rigid_body', 'build_torque_wheels', 'build_wheels', 'dipole_limit_am2']
+
+#: ``disturbance`` keys of the cyclic parts → harmonic order and the (cos, sin) slot.
+_CYCLIC_KEYS = ((1, 'once_per_orbit_cos', 'once_per_orbit_sin'), (2, 'twice_per_orbit_cos', 'twice_per_orbit_sin'))
+
+
+def build_disturbance(disturbance: dict[str, Any], orbit: Orbit) -> DisturbanceTorque | None:
+    """The body-fixed disturbance torque of the scenario's ``disturbance`` section, or None when it is all zero.
+
+    Constant part: ``bias_momentum_per_orbit`` / orbit period (seed 000 §5 states its bias torques as the
+    momentum they build per orbit). Cyclic parts: once and twice per orbit in the argument of latitude u,
+    which is 0 at the ascending node (circular orbit: u = arg_latitude0 + n t; elliptical: the mean
+    argument of latitude, ω + M0 + n t; :meth:`acds_common.environment.Orbit.node_time_s`).
+    """
+    harmonics = tuple(Harmonic(order, tuple(disturbance[cos]), tuple(disturbance[sin]))
+                      for order, cos, sin in _CYCLIC_KEYS if any(disturbance[cos]) or any(disturbance[sin]))
+    if not any(disturbance['bias_momentum_per_orbit']) and not harmonics:
+        return None
+    constant = tuple(float(h) / orbit.period_s for h in disturbance['bias_momentum_per_orbit'])
+    return DisturbanceTorque(constant, harmonics, orbit.mean_motion_rad_s, node_time_s=orbit.node_time_s())
 
 
 def build_rigid_body(spacecraft: dict[str, Any], orbit: dict[str, Any], earth: dict[str, Any], sun: dict[str, Any],
-                     dynamics: dict[str, Any]) -> RigidBodyModel:
-    """The rigid body in its orbit and environment from the scenario's five sections (spec §3)."""
+                     dynamics: dict[str, Any], disturbance: dict[str, Any]) -> RigidBodyModel:
+    """The rigid body in its orbit and environment from the scenario's six sections (spec §3; seed 000 §5)."""
     with scenario_key('spacecraft.inertia', InertiaError):
         inertia = inertia_tensor(*spacecraft['inertia']) * spacecraft['inertia_scale']
     with scenario_key('orbit', EnvironmentModelError):
-        orbit_model = Orbit(OrbitConfig(
-            kind=orbit['kind'], inclination_rad=orbit['inclination'], raan_rad=orbit['raan'],
-            altitude_m=orbit['altitude'], arg_latitude0_rad=orbit['arg_latitude0'],
-            perigee_altitude_m=orbit['perigee_altitude'], apogee_radius_m=orbit['apogee_radius'],
-            arg_perigee_rad=orbit['arg_perigee'], mean_anomaly0_rad=orbit['mean_anomaly0']))
+        orbit_model = orbit_from_section(orbit)
     with scenario_key('earth', EnvironmentModelError):
-        field = TiltedDipoleField(EarthFieldConfig(
-            dipole_moment_am2=earth['dipole_moment'], tilt_rad=earth['dipole_tilt'],
-            dipole_longitude_rad=earth['dipole_longitude'], greenwich_angle0_rad=earth['greenwich_angle0']))
+        field = field_from_section(earth)
+    with scenario_key('disturbance', DynamicsError):
+        torque = build_disturbance(disturbance, orbit_model)
     with scenario_key('sun', EnvironmentModelError):
         sun_model = Sun(SunConfig(right_ascension_rad=sun['right_ascension'], declination_rad=sun['declination'],
                                   eclipse=sun['eclipse']))
@@ -57,7 +74,7 @@ def build_rigid_body(spacecraft: dict[str, Any], orbit: dict[str, Any], earth: d
         return RigidBodyModel(inertia, orbit_model, field, sun_model,
                               gravity_gradient=dynamics['gravity_gradient'], substeps=dynamics['substeps'],
                               q0_body_to_eci=spacecraft['initial_quaternion_xyzw'],
-                              omega0_body_rad_s=spacecraft['initial_rates'])
+                              omega0_body_rad_s=spacecraft['initial_rates'], disturbance=torque)
 
 
 def build_torque_wheels(wheels: dict[str, Any]) -> Any:
@@ -81,6 +98,18 @@ def build_wheels(wheels: dict[str, Any]) -> ReactionWheels:
                               h0_body_nms=np.array(wheels['initial_momentum']))
 
 
+def build_cmgs(wheels: dict[str, Any]) -> ControlMomentGyros:
+    """The CMG store of a ``wheels`` section with ``kind: cmg`` (seed 000): capacity and initial momentum."""
+    with scenario_key('wheels', DynamicsError):
+        return ControlMomentGyros(CmgConfig(capacity_nms=wheels['cmg_capacity']),
+                                  h0_body_nms=np.array(wheels['initial_momentum']))
+
+
+def build_momentum_store(wheels: dict[str, Any]) -> ReactionWheels | ControlMomentGyros:
+    """The momentum store the ``wheels`` section's ``kind`` names: reaction wheels or CMGs."""
+    return build_cmgs(wheels) if wheels['kind'] == 'cmg' else build_wheels(wheels)
+
+
 @dataclass(frozen=True)
 class ActuatorLimits:
     """The most the actuators can physically give per body axis: dipole (A·m²) and wheel momentum (N·m·s)."""
@@ -89,27 +118,36 @@ class ActuatorLimits:
     wheel_momentum_nms: np.ndarray
 
 
-def actuator_limits(em_driver: dict[str, Any], wheels: dict[str, Any]) -> ActuatorLimits:
-    """Physical bounds of the actuator inputs of the rigid body (issue 9 §3: nothing injected beyond them).
-
-    Dipole per axis: both windings (active and standby) carrying the full bus current E/R, with no
-    transistor drop — more than any drive can make (spec §6), so only a value from outside the graph
-    exceeds it. For ``driver_kind: torque_rod`` the same bound from the rod's design record
-    (:func:`acds_common.torque_rod_record.dipole_bound_am2`, seed 003). Wheel momentum per axis: every
-    wheel at its capacity along that axis, Σ_j |a_ij|·H_j (the single-axis maximum; Table 4-6's box is
-    what every axis holds at once).
-    """
+def dipole_limit_am2(em_driver: dict[str, Any]) -> np.ndarray:
+    """Most dipole per body axis the em_driver's hardware can make: both windings (active and standby)
+    at the full bus current E/R with no transistor drop — more than any drive makes (spec §6); for
+    ``driver_kind: torque_rod`` the same bound from the rod's design record
+    (:func:`acds_common.torque_rod_record.dipole_bound_am2`, seed 003); zero on an axis whose drive is
+    ``none`` (no coil there: a formation vehicle's, seed 004)."""
     if em_driver['driver_kind'] == 'torque_rod':
         with scenario_key('em_driver.torque_rod_design', DynamicsError):
             try:
                 record = read_torque_rod_record(em_driver['torque_rod_design'])
             except TorqueRodRecordError as exc:
                 raise DynamicsError(str(exc)) from None
-        dipole = np.full(3, dipole_bound_am2(record, em_driver['supply_v']))
-    else:
-        per_amp = np.asarray(em_driver['coil_moment_per_amp_am2'], dtype=float)
-        i_max = em_driver['supply_v'] / np.asarray(em_driver['coil_resistance_ohm'], dtype=float)
-        dipole = 2.0 * per_amp * i_max
+        return np.full(3, dipole_bound_am2(record, em_driver['supply_v']))
+    per_amp = np.asarray(em_driver['coil_moment_per_amp_am2'], dtype=float)
+    i_max = em_driver['supply_v'] / np.asarray(em_driver['coil_resistance_ohm'], dtype=float)
+    return np.where(np.array(em_driver['drive_types']) == 'none', 0.0, 2.0 * per_amp * i_max)
+
+
+def actuator_limits(em_driver: dict[str, Any], wheels: dict[str, Any]) -> ActuatorLimits:
+    """Physical bounds of the actuator inputs of the rigid body (issue 9 §3: nothing injected beyond them).
+
+    Dipole per axis: both windings (active and standby) carrying the full bus current E/R, with no
+    transistor drop — more than any drive can make (spec §6), so only a value from outside the graph
+    exceeds it (:func:`dipole_limit_am2`). Wheel momentum per axis: every wheel at its capacity along that
+    axis, Σ_j |a_ij|·H_j (the single-axis maximum; Table 4-6's box is what every axis holds at once);
+    CMGs: the radius of their spherical envelope on every axis.
+    """
+    dipole = dipole_limit_am2(em_driver)
+    if wheels['kind'] == 'cmg':
+        return ActuatorLimits(dipole, np.full(3, build_cmgs(wheels).cfg.capacity_nms))
     cluster = build_wheels(wheels)
     axes = np.abs(cluster.wheel_axes_body())
     return ActuatorLimits(dipole, axes @ cluster.wheel_capacities_nms())

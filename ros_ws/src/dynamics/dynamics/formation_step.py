@@ -30,6 +30,7 @@ from acds_common.messages import magnetic_field, vec, vector3
 from acds_common.stepper import StepError, Stepper
 from acds_common.validation import scenario_key
 
+from dynamics.configuration import dipole_limit_am2
 from dynamics.errors import DynamicsError
 from dynamics.formation import (
     Coil,
@@ -55,15 +56,6 @@ def coils(vehicle: dict[str, Any], name: str) -> tuple[Coil, ...]:
                             f'coil_max_current must describe the same {n} coils (3 numbers of axes per coil)')
     return tuple(Coil(np.array(axes[3 * i:3 * i + 3]), vehicle['coil_radii'][i], int(vehicle['coil_turns'][i]),
                       vehicle['coil_max_current'][i]) for i in range(n))
-
-
-def dipole_limit_am2(em_driver: dict[str, Any]) -> np.ndarray:
-    """Most dipole per body axis the vehicle's drives can make: both windings at the full bus current E/R
-    (the bound :func:`dynamics.configuration.actuator_limits` uses); zero on an axis without a coil."""
-    per_amp = np.asarray(em_driver['coil_moment_per_amp_am2'], dtype=float)
-    i_max = em_driver['supply_v'] / np.asarray(em_driver['coil_resistance_ohm'], dtype=float)
-    limit = 2.0 * per_amp * i_max
-    return np.where(np.array(em_driver['drive_types']) == 'none', 0.0, limit)
 
 
 def check_coils_match_drives(name: str, spec: VehicleSpec, em_driver: dict[str, Any]) -> None:

@@ -2,14 +2,16 @@
 
 Equations (spec §3; seed 002 §4.3 "three-degree-of-freedom rigid body angular equations of motion"):
 
-    I ω̇ = −ω × (I ω + h) − ḣ + T_mag + T_gg
+    I ω̇ = −ω × (I ω + h) − ḣ + T_mag + T_gg + T_d
     T_mag = M × B          (B at the spacecraft in body axes, M the achieved dipole)
     T_gg  = 3 μ/r³ · r̂_b × (I r̂_b)
     q̇ = ½ q ⊗ (ω, 0)       (Hamilton quaternion, body → ECI, stored x, y, z, w)
 
-h is the wheels' momentum in body axes, ḣ its rate: the body feels −ḣ. Integration is RK4 with a
-fixed number of substeps per ``advance`` call; orbit position and field are evaluated at each RK4
-stage time; the quaternion is renormalised after every substep.
+h is the wheels' momentum in body axes, ḣ its rate: the body feels −ḣ. T_d is an optional body-fixed
+disturbance torque (seed 000: the Workshop's aerodynamic bias, :mod:`dynamics.disturbances`), applied as
+its exact mean over each ``advance`` step (it varies at orbital rate, a step lasts seconds). Integration
+is RK4 with a fixed number of substeps per ``advance`` call; orbit position and field are evaluated at
+each RK4 stage time; the quaternion is renormalised after every substep.
 """
 
 from __future__ import annotations
@@ -22,8 +24,10 @@ import numpy as np
 from acds_common import units
 from acds_common.environment import Orbit, Sun, TiltedDipoleField, sun_frame_dcm
 from acds_common.environment import ecliptic_normal_eci as default_ecliptic_normal_eci
+from acds_common.environment import gravity_gradient_torque_nm as gravity_gradient_torque_nm  # the public form
 from acds_common.inertia import InertiaError, inertia_tensor
 
+from dynamics.disturbances import DisturbanceTorque
 from dynamics.errors import DynamicsError, finite_float, finite_vector3
 
 #: Default RK4 substeps per ``advance`` call (0.1 s substeps at the 0.5 s HEAO control period).
@@ -113,12 +117,6 @@ def _gg(inertia: Mat, r_body_m: Sequence[float]) -> Vec:
     return (k * t[0], k * t[1], k * t[2])
 
 
-def gravity_gradient_torque_nm(inertia_kg_m2: np.ndarray, r_body_m: np.ndarray) -> np.ndarray:
-    """Gravity-gradient torque T_gg = 3 μ/r³ · r̂_b × (I r̂_b), N·m (spec §3); ``r_body_m`` is the
-    geocentric position of the spacecraft in body axes (m)."""
-    return np.array(_gg(_as_mat(np.asarray(inertia_kg_m2, dtype=float)), [float(c) for c in r_body_m]))
-
-
 def magnetic_torque_nm(dipole_body_am2: np.ndarray, b_body_t: np.ndarray) -> np.ndarray:
     """Magnetic torque T_mag = M × B, N·m (spec §3); dipole in A·m², field in T, both body axes."""
     return np.array(_cross([float(c) for c in dipole_body_am2], [float(c) for c in b_body_t]))
@@ -168,7 +166,8 @@ class RigidBodyModel:
                  ecliptic_normal_eci: np.ndarray | None = None, gravity_gradient: bool = True,
                  substeps: int = DEFAULT_SUBSTEPS,
                  q0_body_to_eci: Sequence[float] = (0.0, 0.0, 0.0, 1.0),
-                 omega0_body_rad_s: Sequence[float] = (0.0, 0.0, 0.0), t0_s: float = 0.0) -> None:
+                 omega0_body_rad_s: Sequence[float] = (0.0, 0.0, 0.0), t0_s: float = 0.0,
+                 disturbance: DisturbanceTorque | None = None) -> None:
         inertia = np.asarray(inertia_kg_m2, dtype=float)
         if inertia.shape != (3, 3) or not np.allclose(inertia, inertia.T, rtol=0.0, atol=1e-12 * abs(
                 inertia).max()):
@@ -196,6 +195,7 @@ class RigidBodyModel:
         self._t = finite_float("t0_s", t0_s)
         self._tmag_avg = np.zeros(3)
         self._tgg_avg = np.zeros(3)
+        self.disturbance = disturbance
 
     @property
     def t_s(self) -> float:
@@ -213,13 +213,13 @@ class RigidBodyModel:
         return self._w.copy()
 
     def _deriv(self, q: Sequence[float], w: Sequence[float], tau_s: float, env: tuple[Vec | None, Vec | None],
-               step: tuple[Vec, Vec, Vec]) -> tuple[tuple[float, ...], Vec, Vec, Vec]:
+               step: tuple[Vec, Vec, Vec, Vec]) -> tuple[tuple[float, ...], Vec, Vec, Vec]:
         """(q̇, ω̇, T_mag, T_gg) at attitude q, rate w, ``tau_s`` into the step.
 
-        ``env`` = (r_eci, b_eci) at the stage time (None when not needed); ``step`` = (dipole, h0, ḣ).
+        ``env`` = (r_eci, b_eci) at the stage time (None when not needed); ``step`` = (dipole, h0, ḣ, T_d).
         """
         r_eci, b_eci = env
-        dipole, h0, hdot = step
+        dipole, h0, hdot, t_d = step
         zero = (0.0, 0.0, 0.0)
         t_mag, t_gg = zero, zero
         if r_eci is not None:
@@ -231,7 +231,7 @@ class RigidBodyModel:
         iw = _mv(self._inertia_t, w)
         gyro = _cross(w, (iw[0] + h0[0] + hdot[0] * tau_s, iw[1] + h0[1] + hdot[1] * tau_s,
                           iw[2] + h0[2] + hdot[2] * tau_s))
-        net = tuple(-gyro[i] - hdot[i] + t_mag[i] + t_gg[i] for i in range(3))
+        net = tuple(-gyro[i] - hdot[i] + t_mag[i] + t_gg[i] + t_d[i] for i in range(3))
         wdot = _mv(self._inertia_inv_t, net)
         qv = _cross(q[:3], w)
         qdot = (0.5 * (q[3] * w[0] + qv[0]), 0.5 * (q[3] * w[1] + qv[1]), 0.5 * (q[3] * w[2] + qv[2]),
@@ -244,19 +244,21 @@ class RigidBodyModel:
 
         ``dipole_body_am2`` (A·m², constant over the step: the driver's time-averaged achieved
         dipole); wheel momentum h(τ) = ``wheel_h_body_nms`` + ``wheel_hdot_body_nm``·(τ − t) (N·m·s,
-        N·m, body axes). Records the step-average magnetic and gravity-gradient torques (RK4 stage
-        weights, i.e. Simpson's rule per substep).
+        N·m, body axes); the disturbance torque at its exact mean over the step. Records the
+        step-average magnetic and gravity-gradient torques (RK4 stage weights, i.e. Simpson's rule per
+        substep).
         """
         dt = finite_float("dt_s", dt_s)
         if dt <= 0.0:
             raise DynamicsError(f"dt_s must be > 0 s, got {dt}")
-        step: tuple[Vec, Vec, Vec] = tuple(  # type: ignore[assignment]
+        t0 = self._t
+        t_d = (0.0, 0.0, 0.0) if self.disturbance is None else self.disturbance.momentum_nms(t0, t0 + dt) / dt
+        step: tuple[Vec, Vec, Vec, Vec] = tuple(  # type: ignore[assignment]
             tuple(float(c) for c in finite_vector3(name, v)) for name, v in (
                 ("dipole_body_am2", dipole_body_am2), ("wheel_h_body_nms", wheel_h_body_nms),
-                ("wheel_hdot_body_nm", wheel_hdot_body_nm)))
+                ("wheel_hdot_body_nm", wheel_hdot_body_nm), ("disturbance torque", t_d)))
         n = self.substeps
         sub = dt / n
-        t0 = self._t
         need_field = any(c != 0.0 for c in step[0])
         need_pos = need_field or self.gravity_gradient
         # Attitude-independent environment at the 2n+1 distinct stage times t0 + j·sub/2.

@@ -73,7 +73,8 @@ class RigidBodyStep(Stepper):
     def __init__(self, params: dict[str, Any], log: Any = None) -> None:
         super().__init__(params, log)
         self.total_steps: int = params['total_steps']
-        self.model = build_rigid_body(*(self.section(s) for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics')))
+        self.model = build_rigid_body(*(self.section(s) for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics',
+                                                                   'disturbance')))
         self.limits = actuator_limits(self.section('em_driver'), self.section('wheels'))
         self._wheel_h = np.zeros(3)
         #: Torque-free so far (external and wheel torques all zero): the drifts are integration error.

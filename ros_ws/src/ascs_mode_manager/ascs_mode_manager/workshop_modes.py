@@ -1,0 +1,58 @@
+"""AAP Workshop mode logic: CMG attitude hold with or without the magnetic momentum dump (seed 000 §1, §4, §13).
+
+Seed: ``000_aap_cmg_dump_levidow.txt``. The Workshop's CMGs hold its attitude ("the momentum exchange action of
+the control moment gyros used for attitude control", §1) and the magnetic dump runs on top of it, automatically
+("Operation is automatic and momentum dump attitude maneuvers are eliminated", abstract): the computer samples
+H_s each orbit and commands the magnet. No on-board transfer is described, so the modes change only by ground
+command. Modes (the strings the controller's Workshop computer takes):
+
+* ``'cmg_dump'``: CMG hold and the magnetic dump (the seed's operating mode);
+* ``'cmg_hold'``: CMG hold, magnets off (the bias momentum accumulates in the CMGs, §1);
+* ``'standby'``: nothing commanded.
+
+Ground command grammar: ``mode <cmg_dump|cmg_hold|standby>``, accepted from any other mode and applied at the
+next step; anything else is refused with the reason.
+"""
+
+from __future__ import annotations
+
+from ascs_mode_manager.heao_modes import CommandResult, Transition
+from ascs_mode_manager.spin_mechanizations import AscsError
+
+#: Workshop modes (module docstring); the first two may start a run (``modes.initial_mode``).
+MODES = ('cmg_dump', 'cmg_hold', 'standby')
+INITIAL_MODES = ('cmg_dump', 'cmg_hold')
+
+
+class WorkshopModeManager:
+    """The Workshop's mode and its ground commands."""
+
+    def __init__(self, initial_mode: str) -> None:
+        if initial_mode not in INITIAL_MODES:
+            raise AscsError(f'initial_mode {initial_mode!r} is not a Workshop mode to start in; choose one of '
+                            f'{INITIAL_MODES}')
+        self.mode = initial_mode
+        self._pending: list[tuple[str, float]] = []
+
+    def command(self, text: str, t_s: float) -> CommandResult:
+        """Validate a ground command received at sim time ``t_s`` (s); grammar in the module docstring."""
+        words = str(text).split()
+        if len(words) != 2 or words[0].lower() != 'mode':
+            return CommandResult(False, f'the Workshop mode logic takes only "mode <{"|".join(MODES)}>"')
+        target = words[1].lower()
+        if target not in MODES:
+            return CommandResult(False, f"unknown mode '{words[1]}'; Workshop modes: {', '.join(MODES)}")
+        current = self._pending[-1][0] if self._pending else self.mode
+        if target == current:
+            return CommandResult(False, f'wrong mode: already in {current}')
+        self._pending.append((target, float(t_s)))
+        return CommandResult(True, f'{current} → {target} at the next step', None, f'mode {target}')
+
+    def step(self, t_s: float) -> list[Transition]:
+        """Apply the mode transfers accepted before this step (at sim time ``t_s``); return them."""
+        out = []
+        for target, t_cmd in self._pending:
+            out.append(Transition(float(t_s), self.mode, target, f'ground command at t={t_cmd:.1f}'))
+            self.mode = target
+        self._pending = []
+        return out

@@ -1,0 +1,55 @@
+"""``acds dump-report`` (seed 000 §5): a bag gives exactly the report its run printed, read-only; a scenario is run
+with the direct engine first; the JSON feeds ``size-magnet``; bad inputs are one line, exit 2."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from acds_cli.__main__ import main
+from acds_cli.bag.dump_report import report_from_bag
+from acds_common.scenario import load_scenario
+from acds_runtime.direct import DirectRun
+
+STEPS = 330  # 20 s steps: the first orbit (5563 s) and a part of the second
+
+
+def test_a_bag_gives_the_report_of_its_run_without_changing_it(tmp_path, capsys, folder_state) -> None:
+    bag = tmp_path / 'run' / 'bag'
+    run = DirectRun(load_scenario('aap_workshop_pop_test'), steps=STEPS, record=bag).run()
+    summary, series, scenario = report_from_bag(bag)
+    assert summary['dump_report'] == run.summary['dump_report']
+    assert scenario.name == 'aap_workshop_pop_test' and len(series.m_am2) == STEPS + 1
+    before = folder_state(bag)
+    out = tmp_path / 'report.json'
+    assert main(['dump-report', str(bag), '--json', str(out), '--out', str(tmp_path / 'plots')]) == 0
+    assert folder_state(bag) == before
+    report = json.loads(out.read_text())
+    for key in ('M_n_am2', 'M_d_am2', 'M_o_am2', 'M_m_am2', 'delta_H_s_ftlbs', 'min_energy_M_o_am2'):
+        assert report[key] == max(row[key] for row in report['per_orbit'])
+    assert report['orbits'] == 1 and report['per_orbit'][0]['orbit'] == 0
+    assert sorted(p.name for p in (tmp_path / 'plots').iterdir()) == ['dump_h_s.png', 'dump_moment.png']
+    text = capsys.readouterr().out
+    assert 'largest over the orbits (Table 1)' in text and 'minimum-energy solution' in text
+    assert main(['size-magnet', '--mode', 'day-night', '--core', 'air', '--from-report', str(out)]) == 0
+
+
+def test_a_scenario_runs_with_the_direct_engine_and_takes_overrides(tmp_path, capsys) -> None:
+    out = tmp_path / 'zero.json'
+    code = main(['dump-report', 'aap_workshop_pop_test', '--steps', str(STEPS), '--out', str(tmp_path / 'run'),
+                 '--set', 'controller.dump_h_s_init=measured', '--json', str(out)])
+    assert code == 0
+    first = json.loads(out.read_text())['per_orbit'][0]
+    assert first['H_s_ftlbs'] == [0.0, 0.0, 0.0] and first['M_m_am2'] == 0.0  # H_s from zero: no dump on orbit 0
+    assert (tmp_path / 'run' / 'bag').is_dir() and (tmp_path / 'run' / 'dump_moment.png').is_file()
+
+
+@pytest.mark.parametrize(('args', 'fragment'), [
+    (['no_such_scenario'], 'no_such_scenario'),
+    (['aap_workshop_pop_test', '--set', 'dump_law=none'], 'expected SECTION.KEY=VALUE'),
+    (['heao_b_acquisition', '--steps', '2'], 'not an AAP Workshop run'),
+])
+def test_bad_inputs_are_one_line(tmp_path, capsys, args, fragment) -> None:
+    assert main(['dump-report', *args, '--out', str(tmp_path / 'out')]) == 2
+    err = capsys.readouterr().err.strip()
+    assert fragment in err and len(err.splitlines()) == 1, err
