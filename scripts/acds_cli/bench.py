@@ -114,10 +114,10 @@ def core_rate(steps: int) -> float:
     """Steps/s of the rigid body + environment kernel alone (the scenario's body, orbit, field, substeps)."""
     import numpy as np
     from acds_common.scenario import load_scenario
-    from dynamics.configuration import build_rigid_body
+    from dynamics.configuration import RIGID_BODY_SECTIONS, build_rigid_body
 
     sc = load_scenario(SCENARIO)
-    model = build_rigid_body(*(sc.values[s] for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics', 'disturbance')))
+    model = build_rigid_body(*(sc.values[s] for s in RIGID_BODY_SECTIONS))
     dipole, zero = np.array([100.0, -50.0, 20.0]), np.zeros(3)
     dt = sc.control_period_s
     t0 = time.perf_counter()

@@ -42,7 +42,6 @@ from .reader import Bag, open_bag
 
 AXES = (('x', 'roll'), ('y', 'pitch'), ('z', 'yaw'))
 #: The sun-angle plot's sections of the time owner's parameters (the rigid body's environment).
-_BODY_SECTIONS = ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics')
 
 Gathered = dict[str, tuple[array, Any]]
 
@@ -139,8 +138,8 @@ class RunContext:
         """The scenario's sun direction in ECI (the rigid body's sun model; fixed over a run)."""
         if 'rigid_body' not in self.params:
             return None
-        from dynamics.configuration import build_rigid_body
-        model = build_rigid_body(*(self.section('rigid_body', s) for s in _BODY_SECTIONS))
+        from dynamics.configuration import RIGID_BODY_SECTIONS, build_rigid_body
+        model = build_rigid_body(*(self.section('rigid_body', s) for s in RIGID_BODY_SECTIONS))
         return model.sun.direction_eci(0.0)
 
 

@@ -370,10 +370,9 @@ def _rotate_onto(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def _model(scenario: Scenario) -> Any:
     """The dynamics' rigid body of ``scenario`` at t0 (the very model its run starts from)."""
-    from dynamics.configuration import build_rigid_body
+    from dynamics.configuration import RIGID_BODY_SECTIONS, build_rigid_body
 
-    v = scenario.values
-    return build_rigid_body(v['spacecraft'], v['orbit'], v['earth'], v['sun'], v['dynamics'])
+    return build_rigid_body(*(scenario.values[s] for s in RIGID_BODY_SECTIONS))
 
 
 def h_parallel_b_attitude(scenario: Scenario) -> list[float]:

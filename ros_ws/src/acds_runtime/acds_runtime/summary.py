@@ -2,7 +2,8 @@
 
 A :class:`RunObserver` is fed every message of a run — serialized bytes by the run monitor
 (per-process graph) or values by the direct engine — decodes only the topics its summary
-modules read, joins them by step and hands complete steps, in step order, to each module in
+modules read (a module summarises single-vehicle runs, or formations when it sets
+``FORMATIONS = True``), joins them by step and hands complete steps, in step order, to each module in
 ``acds_runtime/summaries/`` (``Accumulator(scenario)`` with ``step(k, values)``, ``event(topic,
 value)`` and ``contribute(summary)``). It keeps only what the summaries keep (running peaks,
 change points), never the messages, so its memory does not grow with the run's length.
@@ -121,7 +122,8 @@ class RunObserver:
         self.scenario = scenario
         self.dt_ns = round(scenario.control_period_s * 1e9)
         self.parts: list[Any] = [DynamicsSummary(scenario)] if DynamicsSummary.applies(scenario) else []
-        self.parts += [m.Accumulator(scenario) for m in _summary_modules() if m.applies(scenario)]
+        self.parts += [m.Accumulator(scenario) for m in _summary_modules()
+                       if getattr(m, 'FORMATIONS', False) == scenario.formation and m.applies(scenario)]
         wanted = {topics.resolve(t) for p in self.parts for t in p.topics}
         per_step = {spec.topic(out.topic) for spec, out in graph.outputs() if out.every_step}
         self.per_step = sorted(wanted & per_step)

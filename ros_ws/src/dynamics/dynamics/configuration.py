@@ -33,7 +33,7 @@ from dynamics.errors import DynamicsError
 from dynamics.rigid_body_model import RigidBodyModel
 from dynamics.wheels_model import ReactionWheels, WheelsConfig
 
-__all__ = ['ActuatorLimits', 'actuator_limits', 'build_cmgs', 'build_disturbance', 'build_momentum_store',
+__all__ = ['RIGID_BODY_SECTIONS', 'ActuatorLimits', 'actuator_limits', 'build_cmgs', 'build_disturbance', 'build_momentum_store',
            'build_rigid_body', 'build_torque_wheels', 'build_wheels', 'dipole_limit_am2']
 
 #: ``disturbance`` keys of the cyclic parts → harmonic order and the (cos, sin) slot.
@@ -54,6 +54,10 @@ def build_disturbance(disturbance: dict[str, Any], orbit: Orbit) -> DisturbanceT
         return None
     constant = tuple(float(h) / orbit.period_s for h in disturbance['bias_momentum_per_orbit'])
     return DisturbanceTorque(constant, harmonics, orbit.mean_motion_rad_s, node_time_s=orbit.node_time_s())
+
+
+#: The scenario sections :func:`build_rigid_body` takes, in its argument order.
+RIGID_BODY_SECTIONS = ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics', 'disturbance')
 
 
 def build_rigid_body(spacecraft: dict[str, Any], orbit: dict[str, Any], earth: dict[str, Any], sun: dict[str, Any],

@@ -32,7 +32,7 @@ from acds_common.cdr import OdometryValue
 from acds_common.messages import MODE_STATUS, OK, WALL_CLOCK_PREFIX, WARN, diagnostic, magnetic_field, status_value, vec, vector3
 from acds_common.stepper import StepError, Stepper
 
-from dynamics.configuration import actuator_limits, build_rigid_body
+from dynamics.configuration import RIGID_BODY_SECTIONS, actuator_limits, build_rigid_body
 from dynamics.rigid_body_model import Truth
 
 #: ``angular_velocity_covariance`` of the ideal gyros, rad²/s² (row-major 3×3).
@@ -73,8 +73,7 @@ class RigidBodyStep(Stepper):
     def __init__(self, params: dict[str, Any], log: Any = None) -> None:
         super().__init__(params, log)
         self.total_steps: int = params['total_steps']
-        self.model = build_rigid_body(*(self.section(s) for s in ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics',
-                                                                   'disturbance')))
+        self.model = build_rigid_body(*(self.section(s) for s in RIGID_BODY_SECTIONS))
         self.limits = actuator_limits(self.section('em_driver'), self.section('wheels'))
         self._wheel_h = np.zeros(3)
         #: Torque-free so far (external and wheel torques all zero): the drifts are integration error.

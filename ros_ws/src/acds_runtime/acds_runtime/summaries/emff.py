@@ -29,6 +29,8 @@ from acds_common.inertia import inertia_tensor
 from acds_common.rotations import quat_to_dcm
 from acds_controller.formation_control import steady_spin_dipole_product_am4
 
+#: This module summarises formations (``acds_runtime.summary``).
+FORMATIONS = True
 #: Settling band: a fraction of the initial baseline error.
 SETTLING_BAND = 0.05
 #: The steady dipole product is averaged over the run's last this many seconds.

@@ -36,8 +36,7 @@ ODOMETRY, POWER, DUTY, CURRENT = (topics.resolve(t) for t in (
 
 def applies(scenario: Any) -> bool:
     """The detumble summary comes from runs whose em_driver drives torque rods."""
-    return (not scenario.formation and scenario.get('em_driver', 'driver_kind') == 'torque_rod'
-            and 'em_driver' in scenario.get('', 'nodes'))
+    return scenario.get('em_driver', 'driver_kind') == 'torque_rod' and 'em_driver' in scenario.get('', 'nodes')
 
 
 def null_keys(_summary: dict[str, Any]) -> None:
