@@ -22,7 +22,7 @@ def _stamp_ns(stamp) -> int:
 
 STEPS = 40
 TS = get_typestore(Stores.ROS2_JAZZY)
-TRUTH = [topics.resolve(out.topic) for out in node_spec('rigid_body', {}).outputs]
+TRUTH = [topics.resolve(out.topic) for out in node_spec('rigid_body', {}).outputs if out.every_step]
 PER_STEP = [topics.CLOCK, *TRUTH, *(topics.resolve(t) for t in (topics.WHEEL_MOMENTUM, topics.WHEEL_TORQUE))]
 
 

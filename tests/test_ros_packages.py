@@ -28,7 +28,8 @@ PACKAGES = sorted(p.name for p in SRC.iterdir() if (p / 'package.xml').is_file()
 VENV_BIN = Path(sys.executable).parent
 #: Python distributions → their ROS package keys (rosdep names).
 PYTHON_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml', 'matplotlib': 'python3-matplotlib',
-               'pytest': 'python3-pytest', 'rosbags': 'python3-rosbags-pip', 'rclpy': 'rclpy'}
+               'pytest': 'python3-pytest', 'rosbags': 'python3-rosbags-pip', 'rclpy': 'rclpy',
+               'dask': 'python3-dask', 'tqdm': 'python3-tqdm'}
 #: Packages whose code publishes or subscribes to any graph topic by its type name
 #: (``acds_common.lockstep.message_class``: the node host, and the runtime's monitor and recorder).
 EVERY_TOPIC = {'acds_common', 'acds_runtime'}

@@ -8,8 +8,8 @@ is kept in memory unless ``keep`` asks for it (tests), so a run's memory does no
 its length. It acknowledges every :data:`~acds_common.graph.MONITOR_ACK_EVERY`-th ``/clock``
 step, so the time owner never runs more than :data:`~acds_common.graph.MONITOR_LAG` steps
 ahead of it (it is part of the lockstep handshake as node ``run_monitor``, and announces
-itself ready only once every per-step topic of the graph has a matched publisher, so no
-step of any topic can be missed).
+itself ready only once its own readers are matched with every declared publisher of every
+per-step topic and with the time owner's ``/clock``, so no step of any topic can be missed).
 
 It also watches what no node can: a second message for a step already received on a
 per-step topic, or a publisher on a graph topic that the graph does not declare, is data
@@ -81,12 +81,13 @@ class RunMonitor:
             state.publishers.add(spec.instance)
         #: Called with (absolute topic, raw CDR) for every message, before the /clock ack (a bag writer).
         self.recorder = record(self.node) if record is not None else None
+        self._subs: dict[str, Any] = {}
         for name, state in self.topics.items():
             qos = COMMAND_QOS if name.endswith('/' + topics.GROUND_ACK) else LOCKSTEP_QOS
-            self.node.create_subscription(message_class(state.msg_type), name,
-                                          lambda data, t=name: self._on_raw(t, data), qos, raw=True)
-        self.node.create_subscription(message_class(topics.TYPES[topics.CLOCK]), topics.CLOCK, self._on_clock_raw,
-                                      LOCKSTEP_QOS, raw=True)
+            self._subs[name] = self.node.create_subscription(message_class(state.msg_type), name,
+                                                             lambda data, t=name: self._on_raw(t, data), qos, raw=True)
+        self._clock_sub = self.node.create_subscription(message_class(topics.TYPES[topics.CLOCK]), topics.CLOCK,
+                                                        self._on_clock_raw, LOCKSTEP_QOS, raw=True)
         self._ack = self.node.create_publisher(message_class(topics.TYPES[topics.MONITOR_ACK]), topics.MONITOR_ACK,
                                                LOCKSTEP_QOS)
         self._ack_codec = Codec(topics.TYPES[topics.MONITOR_ACK])
@@ -120,8 +121,10 @@ class RunMonitor:
             self.failure = f'the run monitor stopped: {type(exc).__name__}: {exc}'
 
     def _announce_when_matched(self) -> None:
-        per_step = [name for name, st in self.topics.items() if st.every_step]
-        if all(self.node.count_publishers(name) > 0 for name in per_step):
+        """READY once this monitor's own readers are matched with every declared publisher of every per-step
+        topic and with the time owner's /clock (matched endpoints, not merely discovered ones)."""
+        per_step = [(self._subs[name], len(st.publishers)) for name, st in self.topics.items() if st.every_step]
+        if self._clock_sub.get_publisher_count() > 0 and all(sub.get_publisher_count() >= n for sub, n in per_step):
             self._ready.publish(self._ready_codec.encode(0, MONITOR_NAME))
             self.ready = True
 
