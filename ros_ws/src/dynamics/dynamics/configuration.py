@@ -18,6 +18,9 @@ import numpy as np
 from acds_common.environment import (
     EarthFieldConfig,
     EnvironmentModelError,
+    IgrfConfig,
+    IgrfField,
+    MagneticFieldModel,
     Orbit,
     OrbitConfig,
     Sun,
@@ -31,7 +34,7 @@ from dynamics.errors import DynamicsError
 from dynamics.rigid_body_model import RigidBodyModel
 from dynamics.wheels_model import ReactionWheels, WheelsConfig
 
-__all__ = ['ActuatorLimits', 'actuator_limits', 'build_rigid_body', 'build_wheels']
+__all__ = ['ActuatorLimits', 'actuator_limits', 'build_field', 'build_rigid_body', 'build_wheels']
 
 
 def build_rigid_body(spacecraft: dict[str, Any], orbit: dict[str, Any], earth: dict[str, Any], sun: dict[str, Any],
@@ -46,9 +49,7 @@ def build_rigid_body(spacecraft: dict[str, Any], orbit: dict[str, Any], earth: d
             perigee_altitude_m=orbit['perigee_altitude'], apogee_radius_m=orbit['apogee_radius'],
             arg_perigee_rad=orbit['arg_perigee'], mean_anomaly0_rad=orbit['mean_anomaly0']))
     with scenario_key('earth', EnvironmentModelError):
-        field = TiltedDipoleField(EarthFieldConfig(
-            dipole_moment_am2=earth['dipole_moment'], tilt_rad=earth['dipole_tilt'],
-            dipole_longitude_rad=earth['dipole_longitude'], greenwich_angle0_rad=earth['greenwich_angle0']))
+        field = build_field(earth)
     with scenario_key('sun', EnvironmentModelError):
         sun_model = Sun(SunConfig(right_ascension_rad=sun['right_ascension'], declination_rad=sun['declination'],
                                   eclipse=sun['eclipse']))
@@ -57,6 +58,15 @@ def build_rigid_body(spacecraft: dict[str, Any], orbit: dict[str, Any], earth: d
                               gravity_gradient=dynamics['gravity_gradient'], substeps=dynamics['substeps'],
                               q0_body_to_eci=spacecraft['initial_quaternion_xyzw'],
                               omega0_body_rad_s=spacecraft['initial_rates'])
+
+
+def build_field(earth: dict[str, Any]) -> MagneticFieldModel:
+    """The Earth field of the scenario's ``earth`` section: the study's tilted dipole (default) or IGRF-14 (spec §3)."""
+    if earth['model'] == 'igrf':
+        return IgrfField(IgrfConfig(epoch_year=earth['epoch'], greenwich_angle0_rad=earth['greenwich_angle0']))
+    return TiltedDipoleField(EarthFieldConfig(
+        dipole_moment_am2=earth['dipole_moment'], tilt_rad=earth['dipole_tilt'],
+        dipole_longitude_rad=earth['dipole_longitude'], greenwich_angle0_rad=earth['greenwich_angle0']))
 
 
 def build_wheels(wheels: dict[str, Any]) -> ReactionWheels:
