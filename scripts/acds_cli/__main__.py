@@ -15,6 +15,7 @@ from acds_common.scenario import MAX_STEPS, ScenarioError, list_scenarios, load_
 from .arguments import (
     OneLineParser,
     UsageError,
+    add_foxglove_options,
     check_output_dir,
     check_output_file,
     positive_int,
@@ -73,8 +74,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     quiet = args.quiet
     echo = (lambda line: None) if quiet else None
     bag = None if args.no_record else Path(args.record) if args.record else run_dir / 'bag'
+    live = None
+    if args.foxglove is not None:
+        from acds_runtime.foxglove_bridge import live_view
+        live = live_view(args.foxglove, args.foxglove_host)
     graph = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=Progress(scenario.control_period_s),
-                     record=bag)
+                     record=bag, live=live)
     print(f'[acds] scenario {scenario.name}: {graph.steps} steps of {scenario.control_period_s} s '
           f'({graph.steps * scenario.control_period_s / 60:.1f} min sim), nodes {", ".join(scenario.get("", "nodes"))}; '
           f'run folder {run_dir}', file=sys.stderr, flush=True)
@@ -82,6 +87,10 @@ def cmd_run(args: argparse.Namespace) -> int:
         with graph:
             print(f'[acds] ROS domain {graph.lease.domain_id}' + (f'; recording into {bag}' if bag else ''),
                   file=sys.stderr, flush=True)
+            if graph.live_sink is not None:
+                print(f'[acds] Foxglove live view on ws://{args.foxglove_host}:{graph.live_sink.port} (Foxglove: Open '
+                      f'connection → Foxglove WebSocket; layout {ROOT / "foxglove" / "acds_layout.json"})',
+                      file=sys.stderr, flush=True)
             result = graph.wait()
             summary = result.summary
     except LaunchError as exc:
@@ -163,6 +172,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help='pace at this real-time factor (default 0: as fast as possible)')
     p.add_argument('--run-dir', help='run folder (default runs/<scenario>_<time>); checked writable before the run')
     p.add_argument('--quiet', action='store_true', help="don't forward the nodes' output")
+    add_foxglove_options(p, 'the running graph')
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser('scenarios', help='list the shipped scenarios', description='List the shipped scenarios.')
