@@ -29,7 +29,8 @@ VENV_BIN = Path(sys.executable).parent
 #: Python distributions → their ROS package keys (rosdep names).
 PYTHON_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml', 'matplotlib': 'python3-matplotlib',
                'pytest': 'python3-pytest', 'rosbags': 'python3-rosbags-pip', 'rclpy': 'rclpy',
-               'dask': 'python3-dask', 'tqdm': 'python3-tqdm'}
+               'dask': 'python3-dask', 'tqdm': 'python3-tqdm', 'ppigrf': 'python3-ppigrf-pip',
+               'foxglove': 'python3-foxglove-sdk-pip', 'websockets': 'python3-websockets'}
 #: Packages whose code publishes or subscribes to any graph topic by its type name
 #: (``acds_common.lockstep.message_class``: the node host, and the runtime's monitor and recorder).
 EVERY_TOPIC = {'acds_common', 'acds_runtime'}

@@ -15,6 +15,7 @@ from acds_common.scenario import MAX_STEPS, ScenarioError, list_scenarios, load_
 from .arguments import (
     OneLineParser,
     UsageError,
+    add_foxglove_options,
     check_output_dir,
     check_output_file,
     positive_int,
@@ -53,6 +54,11 @@ class Progress:
               file=sys.stderr, flush=True)
 
 
+def _announce_live(port: int, host: str) -> None:
+    print(f'[acds] Foxglove live view on ws://{host}:{port} (Foxglove: Open connection → Foxglove WebSocket; '
+          f'layout {ROOT / "foxglove" / "acds_layout.json"})', file=sys.stderr, flush=True)
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     """Run a scenario through the full process graph (or the direct engine) and print its summary."""
     from acds_runtime.direct import DirectRun
@@ -87,24 +93,35 @@ def cmd_run(args: argparse.Namespace) -> int:
             check_target(bag, args.storage, args.compression)
         except BagError as exc:
             raise UsageError(str(exc)) from None
+    live = None
+    if args.foxglove is not None:
+        if scenario.formation:
+            raise UsageError('--foxglove: the live view serves one spacecraft; a formation is not served yet (record '
+                             'it and open the bag in Foxglove)')
+        from acds_runtime.foxglove_bridge import live_view
+        live = live_view(args.foxglove, args.foxglove_host)
     progress = Progress(scenario.control_period_s)
-    recording = dict(record=bag, record_storage=args.storage, record_compression=args.compression)
+    options = dict(record=bag, record_storage=args.storage, record_compression=args.compression, live=live)
     if direct:
         run_dir.mkdir(parents=True, exist_ok=True)
-        engine = DirectRun(scenario, steps=steps, echo=echo, progress=progress, **recording)
+        engine = DirectRun(scenario, steps=steps, echo=echo, progress=progress, **options)
     else:
-        engine = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=progress, **recording)
+        engine = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=progress, **options)
     print(f'[acds] scenario {scenario.name}: {engine.steps} steps of {scenario.control_period_s} s '
           f'({engine.steps * scenario.control_period_s / 60:.1f} min sim), '
           + ('direct engine (one process, no DDS)' if direct else f'nodes {", ".join(scenario.get("", "nodes"))}')
           + f'; run folder {run_dir}', file=sys.stderr, flush=True)
     try:
         if direct:
+            if engine.live_sink is not None:
+                _announce_live(engine.live_sink.port, args.foxglove_host)
             summary = engine.run().summary
         else:
             with engine:
                 print(f'[acds] ROS domain {engine.lease.domain_id}' + (f'; recording into {bag}' if bag else ''),
                       file=sys.stderr, flush=True)
+                if engine.live_sink is not None:
+                    _announce_live(engine.live_sink.port, args.foxglove_host)
                 summary = engine.wait().summary
     except LaunchError as exc:
         print(f'[acds] run failed: {exc}', file=sys.stderr)
@@ -178,6 +195,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--engine', choices=('graph', 'direct'), default='graph',
                    help='graph: one process per node over DDS (default); direct: the same steppers in this process, '
                         'no DDS — bit-identical data, faster')
+    add_foxglove_options(p, 'the running graph')
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser('scenarios', help='list the shipped scenarios', description='List the shipped scenarios.')

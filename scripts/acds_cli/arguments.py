@@ -77,6 +77,29 @@ def real_time_factor(text: str) -> float:
     return value
 
 
+def tcp_port(text: str) -> int:
+    """A TCP port to listen on: 0 (any free port) … 65535."""
+    value = _whole(text)
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f'must be a TCP port in [0, 65535] (0: any free port), got {text}')
+    return value
+
+
+#: Port of the live view when ``--foxglove`` names none: the one the Foxglove app proposes (ws://localhost:8765).
+FOXGLOVE_PORT = 8765
+#: Address it listens on unless ``--foxglove-host`` says otherwise: this machine only.
+FOXGLOVE_HOST = '127.0.0.1'
+
+
+def add_foxglove_options(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--foxglove [PORT]`` and ``--foxglove-host``: serve ``what`` live to Foxglove (run and play)."""
+    parser.add_argument('--foxglove', nargs='?', type=tcp_port, const=FOXGLOVE_PORT, metavar='PORT',
+                        help=f'serve {what} live over the Foxglove WebSocket protocol on PORT (default '
+                             f'{FOXGLOVE_PORT}, 0: any free port); layout for the app: foxglove/acds_layout.json')
+    parser.add_argument('--foxglove-host', default=FOXGLOVE_HOST, metavar='HOST',
+                        help=f'address the Foxglove server listens on (default {FOXGLOVE_HOST}: this machine only)')
+
+
 def _probe(option: str, path: Path, folder: Path) -> None:
     """Create (and at once drop) an unnamed file in ``folder``: the one honest writability test."""
     try:

@@ -77,8 +77,11 @@ class Player:
     """An rclpy node (own context, own domain) publishing a bag's messages."""
 
     def __init__(self, bag: Bag, *, domain_id: int | None = None, select: list[str] | None = None,
-                 remap: dict[str, str] | None = None, name: str = 'acds_player') -> None:
+                 remap: dict[str, str] | None = None, name: str = 'acds_player',
+                 sink: Callable[[str, bytes], None] | None = None) -> None:
         self.bag = bag
+        #: Also given every published message (topic as recorded, raw CDR): a live view.
+        self.sink = sink
         wanted = {topics.resolve(t) for t in select} if select else set(bag.types)
         unknown = sorted(wanted - set(bag.types))
         if unknown:
@@ -130,6 +133,8 @@ class Player:
         """Publish one timestamp's messages (raw bytes)."""
         for topic, data in items:
             self.publishers[topic].publish(data)
+            if self.sink is not None:
+                self.sink(topic, data)
             self.published += 1
 
     def play(self, rate: float = 0.0, before_step: Callable[[int], bool] | None = None,

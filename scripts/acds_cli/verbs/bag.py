@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import Any
 
+from ..arguments import add_foxglove_options
 from ..bag import FORMATS
 
 STORAGE_HELP = 'mcap (default) or sqlite3'
@@ -50,17 +52,27 @@ def _play(args: argparse.Namespace) -> int:
     from ..bag.reader import open_bag
 
     stop = stop_on_signals()
+    live = None
     try:
         check_rate(args.rate)
         remap = parse_remaps(args.remap)
         check_domain_free(args.domain)
         bag = open_bag(args.bag)
-        player = Player(bag, domain_id=args.domain, select=args.topics, remap=remap)
+        if args.foxglove is not None:
+            live = _live_view(bag, args.foxglove, args.foxglove_host)
+        player = Player(bag, domain_id=args.domain, select=args.topics, remap=remap, sink=live)
     except BagError as exc:
+        if live is not None:
+            live.close()
         print(f'acds play: {exc}', file=sys.stderr)
         return 2
     try:
-        if args.wait > 0 and not player.wait_for_subscribers(args.wait):
+        if live is not None:
+            print(f'[play] Foxglove live view on ws://{args.foxglove_host}:{live.port}: waiting up to {args.wait:g} s '
+                  'for a Foxglove client', file=sys.stderr, flush=True)
+            if not live.wait_for_client(args.wait):
+                print(f'[play] no Foxglove client after {args.wait:g} s: playing anyway', file=sys.stderr)
+        elif args.wait > 0 and not player.wait_for_subscribers(args.wait):
             print(f'[play] no subscriber after {args.wait:g} s: playing anyway', file=sys.stderr)
         pace = f'at {args.rate:g}x real time' if args.rate > 0 else 'as fast as possible'
         print(f'[play] {bag.path} → domain {args.domain if args.domain is not None else "(ROS_DOMAIN_ID)"}: '
@@ -69,7 +81,25 @@ def _play(args: argparse.Namespace) -> int:
         print(f'[play] published {n} messages{" (stopped)" if stop.is_set() else ""}', file=sys.stderr)
     finally:
         player.close()
+        if live is not None:
+            live.close()
     return 0
+
+
+def _live_view(bag: Any, port: int, host: str) -> Any:
+    """The Foxglove bridge of a bag: its topics and types, frames and limits from its recorded node parameters."""
+    import yaml
+    from acds_runtime.bag.writer import BagError
+    from acds_runtime.foxglove_bridge import BridgeError, FoxgloveBridge
+
+    params = yaml.safe_load(bag.info.get('params', '') or '{}') or {}
+    if 'rigid_body' not in params:
+        raise BagError(f'bag {bag.path}: no recorded node parameters (acds.params), which the Foxglove view needs '
+                       'for its frames and limits (bags of acds run and acds record --run-dir have them)')
+    try:
+        return FoxgloveBridge(params, port=port, host=host, types=dict(bag.types))
+    except BridgeError as exc:
+        raise BagError(str(exc)) from None
 
 
 def _compare(args: argparse.Namespace) -> int:
@@ -155,7 +185,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--rate', type=float, default=0.0, help='sim time per wall time (default 0: as fast as possible)')
     p.add_argument('--remap', nargs='+', metavar='FROM:=TO', help='publish topic FROM under the name TO')
     p.add_argument('--domain', type=int, help='ROS domain id to publish on (default: ROS_DOMAIN_ID)')
-    p.add_argument('--wait', type=float, default=2.0, help='wait up to this many s for a subscriber (default 2)')
+    p.add_argument('--wait', type=float, default=2.0,
+                   help='wait up to this many s for a subscriber (with --foxglove: for a Foxglove client; default 2)')
+    add_foxglove_options(p, "the bag's messages")
     p.set_defaults(func=_play)
 
     p = sub.add_parser('compare', help="replay-regression: one node against a bag's recorded inputs",

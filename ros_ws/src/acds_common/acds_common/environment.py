@@ -1,4 +1,4 @@
-"""Environment: Keplerian orbit, tilted-dipole Earth field, Sun and the sun-pointed frame (spec §3).
+"""Environment: Keplerian orbit, tilted-dipole (or IGRF) Earth field, Sun and the sun-pointed frame (spec §3).
 
 Shared: the dynamics propagates the spacecraft in it, and on-board software that predicts the field
 along the coming orbit (the AAP minimum-energy dump law, seed 000 eq. 3) uses the same models.
@@ -13,10 +13,12 @@ Seed: 002_heao_acds_study.txt §4.3 (tilted dipole 11° / 20° from Greenwich, o
 
 from __future__ import annotations
 
+import datetime
 import math
+from collections import OrderedDict
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -278,11 +280,172 @@ def orbit_from_section(orbit: Mapping[str, Any]) -> Orbit:
         arg_perigee_rad=orbit['arg_perigee'], mean_anomaly0_rad=orbit['mean_anomaly0']))
 
 
-def field_from_section(earth: Mapping[str, Any]) -> TiltedDipoleField:
-    """The tilted-dipole field of a scenario ``earth`` section (SI values), for the dynamics and on board."""
+def field_from_section(earth: Mapping[str, Any]) -> MagneticFieldModel:
+    """The Earth field of a scenario ``earth`` section (SI values), for the dynamics and on board: the study's
+    tilted dipole (``model: dipole``, default) or IGRF-14 at the epoch date (``model: igrf``, spec §3)."""
+    if earth['model'] == 'igrf':
+        return IgrfField(IgrfConfig(epoch_year=earth['epoch'], greenwich_angle0_rad=earth['greenwich_angle0']))
     return TiltedDipoleField(EarthFieldConfig(
         dipole_moment_am2=earth['dipole_moment'], tilt_rad=earth['dipole_tilt'],
         dipole_longitude_rad=earth['dipole_longitude'], greenwich_angle0_rad=earth['greenwich_angle0']))
+
+
+# ------------------------------------------------------------------------------------ IGRF (option)
+
+#: Years covered by IGRF-14 as ppigrf ships it (``IGRF14.shc``): main-field models every 5 years from
+#: 1900.0 to 2025.0, then the 2025–2030 secular variation.
+IGRF_FIRST_YEAR = 1900.0
+IGRF_LAST_YEAR = 2030.0
+#: Edge of one cubic tile of the IGRF cache (ECEF), m.
+IGRF_TILE_M = 1000e3
+#: Lattice nodes per tile edge: degree-9 Lagrange interpolation along each axis.
+IGRF_TILE_NODES = 10
+#: The cache holds the field at whole days from the epoch and interpolates linearly in time.
+IGRF_TIME_STEP_S = 86400.0
+#: Tiles kept (least recently used dropped): 48 kB each.
+IGRF_CACHE_TILES = 64
+
+
+class MagneticFieldModel(Protocol):
+    """What the rigid body asks of an Earth field model: B in ECI (T) at a position (m) and time (s)."""
+
+    def b_eci(self, r_eci_m: np.ndarray, t_s: float) -> np.ndarray:
+        """Field (T) in ECI at position ``r_eci_m`` (m) and time ``t_s`` (s from scenario start)."""
+        ...
+
+
+def decimal_year_datetime(year: float) -> datetime.datetime:
+    """Decimal year (IGRF's date convention: 2025.5 is half-way through 2025) → naive UTC datetime."""
+    year = finite_float("epoch_year", year)
+    whole = math.floor(year)
+    start = datetime.datetime(whole, 1, 1)
+    return start + (datetime.datetime(whole + 1, 1, 1) - start) * (year - whole)
+
+
+@dataclass(frozen=True)
+class IgrfConfig:
+    """IGRF option (spec §3): ``epoch_year`` the decimal-year date at t = 0; ``greenwich_angle0_rad`` the Earth
+    rotation angle at t = 0, as for the tilted dipole (the scenario's ``earth.greenwich_angle0``: for the real
+    geometry of that date, set it to the epoch's sidereal angle)."""
+
+    epoch_year: float = 2025.0
+    greenwich_angle0_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        finite_float("IgrfConfig.greenwich_angle0_rad", self.greenwich_angle0_rad)
+        if not IGRF_FIRST_YEAR <= finite_float("IgrfConfig.epoch_year", self.epoch_year) <= IGRF_LAST_YEAR:
+            raise EnvironmentModelError(f"IgrfConfig.epoch_year must be in [{IGRF_FIRST_YEAR:g}, "
+                                        f"{IGRF_LAST_YEAR:g}] (IGRF-14), got {self.epoch_year}")
+
+
+def igrf_ecef_t(r_ecef_m: np.ndarray, dates: list[datetime.datetime]) -> np.ndarray:
+    """IGRF-14 field (T) in ECEF Cartesian axes at points ``r_ecef_m`` (N×3, m): one ppigrf call, shape (dates, N, 3).
+
+    ppigrf's geocentric ``igrf_gc`` gives (B_r, B_θ, B_φ) in nT at radius (km), colatitude and east
+    longitude (deg); they are turned into ECEF x, y, z here.
+    """
+    import ppigrf  # ppigrf (and pandas) load only when a scenario asks for IGRF
+
+    p = np.asarray(r_ecef_m, dtype=float).reshape(-1, 3)
+    rho = np.hypot(p[:, 0], p[:, 1])
+    theta, phi = np.arctan2(rho, p[:, 2]), np.arctan2(p[:, 1], p[:, 0])
+    b_r, b_t, b_p = (np.asarray(c, dtype=float).reshape(len(dates), -1) * units.NANOTESLA_T for c in ppigrf.igrf_gc(
+        np.linalg.norm(p, axis=1) / units.KM_M, np.degrees(theta), np.degrees(phi), dates))
+    st, ct, sp, cp = np.sin(theta), np.cos(theta), np.sin(phi), np.cos(phi)
+    return np.stack([b_r * st * cp + b_t * ct * cp - b_p * sp,
+                     b_r * st * sp + b_t * ct * sp + b_p * cp,
+                     b_r * ct - b_t * st], axis=-1)
+
+
+class IgrfField:
+    """IGRF-14 main field to degree 13 (ppigrf), rotating with the Earth: a higher-order option (spec §3).
+
+    Same interface as :class:`TiltedDipoleField` (:meth:`b_eci`). One ppigrf evaluation costs tens of ms
+    (mostly its coefficient interpolation in pandas), ~10⁴ times a dipole, and the rigid body asks for the
+    field at every RK4 stage. So the field is cached on a lattice fixed in the Earth: ECEF space is cut into
+    cubes of :data:`IGRF_TILE_M`; the first point that falls in a cube (within one day from the epoch)
+    costs one ppigrf call on the cube's 10×10×10 nodes at both ends of that day (≈ 30 ms), and every point
+    in it is then interpolated: degree-9 Lagrange along each axis (error below 1e-4 nT from low orbit out,
+    far under the coefficients' 0.01 nT), linear in time (exact: IGRF coefficients are linear in time over
+    each 5-year interval and the field is linear in them). A LEO spacecraft crosses a cube in about two
+    minutes (~250 HEAO control steps). The lattice is fixed, so ``b_eci(r, t)`` depends on (r, t) alone, never on what
+    was asked before; the lattice is offset by half a node spacing, so no node lies on the polar axis
+    (where B_φ's 1/sin θ is singular).
+    """
+
+    def __init__(self, cfg: IgrfConfig) -> None:
+        self.cfg = cfg
+        self.epoch = decimal_year_datetime(cfg.epoch_year)
+        self._last = decimal_year_datetime(IGRF_LAST_YEAR)
+        n = IGRF_TILE_NODES
+        self._nodes = np.linspace(0.0, 1.0, n)
+        self._barycentric = np.array([1.0 / np.prod([self._nodes[j] - self._nodes[m] for m in range(n) if m != j])
+                                      for j in range(n)])
+        self._offset_m = 0.5 * IGRF_TILE_M / (n - 1)
+        self._lattice = np.stack(np.meshgrid(self._nodes, self._nodes, self._nodes, indexing="ij"),
+                                 axis=-1).reshape(-1, 3) * IGRF_TILE_M
+        self._tiles: OrderedDict[tuple[int, int, int, int], np.ndarray] = OrderedDict()
+        #: ppigrf calls made so far (one per tile).
+        self.evaluations = 0
+
+    def greenwich_angle_rad(self, t_s: float) -> float:
+        """Earth rotation angle (vernal equinox to Greenwich), rad, at ``t_s``."""
+        return self.cfg.greenwich_angle0_rad + units.EARTH_RATE_RAD_S * t_s
+
+    def date(self, t_s: float) -> datetime.datetime:
+        """UTC date at ``t_s`` (s from the epoch)."""
+        return self.epoch + datetime.timedelta(seconds=t_s)
+
+    def _tile(self, key: tuple[int, int, int, int]) -> np.ndarray:
+        tile = self._tiles.get(key)
+        if tile is not None:
+            self._tiles.move_to_end(key)
+            return tile
+        dates = [self.date(key[3] * IGRF_TIME_STEP_S), self.date((key[3] + 1) * IGRF_TIME_STEP_S)]
+        if dates[0] < decimal_year_datetime(IGRF_FIRST_YEAR) or dates[1] > self._last:
+            raise EnvironmentModelError(f"IGRF-14 covers {IGRF_FIRST_YEAR:g}–{IGRF_LAST_YEAR:g}; the run reaches "
+                                        f"{dates[1]:%Y-%m-%d} (epoch {self.epoch:%Y-%m-%d} + {key[3] + 1} days)")
+        origin = np.array(key[:3], dtype=float) * IGRF_TILE_M + self._offset_m
+        n = IGRF_TILE_NODES
+        values = igrf_ecef_t(origin + self._lattice, dates)  # (2, n³, 3)
+        tile = values.reshape(2, n, n, n, 3).transpose(1, 2, 3, 0, 4).reshape(n, -1)
+        self.evaluations += 1
+        self._tiles[key] = tile
+        if len(self._tiles) > IGRF_CACHE_TILES:
+            self._tiles.popitem(last=False)
+        return tile
+
+    def b_ecef(self, r_ecef_m: np.ndarray, t_s: float) -> np.ndarray:
+        """Field (T) in ECEF at ``r_ecef_m`` (m, Earth-fixed) and ``t_s`` (s), from the cache."""
+        scaled = (np.asarray(r_ecef_m, dtype=float) - self._offset_m) / IGRF_TILE_M
+        cell = np.floor(scaled)
+        day = math.floor(t_s / IGRF_TIME_STEP_S)
+        tile = self._tile((int(cell[0]), int(cell[1]), int(cell[2]), day))
+        # Lagrange weights per axis, barycentric form: w_j = (λ_j / (u − u_j)) / Σ_k λ_k / (u − u_k).
+        d = (scaled - cell)[:, None] - self._nodes[None, :]
+        exact = d == 0.0
+        if exact.any():  # on a node plane: that node's weight is 1
+            d[exact.any(axis=1)] = 1.0
+            q = np.where(exact, 1.0, np.where(exact.any(axis=1, keepdims=True), 0.0, self._barycentric / d))
+        else:
+            q = self._barycentric / d
+        w = q / q.sum(axis=1, keepdims=True)
+        n = IGRF_TILE_NODES
+        b = (w[2] @ (w[1] @ (w[0] @ tile).reshape(n, -1)).reshape(n, -1)).reshape(2, 3)
+        frac = t_s / IGRF_TIME_STEP_S - day
+        return b[0] + frac * (b[1] - b[0])
+
+    def b_eci(self, r_eci_m: np.ndarray, t_s: float) -> np.ndarray:
+        """Field (T) in ECI at position ``r_eci_m`` (m) and time ``t_s`` (s)."""
+        r = np.asarray(r_eci_m, dtype=float)
+        t_s = finite_float("t_s", t_s)
+        rn = math.sqrt(float(r @ r))
+        if not rn > 0.0 or not math.isfinite(rn):
+            raise EnvironmentModelError(f"field point must be finite and away from the Earth's centre, got {r}")
+        g = self.greenwich_angle_rad(t_s)
+        c, s = math.cos(g), math.sin(g)
+        b = self.b_ecef(np.array([c * r[0] + s * r[1], -s * r[0] + c * r[1], r[2]]), t_s)
+        return np.array([c * b[0] - s * b[1], s * b[0] + c * b[1], b[2]])
 
 
 # ------------------------------------------------------------------------------------------------ sun

@@ -29,6 +29,7 @@ launcher passes each node exactly the sections it owns (:data:`NODE_SECTIONS`).
 
 from __future__ import annotations
 
+import datetime
 import math
 import os
 import re
@@ -39,6 +40,7 @@ from typing import Any
 import yaml
 
 from acds_common import units as u
+from acds_common.environment import IGRF_LAST_YEAR, decimal_year_datetime
 from acds_common.graph import TIME_OWNER
 
 
@@ -141,6 +143,11 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'mean_anomaly0': _q('elliptical: mean anomaly at t0', 0.0, 'rad', ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
     },
     'earth': {
+        'model': Field('str', 'Earth field: dipole (the study\'s tilted dipole, default) or igrf (IGRF-14 to degree 13, '
+                       'ppigrf, at the epoch date; the dipole_* keys are then unused)', 'dipole',
+                       choices=('dipole', 'igrf')),
+        'epoch': _q('igrf: date at t0, decimal year (2025.5 = 2 July 2025; IGRF-14 spans 1900–2030)', 2025.0, 'year',
+                    {'year': 1.0}, lo=1900.0, hi=2030.0),
         'greenwich_angle0': _q('Greenwich meridian from the vernal equinox at t0', 0.0, 'rad', ANGLE,
                                lo=-2 * math.pi, hi=2 * math.pi),
         'dipole_tilt': _q('dipole axis tilt from the spin axis (study: 11°)', 11 * _DEG, 'rad', ANGLE,
@@ -757,6 +764,11 @@ def _check_graph(path: Path, sc: Scenario) -> None:
         raise ScenarioError(f'{path}: nodes: formation_dynamics needs a vehicles list')
     if not sc.formation:
         _check_workshop(path, sc)
+    if sc.get('earth', 'model') == 'igrf':
+        end = decimal_year_datetime(sc.get('earth', 'epoch')) + datetime.timedelta(seconds=sc.duration_s())
+        if end > decimal_year_datetime(IGRF_LAST_YEAR):
+            raise ScenarioError(f'{path}: earth.epoch_year {sc.get("earth", "epoch"):g} + the run\'s duration ends '
+                                f'{end:%Y-%m-%d}, after the IGRF-14 coefficients end ({IGRF_LAST_YEAR:g})')
     steps = round(sc.duration_s() / sc.control_period_s)
     if steps > MAX_STEPS:
         raise ScenarioError(f'{path}: duration / control_period give {steps:,} steps, more than the {MAX_STEPS:,} '

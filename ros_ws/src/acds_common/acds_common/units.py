@@ -11,6 +11,10 @@ import math
 
 #: 1 gauss in tesla.
 GAUSS_T = 1e-4
+#: 1 nanotesla in tesla (IGRF field values, ppigrf's unit).
+NANOTESLA_T = 1e-9
+#: 1 kilometre in m (ppigrf takes radii in km).
+KM_M = 1e3
 #: 1 ft-lb in N·m (also 1 ft-lb-sec in N·m·s, 1 slug-ft² in kg·m²).
 FT_LB_NM = 1.3558179
 #: 1 ft-lb-sec in N·m·s.

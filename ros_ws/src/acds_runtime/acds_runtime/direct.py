@@ -52,7 +52,8 @@ class DirectRun:
     def __init__(self, scenario: Scenario, *, steps: int | None = None, echo: Callable[[str], None] | None = None,
                  progress: Callable[[int, int, float], None] | None = None, record: Path | None = None,
                  record_storage: str = 'mcap', record_compression: str | None = None,
-                 overrides: dict[str, dict[str, Any]] | None = None) -> None:
+                 overrides: dict[str, dict[str, Any]] | None = None,
+                 live: Callable[[dict[str, dict[str, Any]]], Any] | None = None) -> None:
         self.scenario = scenario
         self.steps = steps if steps is not None else scenario.total_steps()
         self.echo = echo or (lambda line: None)
@@ -74,6 +75,8 @@ class DirectRun:
         self._max_lag = max((i.lag for spec in self.graph.nodes.values() for st in spec.stages for i in st.inputs),
                             default=0)
         self._writer: Any = None
+        #: Live view (as for :class:`~acds_runtime.launcher.GraphRun`): fed (topic, CDR, value), closed after the run.
+        self.live_sink = live(self.params) if live is not None else None
 
     def _emit(self, node: str, outputs: dict[str, Any], k: int, *, initial: bool = False) -> None:
         for key, value in outputs.items():
@@ -86,14 +89,21 @@ class DirectRun:
                 self._store.setdefault(topic, {})[step] = value
             record = self._writer is not None
             for item in (value if out.many else (value,)):
-                data = codec.encode(step * self.dt_ns, item) if record or self.observer.wants(topic) else None
+                encode = record or self.live_sink is not None or self.observer.wants(topic)
+                data = codec.encode(step * self.dt_ns, item) if encode else None
                 if record:
                     self._writer.write(topic, data)
+                if self.live_sink is not None:
+                    self.live_sink(topic, data, item)
                 self.observer.feed(topic, step, item, data)
 
     def _clock_tick(self, k: int) -> None:
-        if self._writer is not None:
-            self._writer.write(topics.CLOCK, self._clock.encode(k * self.dt_ns))
+        if self._writer is not None or self.live_sink is not None:
+            data = self._clock.encode(k * self.dt_ns)
+            if self._writer is not None:
+                self._writer.write(topics.CLOCK, data)
+            if self.live_sink is not None:
+                self.live_sink(topics.CLOCK, data)
 
     def run(self) -> RunResult:
         """Run to completion (the time owner finishes); a stepper's StepError fails the run naming the node."""
@@ -109,6 +119,8 @@ class DirectRun:
         try:
             final = self._loop(t0)
         finally:
+            if self.live_sink is not None:
+                self.live_sink.close()
             if self._writer is not None:
                 for topic in sorted({t for t, _c, _o in self._codecs.values()}):
                     self._writer.note_publishers(topic, self.graph.publisher_of(topic))

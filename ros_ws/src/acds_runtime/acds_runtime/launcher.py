@@ -141,7 +141,7 @@ class GraphRun:
                  echo: Callable[[str], None] | None = None, progress: Callable[[int, int, float], None] | None = None,
                  overrides: dict[str, dict[str, Any]] | None = None,
                  record: Path | None = None, record_storage: str = 'mcap', record_compression: str | None = None,
-                 keep: bool = False):
+                 keep: bool = False, live: Callable[[dict[str, dict[str, Any]]], Any] | None = None):
         self.scenario = scenario
         self.run_dir = Path(run_dir)
         self.steps = steps if steps is not None else scenario.total_steps()
@@ -157,6 +157,9 @@ class GraphRun:
         self.bag_writer: Any = None
         #: Keep every message in the run monitor (tests; a long run would grow without bound).
         self.keep = keep
+        #: Live view: called with the node parameters at start, returns a sink the monitor feeds (and closes at stop).
+        self.live = live
+        self.live_sink: Any = None
         self.graph: Graph | None = None
         self.observer: RunObserver | None = None
         self.processes: dict[str, NodeProcess] = {}
@@ -214,6 +217,13 @@ class GraphRun:
         self.observer = RunObserver(self.scenario, self.graph)
         params_file = self.run_dir / 'params.yaml'
         params_file.write_text(parameters_yaml(params))
+        if self.live is not None:
+            try:
+                self.live_sink = self.live(params)
+            except Exception:
+                self.lease.close()
+                self.lease = None
+                raise
         record = None
         if self.record is not None:
             from .bag.writer import BagError, BagWriter, RecordingSink, run_info
@@ -225,12 +235,16 @@ class GraphRun:
             except BagError as exc:
                 self.lease.close()
                 self.lease = None
+                if self.live_sink is not None:
+                    self.live_sink.close()
+                    self.live_sink = None
                 raise LaunchError(str(exc)) from None
 
             def record(node: Any) -> Any:
                 return RecordingSink(self.bag_writer, node)
         self.monitor = RunMonitor(self.lease.domain_id, round(self.scenario.control_period_s * 1e9), self.graph,
-                                  on_clock=self._on_clock, record=record, observer=self.observer, keep=self.keep)
+                                  on_clock=self._on_clock, record=record, observer=self.observer, keep=self.keep,
+                                  sink=self.live_sink)
         self._t0 = time.monotonic()
         for name, spec in self.graph.nodes.items():
             exe = VENV_BIN / spec.name
@@ -347,6 +361,9 @@ class GraphRun:
         if self.monitor is not None:
             self.monitor.close()  # also closes the bag, if recording
             self.monitor = None
+        if self.live_sink is not None:
+            self.live_sink.close()
+            self.live_sink = None
         if self.lease is not None:
             self.lease.close()
             self.lease = None

@@ -2,7 +2,7 @@
 
 It subscribes, as serialized CDR (``raw=True``), to every output the graph declares
 (:mod:`acds_common.graph`) and to ``/clock``; it never deserializes what it only records.
-Each message goes to the recorder (a bag writer) and to the run's streaming summary
+Each message goes to the recorder (a bag writer), to an optional live-view sink, and to the run's streaming summary
 (:class:`~acds_runtime.summary.RunObserver`, which decodes only the topics it reads); nothing
 is kept in memory unless ``keep`` asks for it (tests), so a run's memory does not grow with
 its length. It acknowledges every :data:`~acds_common.graph.MONITOR_ACK_EVERY`-th ``/clock``
@@ -55,7 +55,7 @@ class RunMonitor:
 
     def __init__(self, domain_id: int, dt_ns: int, graph: Graph, *, on_clock: Callable[[int], None] | None = None,
                  record: Callable[[Node], Callable[[str, bytes], None]] | None = None,
-                 observer: Any = None, keep: bool = False) -> None:
+                 observer: Any = None, keep: bool = False, sink: Callable[[str, bytes], None] | None = None) -> None:
         self.context = Context()
         rclpy.init(context=self.context, domain_id=domain_id,
                    signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
@@ -81,6 +81,8 @@ class RunMonitor:
             state.publishers.add(spec.instance)
         #: Called with (absolute topic, raw CDR) for every message, before the /clock ack (a bag writer).
         self.recorder = record(self.node) if record is not None else None
+        #: Also called with every message, after the recorder (a live view: :mod:`acds_runtime.foxglove_bridge`).
+        self.sink = sink
         self._subs: dict[str, Any] = {}
         for name, state in self.topics.items():
             qos = COMMAND_QOS if name.endswith('/' + topics.GROUND_ACK) else LOCKSTEP_QOS
@@ -164,6 +166,8 @@ class RunMonitor:
                 st.kept.append(data)
         if self.recorder is not None:
             self.recorder(topic, data)
+        if self.sink is not None:
+            self.sink(topic, data)
         if self.observer is not None:
             self.observer.feed_raw(topic, data)
 
@@ -172,6 +176,8 @@ class RunMonitor:
         k = t_ns // self.dt_ns
         if self.recorder is not None:
             self.recorder(topics.CLOCK, data)
+        if self.sink is not None:
+            self.sink(topics.CLOCK, data)
         with self._lock:
             self.clock_step = max(self.clock_step, k)
             self._clock.count += 1

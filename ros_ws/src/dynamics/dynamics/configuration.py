@@ -33,8 +33,8 @@ from dynamics.errors import DynamicsError
 from dynamics.rigid_body_model import RigidBodyModel
 from dynamics.wheels_model import ReactionWheels, WheelsConfig
 
-__all__ = ['RIGID_BODY_SECTIONS', 'ActuatorLimits', 'actuator_limits', 'build_cmgs', 'build_disturbance', 'build_momentum_store',
-           'build_rigid_body', 'build_torque_wheels', 'build_wheels', 'dipole_limit_am2']
+__all__ = ['RIGID_BODY_SECTIONS', 'ActuatorLimits', 'actuator_limits', 'build_cmgs', 'build_disturbance',
+           'build_momentum_store', 'build_rigid_body', 'build_torque_wheels', 'build_wheels', 'dipole_limit_am2']
 
 #: ``disturbance`` keys of the cyclic parts → harmonic order and the (cos, sin) slot.
 _CYCLIC_KEYS = ((1, 'once_per_orbit_cos', 'once_per_orbit_sin'), (2, 'twice_per_orbit_cos', 'twice_per_orbit_sin'))
