@@ -6,7 +6,6 @@ start the time owner by hand with no other node, stop a node and read who is bla
 
 from __future__ import annotations
 
-import fcntl
 import os
 import signal
 import subprocess
@@ -45,16 +44,9 @@ def _start_run(tmp_path: Path, scenario: str = 'free_tumble_heao_b') -> tuple[su
 
 
 def _domain_locked(run_dir: Path) -> bool:
-    from acds_runtime.launcher import DOMAIN_LOCK_DIR
+    from acds_runtime.launcher import DomainLease
 
-    domain = int((run_dir / 'domain_id').read_text())
-    with open(DOMAIN_LOCK_DIR / f'domain_{domain}.lock', 'w') as fh:
-        try:
-            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            return True
-        fcntl.flock(fh, fcntl.LOCK_UN)
-        return False
+    return DomainLease.held(int((run_dir / 'domain_id').read_text()))
 
 
 def test_sigkilled_launcher_takes_its_nodes_within_two_seconds(tmp_path):

@@ -52,7 +52,6 @@ def report_from_bag(bag_path: Path | str) -> tuple[dict[str, Any], DumpSeries, A
     """
     from acds_common.graph import build_graph
     from acds_common.parameters import node_parameters
-    from acds_runtime.launcher import per_step_topics
     from acds_runtime.summary import RunObserver
 
     bag = open_bag(bag_path)
@@ -61,9 +60,9 @@ def report_from_bag(bag_path: Path | str) -> tuple[dict[str, Any], DumpSeries, A
         raise BagError(f'bag {bag.path}: holds no scenario (not recorded by acds): cannot build the dump report')
     check_workshop(scenario, f'bag {bag.path}: ')
     steps = int(bag.info.get('steps', '0') or 0) or scenario.total_steps()
-    observer = RunObserver(scenario, per_step_topics(build_graph(node_parameters(scenario, steps))))
+    observer = RunObserver(scenario, build_graph(node_parameters(scenario, steps)))
     moment = DIPOLE if bag.has(topics.DIPOLE_AVG) else COMMAND
-    codecs = {t: Codec(topics.TYPES[topics.relative(t)]) for t in (moment, SUN)}
+    codecs = {t: Codec(topics.type_of(t)) for t in (moment, SUN)}
     series = DumpSeries()
     wanted = sorted({topics.resolve(t) for part in observer.parts for t in part.topics} | set(codecs))
     last_step = 0

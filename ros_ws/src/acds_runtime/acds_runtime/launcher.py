@@ -114,15 +114,7 @@ class DomainLease:
     def held(domain: int) -> bool:
         """Whether a run (or a child of one) holds ``domain`` now."""
         path = DOMAIN_LOCK_DIR / f'domain_{domain}.lock'
-        if not path.exists():
-            return False
-        with open(path, 'a') as fh:
-            try:
-                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError:
-                return True
-            fcntl.flock(fh, fcntl.LOCK_UN)
-            return False
+        return path.exists() and shm.lock_held(path)
 
     @property
     def fd(self) -> int:

@@ -31,7 +31,8 @@ def snapshot(shm_dir: Path = SHM_DIR) -> set[str]:
         return set()
 
 
-def _held(path: Path) -> bool:
+def lock_held(path: Path) -> bool:
+    """Whether a live process holds an ``flock`` on ``path`` (a file it cannot even open counts as held)."""
     try:
         with open(path, 'ab') as fh:
             try:
@@ -41,7 +42,7 @@ def _held(path: Path) -> bool:
             fcntl.flock(fh, fcntl.LOCK_UN)
             return False
     except OSError:
-        return True  # cannot even open it: leave it alone
+        return True
 
 
 #: A lock file younger than this may belong to a participant that is still being created (its file
@@ -67,7 +68,7 @@ def clean_run(before: set[str], shm_dir: Path = SHM_DIR) -> list[str]:
     removed: list[str] = []
     for base in bases:
         locks = [shm_dir / f'{base}_{kind}' for kind in ('el', 'sl') if (shm_dir / f'{base}_{kind}').exists()]
-        if not locks or any(_young(p) or _held(p) for p in locks):
+        if not locks or any(_young(p) or lock_held(p) for p in locks):
             continue
         victims = [base, f'{base}_el', f'{base}_sl']
         if base.startswith('fastrtps_port'):
