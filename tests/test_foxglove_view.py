@@ -202,7 +202,7 @@ def test_direct_engine_serves_the_same_view_with_the_scenario_limits() -> None:
         wanted = {ODOMETRY, TF_TOPIC, VIEW_RATES, VIEW_MODE}
         client.advertised(wanted)
         client.subscribe(wanted)
-        time.sleep(0.5)  # the subscription reaches the server before the first step
+        assert run.live_sink.wait_for_subscriptions(wanted, 10.0), 'the client subscriptions never reached the server'
         run.run()
         client.collect(lambda: False, 5.0)  # until the server closes
     assert len(client.received[ODOMETRY]) == 31 and len(client.received[TF_TOPIC]) == 31

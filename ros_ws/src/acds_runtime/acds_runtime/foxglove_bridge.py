@@ -125,10 +125,10 @@ class FoxgloveBridge:
             types[topics.CLOCK] = topics.TYPES[topics.CLOCK]
         self.frames = frames_of(params)
         self._context = foxglove.Context()
-        self._client = threading.Event()
+        self._subscriptions = _Listener()
         try:
             self.server = foxglove.start_server(name=name, host=host, port=port, capabilities=[Capability.Time],
-                                                context=self._context, server_listener=_Listener(self._client))
+                                                context=self._context, server_listener=self._subscriptions)
         except (RuntimeError, ValueError, OSError) as exc:
             raise BridgeError(f'Foxglove server on {host}:{port}: {exc}') from None
         store = typestore()
@@ -178,7 +178,11 @@ class FoxgloveBridge:
 
     def wait_for_client(self, timeout_s: float) -> bool:
         """Wait until a client subscribes to any channel (True), or ``timeout_s`` passed (False)."""
-        return self._client.wait(timeout_s)
+        return self._subscriptions.wait(lambda subscribed: bool(subscribed), timeout_s)
+
+    def wait_for_subscriptions(self, wanted: set[str], timeout_s: float) -> bool:
+        """Wait until clients subscribe to every topic of ``wanted`` (True), or ``timeout_s`` passed (False)."""
+        return self._subscriptions.wait(lambda subscribed: wanted <= subscribed, timeout_s)
 
     def __call__(self, topic: str, data: bytes, value: Any = None) -> None:
         """One message of ``topic`` (absolute): raw CDR, and its decoded value when the caller holds it.
@@ -264,13 +268,21 @@ class FoxgloveBridge:
 
 
 class _Listener(ServerListener):
-    """foxglove-sdk server listener: notes the first subscription (``acds play`` waits for a client)."""
+    """foxglove-sdk server listener: the topics clients subscribed to (``acds play`` waits for a client)."""
 
-    def __init__(self, subscribed: threading.Event) -> None:
-        self._subscribed = subscribed
+    def __init__(self) -> None:
+        self._changed = threading.Condition()
+        self._subscribed: set[str] = set()
 
-    def on_subscribe(self, _client: Any, _channel: Any) -> None:
-        self._subscribed.set()
+    def on_subscribe(self, _client: Any, channel: Any) -> None:
+        with self._changed:
+            self._subscribed.add(channel.topic)
+            self._changed.notify_all()
+
+    def wait(self, done: Callable[[set[str]], bool], timeout_s: float) -> bool:
+        """Wait until ``done(subscribed topics)`` holds (True), or ``timeout_s`` passed (False)."""
+        with self._changed:
+            return self._changed.wait_for(lambda: done(self._subscribed), timeout_s)
 
 
 def live_view(port: int, host: str) -> Callable[[dict[str, dict[str, Any]]], FoxgloveBridge]:
