@@ -103,7 +103,8 @@ def test_player_clock_drives_a_use_sim_time_node(recorded):
     spin.start()
     player = Player(bag, domain_id=lease.domain_id, select=[topics.WHEEL_MOMENTUM])
     try:
-        assert player.wait_for_subscribers(30.0), 'the listener never matched the player'
+        assert player.wait_for_subscribers(30.0, every={topics.resolve(topics.WHEEL_MOMENTUM), topics.CLOCK}), \
+            'the listener (wheel momentum and its /clock time source) never matched the player'
         assert player.play() == 2 * (STEPS + 1), 'wheel momentum and /clock, one each per step'
         deadline = time.monotonic() + 30.0
         while time.monotonic() < deadline and (len(seen) < STEPS + 1 or node.get_clock().now().nanoseconds != clock[-1]):

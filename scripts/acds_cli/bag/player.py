@@ -112,11 +112,14 @@ class Player:
         while not self._stop.is_set() and self.context.ok():
             self.executor.spin_once(timeout_sec=0.05)
 
-    def wait_for_subscribers(self, timeout_s: float) -> bool:
-        """Wait until some subscriber matched any of the player's topics (True) or the timeout passed."""
+    def wait_for_subscribers(self, timeout_s: float, every: set[str] | None = None) -> bool:
+        """Wait until some subscriber matched any of the player's topics, or, given ``every`` (absolute
+        topics), until each of those has a matched subscriber (True); False when the timeout passed."""
+        publishers = [self.publishers[t] for t in sorted(every)] if every else list(self.publishers.values())
+        matched = all if every else any
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline and not self._stop.is_set():
-            if any(p.get_subscription_count() > 0 for p in self.publishers.values()):
+            if matched(p.get_subscription_count() > 0 for p in publishers):
                 return True
             time.sleep(0.02)
         return False
