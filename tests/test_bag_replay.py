@@ -18,6 +18,7 @@ from acds_common import topics
 from acds_common.lockstep import LOCKSTEP_QOS
 from acds_common.scenario import load_scenario
 from acds_runtime.launcher import DomainLease, GraphRun
+from acds_runtime.monitor import release_node
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
@@ -114,8 +115,7 @@ def test_player_clock_drives_a_use_sim_time_node(recorded):
         player.close()
         stop.set()
         spin.join()
-        node.destroy_node()
-        rclpy.try_shutdown(context=context)
+        release_node(executor, node, context)
         lease.close()
     assert [s for s, _ in seen] == [t for _, t, _ in bag.messages([topics.WHEEL_MOMENTUM])]
     assert len(clock) == STEPS + 1 and clock[-1] == STEPS * 500_000_000

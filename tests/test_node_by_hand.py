@@ -26,6 +26,7 @@ from acds_cli.__main__ import main
 from acds_common.parameters import node_parameters, parameters_yaml
 from acds_common.scenario import load_scenario
 from acds_runtime.launcher import FASTDDS_PROFILE, DomainLease
+from acds_runtime.monitor import release_node
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import DescribeParameters, SetParameters
 from rclpy.context import Context
@@ -123,7 +124,7 @@ def test_running_node_refuses_to_set_its_read_only_parameters(tmp_path, ros_doma
         for result in (in_range, out_of_range):
             assert not result.successful, 'a read-only parameter was reported as set'
             assert 'read-only' in result.reason
-        node.destroy_node()
+        release_node(executor, node, context)
     finally:
         rclpy.try_shutdown(context=context)
         for key, value in old_env.items():

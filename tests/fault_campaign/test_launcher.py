@@ -90,3 +90,28 @@ def test_lone_time_owner_runs_5000_steps_without_recursion(tmp_path):
                           stdin=subprocess.DEVNULL, capture_output=True, text=True, env=env, timeout=600, check=False)
     assert done.returncode == 0, done.stderr[-2000:]
     assert 'RecursionError' not in done.stderr
+
+
+def _participants_of_this_process() -> int:
+    """Fast DDS participants alive in this process: each holds ``flock`` locks on its /dev/shm files."""
+    pid = str(os.getpid())
+    return sum(1 for line in Path('/proc/locks').read_text().splitlines() if line.split()[4] == pid)
+
+
+def test_a_finished_run_leaves_no_participant_in_the_launcher(tmp_path):
+    """The run monitor's DDS participant ends with its run: a leftover one kept its transient-local READY
+    and acknowledgements on the domain, and the next run there started (and finished) on them before its
+    own monitor had matched (CI: 'run monitor received no /clock at all')."""
+    from acds_common.scenario import load_scenario
+    from acds_runtime.launcher import GraphRun
+
+    before = _participants_of_this_process()
+    domains = []
+    for i in range(2):
+        with GraphRun(load_scenario('free_tumble_heao_b'), tmp_path / f'run{i}', steps=5,
+                      echo=lambda _line: None) as graph:
+            result = graph.wait()
+            domains.append(graph.lease.domain_id)
+        assert result.steps == 5
+        assert _participants_of_this_process() == before, f'run {i} left its monitor participant alive'
+    assert domains[0] == domains[1], 'both runs of one process lease the same domain (the case that failed)'

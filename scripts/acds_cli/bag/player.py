@@ -23,6 +23,7 @@ from acds_common import topics
 from acds_common.lockstep import message_class
 from acds_runtime.bag.writer import BagError, offered_qos
 from acds_runtime.launcher import FASTDDS_PROFILE
+from acds_runtime.monitor import release_node
 from rclpy.context import Context
 from rclpy.duration import Duration
 from rclpy.executors import SingleThreadedExecutor
@@ -172,5 +173,4 @@ class Player:
         """Stop spinning and release the ROS context."""
         self._stop.set()
         self._thread.join(timeout=5.0)
-        self.node.destroy_node()
-        rclpy.try_shutdown(context=self.context)
+        release_node(self.executor, self.node, self.context)

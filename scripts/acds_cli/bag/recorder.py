@@ -19,6 +19,7 @@ import yaml
 from acds_common import topics
 from acds_common.lockstep import message_class
 from acds_runtime.bag.writer import SKIP, BagError, BagWriter, RecordingSink, cdr_stamp_ns, check_target, stamped
+from acds_runtime.monitor import release_node
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -100,8 +101,7 @@ def record(path: Path | str, *, storage: str = 'mcap', compression: str | None =
             executor.spin_once(timeout_sec=0.05)
     finally:
         sink.close()
-        node.destroy_node()
-        rclpy.try_shutdown(context=context)
+        release_node(executor, node, context)
     if writer.error:
         raise BagError(writer.error)
     return writer

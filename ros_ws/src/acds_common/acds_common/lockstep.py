@@ -424,8 +424,7 @@ class LockstepNode(Node):
         such a publisher is given :data:`UNNAMED_GRACE_S` to be named before it counts as an intruder.
         """
         self._last_intruder_check = now
-        for entry in self._inputs.values():
-            topic = self.resolve_topic_name(entry.topic)
+        for topic, sources in self._declared_publishers().items():
             names = [UNNAMED if i.node_name == UNNAMED else instance_name(i.node_namespace, i.node_name)
                      for i in self.get_publishers_info_by_topic(topic)]
             unnamed = sum(1 for n in names if n == UNNAMED)
@@ -436,13 +435,23 @@ class LockstepNode(Node):
             else:
                 self._unnamed_since.pop(topic, None)
             strangers = sorted({n if n != UNNAMED else 'a publisher without a ROS node name'
-                                for n in names if n != entry.source})
-            if names.count(entry.source) > 1:
-                strangers.append(f'a second node named {entry.source}')
+                                for n in names if n not in sources})
+            strangers += [f'a second node named {s}' for s in sorted(sources) if names.count(s) > 1]
             if strangers:
                 self.fail(f'{topic} has a publisher the graph does not declare ({", ".join(strangers)}); '
-                          f'only {entry.source} may drive this input')
+                          f'only {", ".join(sorted(sources))} may drive this input')
                 return
+
+    def _declared_publishers(self) -> dict[str, set[str]]:
+        """Absolute topic → the instances that may publish it: each input's source and, for the time owner,
+        the handshake (every other node's READY, the run monitor's acknowledgements; a participant left
+        on the domain by an earlier run must not start or pace this one)."""
+        out = {self.resolve_topic_name(e.topic): {e.source} for e in self._inputs.values()}
+        if self.time_owner:
+            out[self.resolve_topic_name(topics.READY)] = set(self.graph_nodes) - {self.instance}
+            if MONITOR_NAME in self.graph_nodes:
+                out[self.resolve_topic_name(topics.MONITOR_ACK)] = {MONITOR_NAME}
+        return out
 
     def check_parent(self) -> bool:
         """Whether the launcher that started this node has died (sets :attr:`orphaned`)."""

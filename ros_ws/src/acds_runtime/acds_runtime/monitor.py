@@ -36,6 +36,18 @@ from rclpy.node import Node
 PUBLISHER_CHECK_PERIOD_S = 1.0
 
 
+def release_node(executor: Any, node: Any, context: Any) -> None:
+    """Shut down an in-process node with its executor and context, so its DDS participant ends now.
+
+    The executor holds the node's entities: without its shutdown the participant outlives its owner and
+    keeps serving its transient-local history (a run's READY and acknowledgements) on the domain, where
+    the next run leasing it would take them for its own.
+    """
+    executor.shutdown()
+    node.destroy_node()
+    rclpy.try_shutdown(context=context)
+
+
 @dataclass
 class TopicState:
     """What the monitor knows of one topic: declared publishers, per-step or not, last step, count."""
@@ -264,5 +276,4 @@ class RunMonitor:
         self._thread.join(timeout=5.0)
         if self.recorder is not None and hasattr(self.recorder, 'close'):
             self.recorder.close()  # the bag: index, custom data, metadata.yaml
-        self.node.destroy_node()
-        rclpy.try_shutdown(context=self.context)
+        release_node(self._executor, self.node, self.context)
