@@ -64,7 +64,7 @@ def test_sigkilled_launcher_takes_its_nodes_within_two_seconds(tmp_path):
         assert free not in _node_pids(run_dir), 'a node outlived its SIGKILLed launcher by more than 2 s'
         assert _domain_locked(run_dir), 'the domain was released while a child of the dead launcher lived'
     finally:
-        os.kill(held, signal.SIGCONT)  # its pending parent-death SIGTERM is delivered now
+        os.kill(held, signal.SIGCONT)  # its pending parent-death signal is delivered now
     deadline = time.monotonic() + 2.0
     while _node_pids(run_dir) and time.monotonic() < deadline:
         time.sleep(0.05)

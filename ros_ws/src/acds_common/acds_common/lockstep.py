@@ -30,6 +30,7 @@ import importlib
 import os
 import signal
 import sys
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -82,6 +83,13 @@ EXIT_OK, EXIT_CONFIG, EXIT_LOCKSTEP, EXIT_ORPHANED = 0, 2, 3, 4
 LAUNCHER_PID_ENV = 'ACDS_LAUNCHER_PID'
 #: Signals that stop a node cleanly (flush, exit 0): Ctrl-C, kill, a closed terminal.
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+#: The signal the kernel sends a node when its launcher dies (``PR_SET_PDEATHSIG``, set by the launcher):
+#: its own signal, since at delivery the dying launcher may still be the node's parent (a SIGTERM then read
+#: as an ordinary stop, and the node waited on acknowledgements nobody would send).
+PARENT_DEATH_SIGNAL = signal.SIGUSR2
+#: Seconds an orphaned node gives its DDS teardown before it leaves without it (issue 9 §2: every node
+#: exits within 2 s of its launcher's death, even when the teardown hangs).
+ORPHAN_TEARDOWN_S = 1.0
 #: Seconds between checks that every input topic has only its declared publisher.
 INTRUDER_CHECK_PERIOD_S = 1.0
 #: What discovery reports for a publisher whose node name it has not learnt yet, and how long it may stay so.
@@ -531,12 +539,13 @@ class LockstepNode(Node):
             self.failure = message
 
     def flush(self, timeout_s: float = 5.0) -> None:
-        """Wait until every output has been acknowledged by its readers."""
+        """Wait until every output has been acknowledged by its readers, ``timeout_s`` in all."""
         pubs = [p.publisher for p in self._ports.values()]
         if self.time_owner:
             pubs.append(self._clock_pub)
+        deadline = time.monotonic() + timeout_s
         for pub in pubs:
-            pub.wait_for_all_acked(rclpy.duration.Duration(seconds=timeout_s))
+            pub.wait_for_all_acked(rclpy.duration.Duration(seconds=max(0.0, deadline - time.monotonic())))
 
 
 def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
@@ -553,13 +562,17 @@ def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
     except RuntimeError as exc:  # rclpy's RCLError: bad --ros-args or params file
         print(f'[{name}] CONFIGURATION ERROR: {str(exc).splitlines()[0]}', file=sys.stderr, flush=True)
         return EXIT_CONFIG
-    stop = {'signal': None}
+    stop: dict[str, Any] = {'signal': None, 'orphaned': False}
 
     def on_signal(signum: int, _frame: Any) -> None:
         stop['signal'] = signum
 
+    def on_parent_death(_signum: int, _frame: Any) -> None:
+        stop['orphaned'] = True
+
     for sig in STOP_SIGNALS:
         signal.signal(sig, on_signal)
+    signal.signal(PARENT_DEATH_SIGNAL, on_parent_death)
     node: LockstepNode | None = None
     code = EXIT_OK
     try:
@@ -567,9 +580,10 @@ def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
         from rclpy.experimental import EventsExecutor
         executor = EventsExecutor()
         executor.add_node(node)
-        while not node.may_exit() and node.failure is None and stop['signal'] is None and not node.orphaned:
+        while not (node.may_exit() or node.failure is not None or stop['signal'] is not None or stop['orphaned']
+                   or node.orphaned):
             executor.spin_once(timeout_sec=0.1)
-        node.check_parent()  # a parent-death SIGTERM: nobody is left to flush to
+        node.orphaned = node.orphaned or stop['orphaned'] or node.check_parent()  # nobody is left to flush to
         if node.orphaned:
             print(f'[{name}] STOPPED: its launcher (pid {node.launcher_pid}) died', file=sys.stderr, flush=True)
             code = EXIT_ORPHANED
@@ -584,6 +598,10 @@ def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
     except (KeyboardInterrupt, ExternalShutdownException):
         code = EXIT_OK
     finally:
+        if node is not None and node.orphaned:  # nobody will stop a hung DDS teardown: bound it
+            guard = threading.Timer(ORPHAN_TEARDOWN_S, os._exit, (EXIT_ORPHANED,))
+            guard.daemon = True
+            guard.start()
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()

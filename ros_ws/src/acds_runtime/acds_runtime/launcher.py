@@ -27,7 +27,7 @@ from typing import IO, Any
 import yaml
 from acds_common import topics
 from acds_common.graph import Graph, build_graph
-from acds_common.lockstep import LAUNCHER_PID_ENV
+from acds_common.lockstep import LAUNCHER_PID_ENV, PARENT_DEATH_SIGNAL
 from acds_common.parameters import node_parameters, parameters_yaml
 from acds_common.scenario import Scenario
 
@@ -72,16 +72,17 @@ class RunResult:
 
 
 def _die_with_parent() -> None:
-    """In a child between fork and exec: ask the kernel for SIGTERM when the launcher dies.
+    """In a child between fork and exec: ask the kernel for a signal when the launcher dies.
 
-    Linux ``prctl(PR_SET_PDEATHSIG, SIGTERM)``; survives the exec of the node's entry point.
+    Linux ``prctl(PR_SET_PDEATHSIG, PARENT_DEATH_SIGNAL)`` (the lockstep base's own signal for it);
+    survives the exec of the node's entry point.
     The node's lockstep base also watches its parent pid (``ACDS_LAUNCHER_PID``), which covers
     a launcher that died before this call ran.
     """
     import ctypes
 
     pr_set_pdeathsig = 1
-    ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGTERM, 0, 0, 0)
+    ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, PARENT_DEATH_SIGNAL, 0, 0, 0)
 
 
 class DomainLease:
