@@ -19,7 +19,7 @@ def run_acds(*args: str) -> subprocess.CompletedProcess[str]:
 
 
 @pytest.mark.parametrize(('edit', 'message'), [
-    (lambda s: s.replace('  substeps: 10', '  substeps: 10\n  subteps: 3'), 'unknown key "dynamics.subteps"'),
+    (lambda s: s.replace('  substeps: 1\n', '  substeps: 1\n  subteps: 3\n'), 'unknown key "dynamics.subteps"'),
     (lambda s: s.replace('[1520, 7970', '[-1520, 7970'), 'spacecraft.inertia: inertia tensor is not positive definite'),
     (lambda s: s.replace('initial_rates_deg_s: [1.0, 1.0, 1.0]', 'initial_rates_deg_s: [.nan, 1.0, 1.0]'),
      'spacecraft.initial_rates_deg_s: nan is not a finite number'),

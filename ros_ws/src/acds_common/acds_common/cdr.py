@@ -138,6 +138,9 @@ class Codec:
         # Offset (in the payload) where the body after the header starts, before its alignment.
         self._body_offset = 8 + len(self._head)
         encode, self.decode = _TYPES[msg_type](self)
+        if msg_type in _SELF_PADDED:
+            self.encode = encode
+            return
 
         def padded(t_ns: int, value: Any = None) -> bytes:
             data = encode(t_ns, value)
@@ -167,11 +170,20 @@ def _text(c: Codec) -> tuple[Any, Any]:
     return encode, decode
 
 
+def _stamped(body: str) -> struct.Struct:
+    """One struct for a fixed-layout stamped message: encapsulation, stamp, then ``body`` (its constant
+    parts as ``s`` fields), zero-padded to a multiple of 4 bytes: a message is one ``pack``."""
+    size = struct.calcsize(f'<4siI{body}')
+    return struct.Struct(f'<4siI{body}{-size % 4}x')
+
+
 def _vector3_stamped(c: Codec) -> tuple[Any, Any]:
     head = c._head + _pad(c._body_offset, 8)
+    packer = _stamped(f'{len(head)}s3d')
 
     def encode(t_ns: int, value: Any) -> bytes:
-        return ENCAPSULATION + _STAMP.pack(*divmod(t_ns, 1_000_000_000)) + head + _V3.pack(*value)
+        sec, nsec = divmod(t_ns, 1_000_000_000)
+        return packer.pack(ENCAPSULATION, sec, nsec, head, value[0], value[1], value[2])
 
     def decode(data: bytes) -> tuple[int, tuple[float, float, float]]:
         r = _Reader(data, 12)
@@ -182,10 +194,12 @@ def _vector3_stamped(c: Codec) -> tuple[Any, Any]:
 
 def _magnetic_field(c: Codec) -> tuple[Any, Any]:
     head = c._head + _pad(c._body_offset, 8)
+    packer = _stamped(f'{len(head)}s3d9d')
 
     def encode(t_ns: int, value: Any) -> bytes:
         b, cov = value
-        return ENCAPSULATION + _STAMP.pack(*divmod(t_ns, 1_000_000_000)) + head + _V3.pack(*b) + _D9.pack(*cov)
+        sec, nsec = divmod(t_ns, 1_000_000_000)
+        return packer.pack(ENCAPSULATION, sec, nsec, head, *b, *cov)
 
     def decode(data: bytes) -> tuple[int, Any]:
         r = _Reader(data, 12)
@@ -217,13 +231,14 @@ _IDENTITY_ORIENTATION = _QUAT.pack(0.0, 0.0, 0.0, 1.0)
 
 
 def _imu(c: Codec) -> tuple[Any, Any]:
-    head = c._head + _pad(c._body_offset, 8)
+    head = c._head + _pad(c._body_offset, 8) + _IDENTITY_ORIENTATION + _NOT_PROVIDED_9
     tail = _V3.pack(0.0, 0.0, 0.0) + _NOT_PROVIDED_9
+    packer = _stamped(f'{len(head)}s3d9d{len(tail)}s')
 
     def encode(t_ns: int, value: Any) -> bytes:
         w, cov = value
-        return (ENCAPSULATION + _STAMP.pack(*divmod(t_ns, 1_000_000_000)) + head + _IDENTITY_ORIENTATION
-                + _NOT_PROVIDED_9 + _V3.pack(*w) + _D9.pack(*cov) + tail)
+        sec, nsec = divmod(t_ns, 1_000_000_000)
+        return packer.pack(ENCAPSULATION, sec, nsec, head, *w, *cov, tail)
 
     def decode(data: bytes) -> tuple[int, Any]:
         r = _Reader(data, 12)
@@ -239,11 +254,12 @@ def _odometry(c: Codec) -> tuple[Any, Any]:
     head += _pad(8 + len(head), 8)
     _P = struct.Struct('<3d4d')
     _T = struct.Struct('<3d3d')
+    packer = _stamped(f'{len(head)}s7d{len(_D36_ZERO)}x6d{len(_D36_ZERO)}x')  # covariances: zeros
 
     def encode(t_ns: int, value: OdometryValue) -> bytes:
-        return (ENCAPSULATION + _STAMP.pack(*divmod(t_ns, 1_000_000_000)) + head
-                + _P.pack(*value.position, *value.orientation) + _D36_ZERO
-                + _T.pack(*value.velocity, *value.angular) + _D36_ZERO)
+        sec, nsec = divmod(t_ns, 1_000_000_000)
+        return packer.pack(ENCAPSULATION, sec, nsec, head, *value.position, *value.orientation, *value.velocity,
+                           *value.angular)
 
     def decode(data: bytes) -> tuple[int, OdometryValue]:
         r = _Reader(data, 12)
@@ -256,20 +272,42 @@ def _odometry(c: Codec) -> tuple[Any, Any]:
     return encode, decode
 
 
+#: Zero bytes that pad a buffer of length n to a multiple of 4, indexed by n % 4.
+_PAD4 = (b'', b'\0\0\0', b'\0\0', b'\0')
+#: Encoded CDR strings (length + bytes + NUL) of recent texts: diagnostic keys repeat every message.
+_STRING_CACHE: dict[str, bytes] = {}
+_STRING_CACHE_SIZE = 4096
+
+
+def _cached_string(text: str) -> bytes:
+    raw = _STRING_CACHE.get(text)
+    if raw is None:
+        if len(_STRING_CACHE) >= _STRING_CACHE_SIZE:
+            _STRING_CACHE.clear()
+        raw = _STRING_CACHE[text] = _string(text)
+    return raw
+
+
 def _diagnostic_array(c: Codec) -> tuple[Any, Any]:
     head = c._head
 
     def encode(t_ns: int, value: tuple[Status, ...]) -> bytes:
+        # Offsets relative to the payload start; every string and count is 4-aligned (_PAD4).
         out = bytearray(_STAMP.pack(*divmod(t_ns, 1_000_000_000)) + head)
-        out += _pad(len(out), 4) + _U32.pack(len(value))
+        out += _PAD4[len(out) & 3]
+        out += _U32.pack(len(value))
         for st in value:
             out.append(st.level)
             for text in (st.name, st.message, st.hardware_id):
-                out += _pad(len(out), 4) + _string(text)
-            out += _pad(len(out), 4) + _U32.pack(len(st.values))
+                out += _PAD4[len(out) & 3]
+                out += _cached_string(text)
+            out += _PAD4[len(out) & 3]
+            out += _U32.pack(len(st.values))
             for key, text in st.values:
-                out += _pad(len(out), 4) + _string(key)
-                out += _pad(len(out), 4) + _string(text)
+                out += _PAD4[len(out) & 3]
+                out += _cached_string(key)
+                out += _PAD4[len(out) & 3]
+                out += _cached_string(text)
         return ENCAPSULATION + bytes(out)
 
     def decode(data: bytes) -> tuple[int, tuple[Status, ...]]:
@@ -284,6 +322,10 @@ def _diagnostic_array(c: Codec) -> tuple[Any, Any]:
         return stamp_ns(data), tuple(statuses)
     return encode, decode
 
+
+#: Fixed-layout types whose encoders already pad to 4 bytes (:func:`_stamped`; Clock is 12 bytes).
+_SELF_PADDED = frozenset({'rosgraph_msgs/msg/Clock', 'geometry_msgs/msg/Vector3Stamped', 'sensor_msgs/msg/MagneticField',
+                          'sensor_msgs/msg/Imu', 'nav_msgs/msg/Odometry'})
 
 _TYPES = {
     'rosgraph_msgs/msg/Clock': _clock,

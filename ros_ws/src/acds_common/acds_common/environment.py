@@ -16,13 +16,14 @@ from __future__ import annotations
 import datetime
 import math
 from collections import OrderedDict
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
 
 from acds_common import units, validation
+from acds_common.vec3 import Vec3  # the fast paths take and return float triples (RK4 stage times)
 
 #: Mean obliquity of the ecliptic, rad (spec §3).
 OBLIQUITY_RAD = math.radians(23.44)
@@ -162,8 +163,39 @@ class Orbit:
         self.mean_motion_rad_s = math.sqrt(units.EARTH_MU_M3_S2 / self.semi_major_axis_m ** 3)
         #: Orbit period, s.
         self.period_s = 2.0 * math.pi / self.mean_motion_rad_s
-        # Perifocal (or node-line) frame to ECI: R3(Ω) R1(i) R3(ω or u0).
-        self._pqw_to_eci = rot_z(cfg.raan_rad) @ rot_x(cfg.inclination_rad) @ rot_z(self._arg0)
+        # Perifocal (or node-line) frame to ECI: R3(Ω) R1(i) R3(ω or u0); its first two columns P, Q
+        # (the in-plane axes in ECI) as floats, so that r = x_p·P + y_p·Q.
+        pqw_to_eci = rot_z(cfg.raan_rad) @ rot_x(cfg.inclination_rad) @ rot_z(self._arg0)
+        self._p_axis: Vec3 = tuple(float(c) for c in pqw_to_eci[:, 0])  # type: ignore[assignment]
+        self._q_axis: Vec3 = tuple(float(c) for c in pqw_to_eci[:, 1])  # type: ignore[assignment]
+        self._circular = cfg.kind == "circular"
+        self._semi_minor_axis_m = self.semi_major_axis_m * math.sqrt(1.0 - self.eccentricity ** 2)
+
+    def _in_plane(self, t_s: float) -> tuple[float, float, float, float]:
+        """(x_p, y_p, ẋ_p, ẏ_p): position (m) and velocity (m/s) in the orbit plane at ``t_s``."""
+        a, n = self.semi_major_axis_m, self.mean_motion_rad_s
+        if self._circular:
+            u = n * t_s
+            cu, su = math.cos(u), math.sin(u)
+            return a * cu, a * su, -a * n * su, a * n * cu
+        e, b = self.eccentricity, self._semi_minor_axis_m
+        e_anom = solve_kepler(self.cfg.mean_anomaly0_rad + n * t_s, e)
+        ce, se = math.cos(e_anom), math.sin(e_anom)
+        edot = n / (1.0 - e * ce)
+        return a * (ce - e), b * se, -a * se * edot, b * ce * edot
+
+    def state_xyz(self, t_s: float) -> tuple[Vec3, Vec3]:
+        """Fast path of :meth:`position_velocity_eci`: (position m, velocity m/s) as float triples, no checks."""
+        x, y, vx, vy = self._in_plane(t_s)
+        (p0, p1, p2), (q0, q1, q2) = self._p_axis, self._q_axis
+        return ((x * p0 + y * q0, x * p1 + y * q1, x * p2 + y * q2),
+                (vx * p0 + vy * q0, vx * p1 + vy * q1, vx * p2 + vy * q2))
+
+    def position_xyz(self, t_s: float) -> Vec3:
+        """Fast path: ECI position (m) at ``t_s`` as a float triple, no checks."""
+        x, y, _vx, _vy = self._in_plane(t_s)
+        (p0, p1, p2), (q0, q1, q2) = self._p_axis, self._q_axis
+        return x * p0 + y * q0, x * p1 + y * q1, x * p2 + y * q2
 
     def node_time_s(self) -> float:
         """A time (s) at which the orbit passes its ascending node: the argument of latitude (for an
@@ -174,21 +206,8 @@ class Orbit:
 
     def position_velocity_eci(self, t_s: float) -> tuple[np.ndarray, np.ndarray]:
         """Position (m) and velocity (m/s) in ECI at time ``t_s`` (s from scenario start)."""
-        t_s = finite_float("t_s", t_s)
-        a, e, n = self.semi_major_axis_m, self.eccentricity, self.mean_motion_rad_s
-        if self.cfg.kind == "circular":
-            u = n * t_s
-            cu, su = math.cos(u), math.sin(u)
-            r_pqw = np.array([a * cu, a * su, 0.0])
-            v_pqw = np.array([-a * n * su, a * n * cu, 0.0])
-        else:
-            e_anom = solve_kepler(self.cfg.mean_anomaly0_rad + n * t_s, e)
-            ce, se = math.cos(e_anom), math.sin(e_anom)
-            b = a * math.sqrt(1.0 - e * e)
-            edot = n / (1.0 - e * ce)
-            r_pqw = np.array([a * (ce - e), b * se, 0.0])
-            v_pqw = np.array([-a * se * edot, b * ce * edot, 0.0])
-        return self._pqw_to_eci @ r_pqw, self._pqw_to_eci @ v_pqw
+        r, v = self.state_xyz(finite_float("t_s", t_s))
+        return np.array(r), np.array(v)
 
 
 # ------------------------------------------------------------------------------------- magnetic field
@@ -230,16 +249,35 @@ class TiltedDipoleField:
         self.cfg = cfg
         st = math.sin(cfg.tilt_rad)
         lon = cfg.dipole_longitude_rad
-        self._pole_ecef = np.array([st * math.cos(lon), st * math.sin(lon), math.cos(cfg.tilt_rad)])
+        self._pole_ecef: Vec3 = (st * math.cos(lon), st * math.sin(lon), math.cos(cfg.tilt_rad))
         self._k = units.MU0 / (4.0 * math.pi) * cfg.dipole_moment_am2
 
     def greenwich_angle_rad(self, t_s: float) -> float:
         """Earth rotation angle (vernal equinox to Greenwich), rad, at ``t_s``."""
         return self.cfg.greenwich_angle0_rad + units.EARTH_RATE_RAD_S * t_s
 
+    def _axis_xyz(self, t_s: float) -> Vec3:
+        """The pole's unit vector rotated about ECI z by the Earth rotation angle at ``t_s``."""
+        g = self.greenwich_angle_rad(t_s)
+        c, s = math.cos(g), math.sin(g)
+        px, py, pz = self._pole_ecef
+        return c * px - s * py, s * px + c * py, pz
+
     def dipole_axis_eci(self, t_s: float) -> np.ndarray:
         """Unit vector to the northern geomagnetic pole in ECI at ``t_s`` (the moment is antiparallel)."""
-        return rot_z(self.greenwich_angle_rad(t_s)) @ self._pole_ecef
+        return np.array(self._axis_xyz(t_s))
+
+    def b_eci_xyz(self, r_eci_m: Sequence[float], t_s: float) -> Vec3:
+        """Fast path of :meth:`b_eci` on float triples (no checks: the point must be finite and off-centre).
+
+        With m̂ = −p̂: B = k/|r|³·(3(m̂·r)/|r|²·r − m̂), the same dipole formula.
+        """
+        px, py, pz = self._axis_xyz(t_s)
+        rx, ry, rz = r_eci_m
+        r2 = rx * rx + ry * ry + rz * rz
+        k = self._k / (r2 * math.sqrt(r2))
+        f = -3.0 * (px * rx + py * ry + pz * rz) / r2
+        return k * (f * rx + px), k * (f * ry + py), k * (f * rz + pz)
 
     def b_eci(self, r_eci_m: np.ndarray, t_s: float) -> np.ndarray:
         """Field (T) in ECI at position ``r_eci_m`` (m) and time ``t_s`` (s)."""
@@ -247,9 +285,29 @@ class TiltedDipoleField:
         rn = math.sqrt(float(r @ r))
         if not rn > 0.0 or not math.isfinite(rn):
             raise EnvironmentModelError(f"field point must be finite and away from the Earth's centre, got {r}")
-        rhat = r / rn
-        m_hat = -self.dipole_axis_eci(t_s)
-        return (self._k / rn ** 3) * (3.0 * float(m_hat @ rhat) * rhat - m_hat)
+        return np.array(self.b_eci_xyz([float(c) for c in r], t_s))
+
+
+class MagneticFieldModel(Protocol):
+    """What the rigid body asks of an Earth field model: B in ECI (T) at a position (m) and time (s)."""
+
+    def b_eci(self, r_eci_m: np.ndarray, t_s: float) -> np.ndarray:
+        """Field (T) in ECI at position ``r_eci_m`` (m) and time ``t_s`` (s from scenario start)."""
+        ...
+
+
+def field_xyz(field: MagneticFieldModel) -> Callable[[Vec3, float], Vec3]:
+    """The field model as a function of float triples, what the rigid body's RK4 stages call: its
+    ``b_eci_xyz(r, t_s)`` fast path when it has one (the tilted dipole), else its ``b_eci`` wrapped
+    (numpy in, floats out, e.g. the IGRF option), so any :class:`MagneticFieldModel` plugs in."""
+    fast = getattr(field, "b_eci_xyz", None)
+    if fast is not None:
+        return fast  # type: ignore[no-any-return]
+
+    def wrapped(r: Vec3, t_s: float) -> Vec3:
+        b = field.b_eci(np.array(r), t_s)
+        return float(b[0]), float(b[1]), float(b[2])
+    return wrapped
 
 
 def gravity_gradient_torque_nm(inertia_kg_m2: np.ndarray, r_body_m: np.ndarray) -> np.ndarray:
@@ -304,14 +362,6 @@ IGRF_TILE_NODES = 10
 IGRF_TIME_STEP_S = 86400.0
 #: Tiles kept (least recently used dropped): 48 kB each.
 IGRF_CACHE_TILES = 64
-
-
-class MagneticFieldModel(Protocol):
-    """What the rigid body asks of an Earth field model: B in ECI (T) at a position (m) and time (s)."""
-
-    def b_eci(self, r_eci_m: np.ndarray, t_s: float) -> np.ndarray:
-        """Field (T) in ECI at position ``r_eci_m`` (m) and time ``t_s`` (s from scenario start)."""
-        ...
 
 
 def decimal_year_datetime(year: float) -> datetime.datetime:
@@ -503,24 +553,31 @@ class Sun:
         self.cfg = cfg
         ca, sa = math.cos(cfg.right_ascension_rad), math.sin(cfg.right_ascension_rad)
         cd, sd = math.cos(cfg.declination_rad), math.sin(cfg.declination_rad)
-        self._dir = np.array([cd * ca, cd * sa, sd])
+        #: Unit vector to the Sun in ECI as floats (constant over the run).
+        self.direction_xyz: Vec3 = (cd * ca, cd * sa, sd)
 
     def direction_eci(self, t_s: float) -> np.ndarray:
         """Unit vector to the Sun in ECI (constant over the run; ``t_s`` kept for the interface)."""
         finite_float("t_s", t_s)
-        return self._dir.copy()
+        return np.array(self.direction_xyz)
+
+    def present_xyz(self, r_eci_m: Sequence[float]) -> bool:
+        """Fast path of :meth:`present` on a float triple (the Sun is fixed, so no time)."""
+        if not self.cfg.eclipse:
+            return True
+        rx, ry, rz = r_eci_m
+        sx, sy, sz = self.direction_xyz
+        along = rx * sx + ry * sy + rz * sz
+        if along >= 0.0:
+            return True
+        px, py, pz = rx - along * sx, ry - along * sy, rz - along * sz
+        return px * px + py * py + pz * pz > units.EARTH_RADIUS_M ** 2
 
     def present(self, r_eci_m: np.ndarray, t_s: float) -> bool:
         """True when the Sun is visible from ``r_eci_m`` (always True when eclipse is disabled)."""
-        if not self.cfg.eclipse:
-            return True
-        r = np.asarray(r_eci_m, dtype=float)
-        s = self.direction_eci(t_s)
-        along = float(r @ s)
-        if along >= 0.0:
-            return True
-        perp = r - along * s
-        return float(perp @ perp) > units.EARTH_RADIUS_M ** 2
+        if self.cfg.eclipse:
+            finite_float("t_s", t_s)
+        return self.present_xyz([float(c) for c in np.asarray(r_eci_m, dtype=float)])
 
 
 def sun_frame_dcm(sun_eci_unit: np.ndarray, ecliptic_normal_eci: np.ndarray) -> np.ndarray:

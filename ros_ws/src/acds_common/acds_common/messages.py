@@ -28,10 +28,16 @@ def vec(value: Sequence[float] | None, default: Sequence[float] = (0.0, 0.0, 0.0
     return np.array(default if value is None else value, dtype=float)
 
 
+def xyz(value: Sequence[float] | None, default: Sequence[float] = (0.0, 0.0, 0.0)) -> Sequence[float]:
+    """A Vector3Stamped value as it is, a float triple (``default`` for an absent input): :func:`vec`
+    without numpy, for the steppers' per-step paths."""
+    return default if value is None else value
+
+
 def vector3(values: Iterable[float]) -> tuple[float, float, float]:
     """A 3-vector → the Vector3Stamped value (plain floats)."""
-    x, y, z = (float(v) for v in values)
-    return x, y, z
+    x, y, z = values.tolist() if isinstance(values, np.ndarray) else values
+    return float(x), float(y), float(z)
 
 
 def field(value: tuple[Sequence[float], Sequence[float]] | None) -> np.ndarray:
@@ -60,8 +66,9 @@ def mode_status(value: Sequence[Status] | None, node: str) -> tuple[str | None, 
     key = f'command/{node}'
     for status in value:
         if status.name == MODE_STATUS:
-            mode = next((v for k, v in status.values if k == 'mode'), status.message)
-            return mode, [v for k, v in status.values if k == key]
+            keyed = dict(status.values)  # the mode manager writes 'mode' once; commands may repeat
+            mode = keyed.get('mode', status.message)
+            return mode, ([v for k, v in status.values if k == key] if key in keyed else [])
     return None, []
 
 

@@ -29,11 +29,13 @@ moment and zero CMG torque for the step (H_s held), with a diagnostic.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from acds_common.messages import WARN, diagnostic, mode_status, vec, vector3
+from acds_common.messages import WARN, diagnostic, mode_status, vec, vector3, xyz
 from acds_common.stepper import Stepper
+from acds_common.validation import all_finite
 
 from acds_controller.configuration import build_dpa, build_workshop
 from acds_controller.dpa import MODES, Dpa
@@ -43,6 +45,7 @@ from acds_controller.workshop import WORKSHOP_MODES
 #: Excess-coil-current alarm: |I| above this multiple of the current of the maximum moment.
 EXCESS_CURRENT_FACTOR = 1.1
 _ZERO = (0.0, 0.0, 0.0)
+_MID_SCALE_V = (2.5, 2.5, 2.5)
 
 
 def apply_command(dpa: Dpa, text: str) -> str:
@@ -64,11 +67,11 @@ def apply_command(dpa: Dpa, text: str) -> str:
     raise ControllerError(f'command {text!r} is not "law <slot> <name>" or "gain <name> <value>"')
 
 
-def _check_finite(inputs: tuple[tuple[str, np.ndarray], ...]) -> None:
+def _check_finite(inputs: tuple[tuple[str, Sequence[float]], ...]) -> None:
     """Raise :class:`ControllerError` naming the first input that is not finite."""
     for name, v in inputs:
-        if not np.all(np.isfinite(v)):
-            raise ControllerError(f'{name} input is not finite: {v.tolist()}')
+        if not all_finite(v):
+            raise ControllerError(f'{name} input is not finite: {[float(x) for x in v]}')
 
 
 class ControllerStep(Stepper):
@@ -136,8 +139,8 @@ class ControllerStep(Stepper):
             warnings.append((f'{mode!r} is not a Workshop mode ({", ".join(WORKSHOP_MODES)}): standby', {'mode': mode}))
             mode = 'standby'
         try:
-            volts, bias, omega, h = (vec(inp['mag_volts'], (2.5, 2.5, 2.5)), vec(inp['mag_bias'], (2.5, 2.5, 2.5)),
-                                     vec(None if inp['gyro'] is None else inp['gyro'][0]), self._store_momentum(inp))
+            volts, bias = vec(inp['mag_volts'], _MID_SCALE_V), vec(inp['mag_bias'], _MID_SCALE_V)
+            omega, h = vec(None if inp['gyro'] is None else inp['gyro'][0]), np.array(self._store_momentum(inp))
             _check_finite((('magnetometer volts', volts), ('bias volts', bias), ('gyro', omega),
                            ('CMG momentum', h)))
             if inp['odometry'] is None:
@@ -154,26 +157,28 @@ class ControllerStep(Stepper):
             result = {'moment': _ZERO, 'cmg_torque': _ZERO, 'sampled_momentum': self._h_s}
         return self._warned(k, result, warnings)
 
-    def _store_momentum(self, inp: dict[str, Any]) -> np.ndarray:
+    def _store_momentum(self, inp: dict[str, Any]) -> tuple[float, float, float]:
         """h(t_k) of the wheels or CMGs from their step k−1 outputs (lag 1): h_{k−1} + ḣ_{k−1}·Δt, exactly."""
-        return vec(inp['wheel_h']) + vec(inp['wheel_hdot']) * self.control_period_s
+        (hx, hy, hz), (dx, dy, dz), dt = xyz(inp['wheel_h']), xyz(inp['wheel_hdot']), self.control_period_s
+        return hx + dx * dt, hy + dy * dt, hz + dz * dt
 
     def _dpa_step(self, k: int, mode: str, inp: dict[str, Any]) -> dict[str, Any]:
-        volts = vec(inp['mag_volts'], (2.5, 2.5, 2.5))
-        bias = vec(inp['mag_bias'], (2.5, 2.5, 2.5))
-        omega = vec(None if inp['gyro'] is None else inp['gyro'][0])
-        sun = vec(inp['sun'])
+        volts = xyz(inp['mag_volts'], _MID_SCALE_V)
+        bias = xyz(inp['mag_bias'], _MID_SCALE_V)
+        omega = _ZERO if inp['gyro'] is None else inp['gyro'][0]
+        sun = xyz(inp['sun'])
         dt = self.control_period_s
         h = self._store_momentum(inp)
-        q = None if inp['odometry'] is None else np.array(inp['odometry'].orientation)
-        coil = vec(inp['coil_current'])
-        _check_finite((('magnetometer volts', volts), ('bias volts', bias), ('gyro', omega), ('sun sensor', sun),
-                       ('wheel momentum', h), ('coil current', coil)))
-        b = self.ta.sense(volts, bias)
+        q = None if inp['odometry'] is None else inp['odometry'].orientation
+        coil = xyz(inp['coil_current'])
+        if not all_finite((*volts, *bias, *omega, *sun, *h, *coil)):
+            _check_finite((('magnetometer volts', volts), ('bias volts', bias), ('gyro', omega), ('sun sensor', sun),
+                           ('wheel momentum', h), ('coil current', coil)))
+        b = self.ta.sense_xyz(volts, bias)
         out = self.dpa.step(mode, b, omega, sun, h, q, dt)
-        result: dict[str, Any] = {'moment': vector3(out.moment_command_am2), 'volts': vector3(out.wheel_volts_v)}
+        result: dict[str, Any] = {'moment': out.moment_xyz, 'volts': out.volts_xyz}
         if k % self.telemetry_period == 0:
-            alarms = [bool(abs(i) > self.excess_current_a) for i in coil]
-            telemetry = {**out.telemetry, **self.ta.telemetry(b, out.moment_command_am2, bias, coil, alarms)}
+            alarms = [abs(i) > self.excess_current_a for i in coil]
+            telemetry = {**out.telemetry, **self.ta.telemetry(b, out.moment_xyz, bias, coil, alarms)}
             result['diagnostics'] = diagnostic(self.node, telemetry)
         return result

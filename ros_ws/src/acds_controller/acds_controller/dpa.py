@@ -27,11 +27,14 @@ one gain label (K = .05) through the whole run, so 0.05 (s·G²)⁻¹ is the def
 from __future__ import annotations
 
 import dataclasses
+import functools
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from acds_common.dpa_commands import AXES, GAIN_TABLE, LAW_CHOICES, SCALAR_GAINS
 from acds_common.units import FT_LB_NM, deg, nms_to_ftlbs, rad_s_to_rpm, rpm_to_rad_s, tesla_to_gauss
+from acds_common.vec3 import ZERO, Vec3, clip, mat3, mv, norm
 
 from acds_controller.b_cross_omega import K_OMEGA_SEED, detumble_moment, dump_moment
 from acds_controller.magnetic_laws import (
@@ -42,14 +45,15 @@ from acds_controller.magnetic_laws import (
     MAX_MOMENT_AM2,
     ControllerError,
     as_matrix3,
-    as_vector3,
-    bdot_moment,
-    bxh_moment,
+    as_xyz,
+    bdot_gain_to_si,
+    bdot_moment_xyz,
+    bxh_gain_to_si,
+    bxh_moment_xyz,
     check_gain,
-    compensate_coupling,
-    lead_moment,
-    saturate,
-    wheel_command_momentum_nms,
+    compensate_coupling_xyz,
+    lead_moment_xyz,
+    wheel_command_momentum_xyz,
 )
 from acds_controller.wheel_laws import (
     HEAO_B_ACQUISITION,
@@ -58,11 +62,12 @@ from acds_controller.wheel_laws import (
     V_SAT_V,
     WheelLawGains,
     as_unit_quaternion,
-    inertial_hold_error,
-    pointing_error,
-    rotate_to_body,
+    inertial_hold_error_xyz,
+    pointing_error_xyz,
+    rotate_to_body_xyz,
     scan_yaw_volts,
-    wheel_volts,
+    unit_quaternion_xyzw,
+    wheel_volts_xyz,
 )
 
 #: DPA modes, exactly as the mode manager names them.
@@ -151,13 +156,33 @@ class DpaConfig:
         check_gain(self.wheel_torque_gain_nm_per_v2, 'wheel_torque_gain_nm_per_v2', 0.0, 1e3)
 
 
-@dataclass(frozen=True)
 class DpaOutput:
-    """One DPA step's result: moment command (A·m², body), wheel drive volts (V, body axes), telemetry."""
+    """One DPA step's result: moment command (A·m², body), wheel drive volts (V, body axes), telemetry.
 
-    moment_command_am2: np.ndarray
-    wheel_volts_v: np.ndarray
-    telemetry: dict[str, str]
+    ``moment_xyz`` / ``volts_xyz`` are the float triples the DPA computed (what the stepper
+    publishes); ``moment_command_am2`` / ``wheel_volts_v`` are them as arrays. ``telemetry``
+    (key/value strings) is formatted when first read, so only telemetry steps pay for it.
+    """
+
+    def __init__(self, moment_xyz: Vec3, volts_xyz: Vec3, telemetry: Callable[[], dict[str, str]]) -> None:
+        self.moment_xyz = moment_xyz
+        self.volts_xyz = volts_xyz
+        self._telemetry = telemetry
+
+    @property
+    def moment_command_am2(self) -> np.ndarray:
+        """Moment command, A·m², body axes."""
+        return np.array(self.moment_xyz)
+
+    @property
+    def wheel_volts_v(self) -> np.ndarray:
+        """Wheel drive volts per body axis, V."""
+        return np.array(self.volts_xyz)
+
+    @functools.cached_property
+    def telemetry(self) -> dict[str, str]:
+        """DPA telemetry as key/value strings (see :func:`dpa_telemetry`)."""
+        return self._telemetry()
 
 
 class Dpa:
@@ -165,8 +190,29 @@ class Dpa:
 
     def __init__(self, config: DpaConfig) -> None:
         self.config = config
-        self._b_prev_t: np.ndarray | None = None
-        self._m_prev_am2 = np.zeros(3)
+        self._b_prev_t: Vec3 | None = None
+        self._m_prev_am2: Vec3 = ZERO
+
+    @property
+    def config(self) -> DpaConfig:
+        """The configuration in force (``set_gain`` / ``set_law`` replace it)."""
+        return self._config
+
+    @config.setter
+    def config(self, config: DpaConfig) -> None:
+        """Set the configuration and its float forms for the per-step path (SI gains, 3×3 rows)."""
+        self._config = config
+        self._inertia = mat3(config.inertia_kg_m2)
+        self._delta = mat3(config.coupling_delta_t_per_am2)
+        qt = unit_quaternion_xyzw(config.target_q_body_to_eci, 'target_q_body_to_eci')
+        self._target_q = qt
+        self._scan_axis_eci = rotate_to_body_xyz(
+            unit_quaternion_xyzw((-qt[0], -qt[1], -qt[2], qt[3]), 'q_body_to_eci'), (0.0, 0.0, 1.0))
+        self._acquisition_gain_si = bxh_gain_to_si(config.acquisition_gain_study)
+        self._bdot_gain_si = bdot_gain_to_si(config.bdot_gain_study)
+        self._unloading_gain_si = {'mode_1b': bxh_gain_to_si(config.unloading_gain_mode_1b_study),
+                                   'celestial_scan': bxh_gain_to_si(config.unloading_gain_scan_study),
+                                   'celestial_point': bxh_gain_to_si(config.unloading_gain_point_study)}
 
     def set_gain(self, name: str, value: float) -> None:
         """Change a gain at run time; unknown name or out-of-range value raises :class:`ControllerError`.
@@ -201,11 +247,11 @@ class Dpa:
     def step(
         self,
         mode: str,
-        b_sensed_t: np.ndarray,
-        omega_rad_s: np.ndarray,
-        sun_body_unit: np.ndarray,
-        wheel_h_nms: np.ndarray,
-        q_body_to_eci: np.ndarray | None,
+        b_sensed_t: Sequence[float],
+        omega_rad_s: Sequence[float],
+        sun_body_unit: Sequence[float],
+        wheel_h_nms: Sequence[float],
+        q_body_to_eci: Sequence[float] | None,
         dt_s: float,
     ) -> DpaOutput:
         """Compute one control period (spec §7).
@@ -213,97 +259,90 @@ class Dpa:
         ``b_sensed_t``: TA field (T, body); ``omega_rad_s``: gyro rates; ``sun_body_unit``: sun
         unit vector in body (zeros = absent); ``wheel_h_nms``: total wheel momentum (N·m·s,
         body); ``q_body_to_eci``: attitude reference (x, y, z, w), needed in the cruise modes;
-        ``dt_s``: control period (s), the B-dot difference interval.
+        ``dt_s``: control period (s), the B-dot difference interval. Vectors as arrays or
+        float sequences.
         """
         if mode not in MODES:
             raise ControllerError(f'unknown mode {mode!r}; choose one of {MODES}')
-        c = self.config
-        b_sensed = as_vector3(b_sensed_t, 'b_sensed_t')
-        omega = as_vector3(omega_rad_s, 'omega_rad_s')
-        sun = as_vector3(sun_body_unit, 'sun_body_unit')
-        h_wheel = as_vector3(wheel_h_nms, 'wheel_h_nms')
+        c = self._config
+        b_sensed = as_xyz(b_sensed_t, 'b_sensed_t')
+        omega = as_xyz(omega_rad_s, 'omega_rad_s')
+        sun = as_xyz(sun_body_unit, 'sun_body_unit')
+        h_wheel = as_xyz(wheel_h_nms, 'wheel_h_nms')
         dt = check_gain(dt_s, 'dt_s (s)', 1e-6, 1e4)
-        b = (compensate_coupling(b_sensed, c.coupling_delta_t_per_am2, self._m_prev_am2)
+        b = (compensate_coupling_xyz(b_sensed, self._delta, self._m_prev_am2)
              if c.coupling_compensation else b_sensed)
 
-        theta = np.zeros(3)
-        volts = np.zeros(3)
-        h_used = np.zeros(3)
-        m = np.zeros(3)
+        theta = volts = h_used = m = ZERO
         if mode == 'mode_1a':
             if c.acquisition_law == 'bxh':
-                h_used = c.inertia_kg_m2 @ omega
-                m = bxh_moment(b, h_used, c.acquisition_gain_study)
+                h_used = mv(self._inertia, omega)
+                m = bxh_moment_xyz(b, h_used, self._acquisition_gain_si)
             elif c.acquisition_law == 'b_cross_omega':
-                if np.any(b):
-                    m = detumble_moment(b, omega, c.detumble_gain_kg_m2_s)
+                if any(b):
+                    m = _xyz(detumble_moment(b, omega, c.detumble_gain_kg_m2_s))
             elif self._b_prev_t is not None:
-                m = bdot_moment(b, self._b_prev_t, dt, c.bdot_gain_study)
+                m = bdot_moment_xyz(b, self._b_prev_t, dt, self._bdot_gain_si)
         elif mode != 'standby':
             theta, volts = self._wheel_loop(mode, omega, sun, q_body_to_eci)
             h_used = h_wheel
             m = self._unloading_moment(mode, b, h_wheel, volts)
-        m_cmd = saturate(m, c.max_moment_am2)
+        m_cmd = clip(m, c.max_moment_am2)
         self._b_prev_t = b
         self._m_prev_am2 = m_cmd
-        return DpaOutput(m_cmd, volts, self._telemetry(mode, b, h_used, theta, m, m_cmd, volts))
+        return DpaOutput(m_cmd, volts, functools.partial(dpa_telemetry, c, mode, b, h_used, theta, m, m_cmd, volts))
 
-    def _wheel_loop(
-        self, mode: str, omega: np.ndarray, sun: np.ndarray, q_body_to_eci: np.ndarray | None
-    ) -> tuple[np.ndarray, np.ndarray]:
+    def _wheel_loop(self, mode: str, omega: Vec3, sun: Vec3, q_body_to_eci: Sequence[float] | None) -> tuple[Vec3, Vec3]:
         """Attitude error (rad) and wheel volts for modes 1B, scan and point (seed 002 §4.2.2, §4.2.3)."""
-        c = self.config
+        c = self._config
         if mode == 'mode_1b':
-            present = float(np.linalg.norm(sun)) >= _SUN_PRESENT_MIN_NORM
-            theta = pointing_error(sun) if present else np.zeros(3)
-            return theta, wheel_volts(theta, omega, c.wheel_gains_acquisition, c.v_sat_v)
+            theta = pointing_error_xyz(sun) if norm(sun) >= _SUN_PRESENT_MIN_NORM else ZERO
+            return theta, wheel_volts_xyz(theta, omega, c.wheel_gains_acquisition, c.v_sat_v)
         if q_body_to_eci is None:
             raise ControllerError(f'mode {mode} needs the attitude reference q_body_to_eci')
+        q = unit_quaternion_xyzw(q_body_to_eci, 'q_body_to_eci')
         gains = c.wheel_gains_normal
         if mode == 'celestial_point':
-            theta = inertial_hold_error(q_body_to_eci, c.target_q_body_to_eci)
-            return theta, wheel_volts(theta, omega, gains, c.v_sat_v)
-        qt = c.target_q_body_to_eci
-        scan_axis_eci = rotate_to_body(np.array([-qt[0], -qt[1], -qt[2], qt[3]]), np.array([0.0, 0.0, 1.0]))
-        theta = pointing_error(rotate_to_body(q_body_to_eci, scan_axis_eci))
-        volts = wheel_volts(theta, omega, gains, c.v_sat_v)
-        volts[2] = scan_yaw_volts(omega[2], c.scan_rate_rad_s, gains.k_p_v_per_rad[2], gains.k_r_s[2],
-                                  c.v_sat_v)
-        return theta, volts
+            theta = inertial_hold_error_xyz(q, self._target_q)
+            return theta, wheel_volts_xyz(theta, omega, gains, c.v_sat_v)
+        theta = pointing_error_xyz(rotate_to_body_xyz(q, self._scan_axis_eci))
+        vx, vy, _vz = wheel_volts_xyz(theta, omega, gains, c.v_sat_v)
+        return theta, (vx, vy, scan_yaw_volts(omega[2], c.scan_rate_rad_s, gains.k_p_v_per_rad[2], gains.k_r_s[2],
+                                              c.v_sat_v))
 
-    def _unloading_moment(self, mode: str, b: np.ndarray, h_wheel: np.ndarray, volts: np.ndarray) -> np.ndarray:
+    def _unloading_moment(self, mode: str, b: Vec3, h_wheel: Vec3, volts: Vec3) -> Vec3:
         """Unloading moment on the wheel momentum with the mode's gain (seed 002 §4.2.3.2, eq. 4-37)."""
-        c = self.config
-        gain = {'mode_1b': c.unloading_gain_mode_1b_study,
-                'celestial_scan': c.unloading_gain_scan_study,
-                'celestial_point': c.unloading_gain_point_study}[mode]
+        c = self._config
+        gain = self._unloading_gain_si[mode]
         if c.unloading_law == 'none':
-            return np.zeros(3)
+            return ZERO
         if c.unloading_law == 'b_cross_h':
-            return dump_moment(b, h_wheel, c.dump_gain_per_s) if np.any(b) else np.zeros(3)
+            return _xyz(dump_moment(b, h_wheel, c.dump_gain_per_s)) if any(b) else ZERO
         if c.unloading_law == 'lead':
-            eps = wheel_command_momentum_nms(volts, c.wheel_torque_gain_nm_per_v2, c.lead_time_s)
-            return lead_moment(b, h_wheel, eps, gain)
-        return bxh_moment(b, h_wheel, gain)
+            eps = wheel_command_momentum_xyz(volts, c.wheel_torque_gain_nm_per_v2, c.lead_time_s)
+            return lead_moment_xyz(b, h_wheel, eps, gain)
+        return bxh_moment_xyz(b, h_wheel, gain)
 
-    def _telemetry(
-        self, mode: str, b: np.ndarray, h_used: np.ndarray, theta: np.ndarray,
-        m_raw: np.ndarray, m_cmd: np.ndarray, volts: np.ndarray,
-    ) -> dict[str, str]:
-        """DPA telemetry as key/value strings, seed units in the key names (+ 0.0 turns −0 into 0)."""
-        c = self.config
-        out = {
-            'mode': mode,
-            'acquisition_law': c.acquisition_law,
-            'unloading_law': c.unloading_law,
-            'moment_saturated': 'true' if np.any(np.abs(m_raw) > c.max_moment_am2) else 'false',
-        }
-        b_g = tesla_to_gauss(b)
-        h_ftlbs = nms_to_ftlbs(h_used)
-        for i, axis in enumerate(AXES):
-            out[f'control_field_{axis}_gauss'] = f'{b_g[i] + 0.0:.6g}'
-            out[f'control_momentum_{axis}_ftlbs'] = f'{h_ftlbs[i] + 0.0:.6g}'
-            out[f'attitude_error_{axis}_deg'] = f'{deg(theta[i]) + 0.0:.6g}'
-            out[f'moment_command_{axis}_am2'] = f'{m_cmd[i] + 0.0:.6g}'
-            out[f'wheel_volts_{axis}_v'] = f'{volts[i] + 0.0:.6g}'
-        return out
+
+def _xyz(v: np.ndarray) -> Vec3:
+    """A law's numpy 3-vector as the DPA's float triple."""
+    x, y, z = v.tolist()
+    return x, y, z
+
+
+def dpa_telemetry(c: DpaConfig, mode: str, b: Vec3, h_used: Vec3, theta: Vec3, m_raw: Vec3, m_cmd: Vec3,
+                  volts: Vec3) -> dict[str, str]:
+    """DPA telemetry as key/value strings, seed units in the key names (+ 0.0 turns −0 into 0)."""
+    out = {
+        'mode': mode,
+        'acquisition_law': c.acquisition_law,
+        'unloading_law': c.unloading_law,
+        'moment_saturated': 'true' if any(abs(x) > c.max_moment_am2 for x in m_raw) else 'false',
+    }
+    for i, axis in enumerate(AXES):
+        out[f'control_field_{axis}_gauss'] = f'{tesla_to_gauss(b[i]) + 0.0:.6g}'
+        out[f'control_momentum_{axis}_ftlbs'] = f'{nms_to_ftlbs(h_used[i]) + 0.0:.6g}'
+        out[f'attitude_error_{axis}_deg'] = f'{deg(theta[i]) + 0.0:.6g}'
+        out[f'moment_command_{axis}_am2'] = f'{m_cmd[i] + 0.0:.6g}'
+        out[f'wheel_volts_{axis}_v'] = f'{volts[i] + 0.0:.6g}'
+    return out

@@ -15,14 +15,19 @@ Conventions
     in SI K_D·13558.2/1e-4 = K_D·1.3558e8 A·m²·s/T (:func:`bdot_gain_to_si`).
 
 This module also holds the package's exception :class:`ControllerError` and
-the input checks every acds_controller core uses.
+the input checks every acds_controller core uses. Each law has a float-triple kernel
+(``*_xyz``, SI gains, no checks: what the DPA runs every control period) behind its checked
+numpy function.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from acds_common import validation
 from acds_common.units import FT_LB_S_NMS, FTLB_PER_GAUSS_AM2, GAUSS_T
+from acds_common.vec3 import Mat3, Vec3, clip, cross, mat3, mv
 
 #: Baseline per-axis electromagnet moment limit, A·m² (seed 002 §4.3.1; 1000 and 3000 also studied).
 MAX_MOMENT_AM2 = 2000.0
@@ -43,6 +48,11 @@ class ControllerError(ValueError):
 def as_vector3(x: object, name: str) -> np.ndarray:
     """Return ``x`` as a finite float (3,) array or raise :class:`ControllerError` naming ``name``."""
     return validation.finite_vector3(name, x, ControllerError)
+
+
+def as_xyz(x: object, name: str) -> Vec3:
+    """Return ``x`` as a finite float triple or raise :class:`ControllerError` naming ``name`` (no numpy)."""
+    return validation.finite_xyz(name, x, ControllerError)
 
 
 def as_matrix3(x: object, name: str) -> np.ndarray:
@@ -83,6 +93,13 @@ def bdot_gain_to_si(k_d_study: float) -> float:
     return k_d_study * FTLB_PER_GAUSS_AM2 / GAUSS_T
 
 
+def bdot_moment_xyz(b_now_t: Sequence[float], b_prev_t: Sequence[float], dt_s: float, k_si: float) -> Vec3:
+    """Kernel of :func:`bdot_moment`: −K·(B_now − B_prev)/Δt with K in SI (A·m²·s/T)."""
+    c = -k_si
+    return (c * (b_now_t[0] - b_prev_t[0]) / dt_s, c * (b_now_t[1] - b_prev_t[1]) / dt_s,
+            c * (b_now_t[2] - b_prev_t[2]) / dt_s)
+
+
 def bdot_moment(b_now_t: np.ndarray, b_prev_t: np.ndarray, dt_s: float, k_d: float) -> np.ndarray:
     """B-dot law M = −K_D·dB/dt, dB/dt by backward difference of two field samples (seed 002 eq. 4-9).
 
@@ -91,13 +108,20 @@ def bdot_moment(b_now_t: np.ndarray, b_prev_t: np.ndarray, dt_s: float, k_d: flo
     (unsaturated). Each moment component has the polarity opposite to the field rate (eq. 4-8),
     so the rate of work M·Ḃ (eq. 4-6) is negative.
     """
-    b_now = as_vector3(b_now_t, 'b_now_t')
-    b_prev = as_vector3(b_prev_t, 'b_prev_t')
+    b_now = as_xyz(b_now_t, 'b_now_t')
+    b_prev = as_xyz(b_prev_t, 'b_prev_t')
     dt = check_gain(dt_s, 'dt_s', 0.0, np.inf)
     if dt == 0.0:
         raise ControllerError('dt_s must be > 0 s for the B-dot difference')
     k = check_gain(k_d, 'k_d (ft-lb-s/G²)', 0.0, np.inf)
-    return -bdot_gain_to_si(k) * (b_now - b_prev) / dt
+    return np.array(bdot_moment_xyz(b_now, b_prev, dt, bdot_gain_to_si(k)))
+
+
+def bxh_moment_xyz(b_t: Sequence[float], h_nms: Sequence[float], gain_si: float) -> Vec3:
+    """Kernel of :func:`bxh_moment`: −G·(B × H) with G in SI ((s·T²)⁻¹)."""
+    c = -gain_si
+    bh = cross(b_t, h_nms)
+    return c * bh[0], c * bh[1], c * bh[2]
 
 
 def bxh_moment(b_t: np.ndarray, h_nms: np.ndarray, gain_study: float) -> np.ndarray:
@@ -110,10 +134,18 @@ def bxh_moment(b_t: np.ndarray, h_nms: np.ndarray, gain_study: float) -> np.ndar
     so it never increases |H|. In the study's units |M| = G·|B|[G]·|H|[ft-lb-s]·13558.2
     for B ⊥ H.
     """
-    b = as_vector3(b_t, 'b_t')
-    h = as_vector3(h_nms, 'h_nms')
+    b = as_xyz(b_t, 'b_t')
+    h = as_xyz(h_nms, 'h_nms')
     g = check_gain(gain_study, 'gain_study ((s·G²)⁻¹)', 0.0, np.inf)
-    return -bxh_gain_to_si(g) * np.cross(b, h)
+    return np.array(bxh_moment_xyz(b, h, bxh_gain_to_si(g)))
+
+
+def wheel_command_momentum_xyz(wheel_volts_v: Sequence[float], wheel_torque_gain_nm_per_v2: float,
+                               lead_time_s: float) -> Vec3:
+    """Kernel of :func:`wheel_command_momentum_nms`: τ_lead·k·V|V| per axis."""
+    c = lead_time_s * wheel_torque_gain_nm_per_v2
+    v0, v1, v2 = wheel_volts_v
+    return c * v0 * abs(v0), c * v1 * abs(v1), c * v2 * abs(v2)
 
 
 def wheel_command_momentum_nms(
@@ -127,10 +159,17 @@ def wheel_command_momentum_nms(
     ``wheel_torque_gain_nm_per_v2`` = k in N·m/V²). It points the way h is growing, so
     H + ε anticipates the build-up of wheel momentum.
     """
-    v = as_vector3(wheel_volts_v, 'wheel_volts_v')
+    v = as_xyz(wheel_volts_v, 'wheel_volts_v')
     k = check_gain(wheel_torque_gain_nm_per_v2, 'wheel_torque_gain_nm_per_v2', 0.0, np.inf)
     tau = check_gain(lead_time_s, 'lead_time_s', 0.0, np.inf)
-    return tau * k * v * np.abs(v)
+    return np.array(wheel_command_momentum_xyz(v, k, tau))
+
+
+def lead_moment_xyz(b_t: Sequence[float], h_nms: Sequence[float], eps_wheel_cmd: Sequence[float],
+                    gain_si: float) -> Vec3:
+    """Kernel of :func:`lead_moment`: the B×H kernel on H + ε."""
+    return bxh_moment_xyz(b_t, (h_nms[0] + eps_wheel_cmd[0], h_nms[1] + eps_wheel_cmd[1],
+                                h_nms[2] + eps_wheel_cmd[2]), gain_si)
 
 
 def lead_moment(b_t: np.ndarray, h_nms: np.ndarray, eps_wheel_cmd: np.ndarray, gain: float) -> np.ndarray:
@@ -144,9 +183,11 @@ def lead_moment(b_t: np.ndarray, h_nms: np.ndarray, eps_wheel_cmd: np.ndarray, g
     M × B = −K·B²·(H + ε)⊥ reduces |H + ε|, the anticipated momentum; it may briefly raise
     |H| when the wheel command opposes the stored momentum (that is the lead action).
     """
-    h = as_vector3(h_nms, 'h_nms')
-    eps = as_vector3(eps_wheel_cmd, 'eps_wheel_cmd')
-    return bxh_moment(b_t, h + eps, gain)
+    b = as_xyz(b_t, 'b_t')
+    h = as_xyz(h_nms, 'h_nms')
+    eps = as_xyz(eps_wheel_cmd, 'eps_wheel_cmd')
+    g = check_gain(gain, 'gain_study ((s·G²)⁻¹)', 0.0, np.inf)
+    return np.array(lead_moment_xyz(b, h, eps, bxh_gain_to_si(g)))
 
 
 def saturate(m: np.ndarray, max_moment_am2: float = MAX_MOMENT_AM2) -> np.ndarray:
@@ -155,9 +196,15 @@ def saturate(m: np.ndarray, max_moment_am2: float = MAX_MOMENT_AM2) -> np.ndarra
     Per-axis clipping keeps each component's sign, so a saturated B×H command still
     removes momentum (M_sat·(B × H) has the sign of M·(B × H)).
     """
-    mv = as_vector3(m, 'm')
+    mv3 = as_xyz(m, 'm')
     limit = check_gain(max_moment_am2, 'max_moment_am2', 0.0, np.inf)
-    return np.clip(mv, -limit, limit)
+    return np.array(clip(mv3, limit))
+
+
+def compensate_coupling_xyz(b_sensed_t: Sequence[float], delta_t_per_am2: Mat3, m_prev_am2: Sequence[float]) -> Vec3:
+    """Kernel of :func:`compensate_coupling`: B_sensed − Δ·M."""
+    dm = mv(delta_t_per_am2, m_prev_am2)
+    return b_sensed_t[0] - dm[0], b_sensed_t[1] - dm[1], b_sensed_t[2] - dm[2]
 
 
 def compensate_coupling(
@@ -169,7 +216,7 @@ def compensate_coupling(
     8.75e-10 T per A·m²); ``m_prev_am2``: the moment being produced while the field was
     sensed (the previous command), A·m². Returns T.
     """
-    b = as_vector3(b_sensed_t, 'b_sensed_t')
+    b = as_xyz(b_sensed_t, 'b_sensed_t')
     delta = as_matrix3(delta_t_per_am2, 'delta_t_per_am2')
-    m = as_vector3(m_prev_am2, 'm_prev_am2')
-    return b - delta @ m
+    m = as_xyz(m_prev_am2, 'm_prev_am2')
+    return np.array(compensate_coupling_xyz(b, mat3(delta), m))

@@ -9,12 +9,14 @@ cancelled when it is common to both (and shows in telemetry when it is not).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 from acds_common.units import GAUSS_T, tesla_to_gauss
+from acds_common.vec3 import Vec3
 
-from acds_controller.magnetic_laws import ControllerError, as_vector3, check_gain
+from acds_controller.magnetic_laws import ControllerError, as_vector3, as_xyz, check_gain
 
 #: Magnetometer output span, V (Table 4-5: 0 to +5 V DC).
 FULL_SCALE_V = 5.0
@@ -57,18 +59,27 @@ class TransferAssembly:
         self.moment_per_amp_am2_per_a = check_gain(
             moment_per_amp_am2_per_a, 'moment_per_amp_am2_per_a', 1e-6, 1e9)
         self.lsb_v = self.full_scale_v / (1 << adc_bits)
+        self._top_count = (1 << adc_bits) - 1
+
+    def _count_v(self, v: float) -> float:
+        """One voltage quantised to the nearest ADC count (clipped to 0…2ⁿ−1), as the count's voltage."""
+        count = math.floor(v / self.lsb_v + 0.5)
+        return (0 if count < 0 else self._top_count if count > self._top_count else count) * self.lsb_v
 
     def digitise(self, volts: np.ndarray) -> np.ndarray:
         """Quantise volts to the nearest ADC count (clipped to 0…2ⁿ−1) and return the count's voltage, V."""
-        v = as_vector3(volts, 'volts')
-        counts = np.clip(np.floor(v / self.lsb_v + 0.5), 0, (1 << self.adc_bits) - 1)
-        return counts * self.lsb_v
+        return np.array([self._count_v(v) for v in as_xyz(volts, 'volts')])
+
+    def sense_xyz(self, volts: Sequence[float], bias_volts: Sequence[float]) -> Vec3:
+        """:meth:`sense` on finite float triples (the stepper's per-step path), T."""
+        count, scale = self._count_v, self.scale_v_per_gauss
+        return ((count(volts[0]) - count(bias_volts[0])) / scale * GAUSS_T,
+                (count(volts[1]) - count(bias_volts[1])) / scale * GAUSS_T,
+                (count(volts[2]) - count(bias_volts[2])) / scale * GAUSS_T)
 
     def sense(self, volts: np.ndarray, bias_volts: np.ndarray) -> np.ndarray:
         """Sensed field in tesla (body axes) from per-axis field volts and bias reference volts (Table 4-5)."""
-        b_gauss = (self.digitise(volts) - self.digitise(as_vector3(bias_volts, 'bias_volts'))) \
-            / self.scale_v_per_gauss
-        return b_gauss * GAUSS_T
+        return np.array(self.sense_xyz(as_xyz(volts, 'volts'), as_xyz(bias_volts, 'bias_volts')))
 
     def telemetry(
         self,

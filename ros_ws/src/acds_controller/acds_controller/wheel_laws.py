@@ -1,5 +1,8 @@
 """Reaction wheel control laws and attitude errors of the DPA (spec §7; seed 002 §4.2.2, §4.2.3, Table 4-2).
 
+Each law has a float-triple kernel (``*_xyz``, no checks: what the DPA runs every control
+period) behind its checked numpy function.
+
 Sign convention (explicit, used by every function here)
 -------------------------------------------------------
 * The attitude error θ_i is the body's rotation about body axis i *away from* the
@@ -17,12 +20,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from acds_common.units import rad, rpm_to_rad_s
+from acds_common.vec3 import Quat, Vec3, quat_mul
 
-from acds_controller.magnetic_laws import ControllerError, as_vector3, check_gain
+from acds_controller.magnetic_laws import ControllerError, as_xyz, check_gain
 
 #: Wheel controller saturation, V (seed 002 §4.2.3.1).
 V_SAT_V = 17.1
@@ -89,6 +94,19 @@ def design_gains(
     return v_sat_v / theta, theta / rate
 
 
+def wheel_volts_xyz(theta_err_rad: Sequence[float], omega_rad_s: Sequence[float], gains: WheelLawGains,
+                    v_sat_v: float) -> Vec3:
+    """Kernel of :func:`wheel_volts`."""
+    kp, limits, kr = gains.k_p_v_per_rad, gains.theta_limit_rad, gains.k_r_s
+    out = []
+    for i in range(3):
+        theta, limit = theta_err_rad[i], limits[i]
+        if limit is not None:
+            theta = min(max(theta, -limit), limit)
+        out.append(min(max(kp[i] * (theta + kr[i] * omega_rad_s[i]), -v_sat_v), v_sat_v))
+    return out[0], out[1], out[2]
+
+
 def wheel_volts(
     theta_err_rad: np.ndarray, omega_rad_s: np.ndarray, gains: WheelLawGains, v_sat_v: float = V_SAT_V
 ) -> np.ndarray:
@@ -98,13 +116,10 @@ def wheel_volts(
     the module docstring); ``omega_rad_s``: gyro rates (rad/s); ``v_sat_v``: saturation (V).
     Returns volts per body axis; positive volts drive the body torque negative.
     """
-    theta = as_vector3(theta_err_rad, 'theta_err_rad')
-    omega = as_vector3(omega_rad_s, 'omega_rad_s')
+    theta = as_xyz(theta_err_rad, 'theta_err_rad')
+    omega = as_xyz(omega_rad_s, 'omega_rad_s')
     v_sat = check_gain(v_sat_v, 'v_sat_v', 0.0, 1e3)
-    limit = np.array([np.inf if x is None else x for x in gains.theta_limit_rad])
-    theta_l = np.clip(theta, -limit, limit)
-    eps = np.asarray(gains.k_p_v_per_rad) * (theta_l + np.asarray(gains.k_r_s) * omega)
-    return np.clip(eps, -v_sat, v_sat)
+    return np.array(wheel_volts_xyz(theta, omega, gains, v_sat))
 
 
 def scan_yaw_volts(
@@ -119,7 +134,21 @@ def scan_yaw_volts(
     wz0 = check_gain(omega_z0, 'omega_z0 (rad/s)', -10.0, 10.0)
     gain = check_gain(k_pz, 'k_pz (V/rad)', 0.0, 1e8) * check_gain(k_rz, 'k_rz (s)', 0.0, 1e5)
     v_sat = check_gain(v_sat_v, 'v_sat_v', 0.0, 1e3)
-    return float(np.clip(gain * (wz - wz0), -v_sat, v_sat))
+    return min(max(gain * (wz - wz0), -v_sat), v_sat)
+
+
+def pointing_error_xyz(target_body: Sequence[float]) -> Vec3:
+    """Kernel of :func:`pointing_error` (raises :class:`ControllerError` for a zero vector)."""
+    sx, sy, sz = target_body
+    norm = math.sqrt(sx * sx + sy * sy + sz * sz)
+    if norm < 1e-9:
+        raise ControllerError('target_body_unit is the zero vector: no direction to point at')
+    sx, sy, sz = sx / norm, sy / norm, sz / norm
+    sin_angle = math.sqrt(sy * sy + sx * sx)  # |(s_y, −s_x, 0)|
+    angle = math.atan2(sin_angle, sz)
+    if sin_angle < 1e-12:
+        return angle, 0.0, 0.0
+    return sy / sin_angle * angle, -sx / sin_angle * angle, 0.0
 
 
 def pointing_error(target_body_unit: np.ndarray) -> np.ndarray:
@@ -132,48 +161,50 @@ def pointing_error(target_body_unit: np.ndarray) -> np.ndarray:
     controlled (B12 free), only its rate is nulled by the K_r·ω_z term. A target exactly
     behind (s = −ẑ) gives π about body x.
     """
-    s = as_vector3(target_body_unit, 'target_body_unit')
-    norm = float(np.linalg.norm(s))
-    if norm < 1e-9:
-        raise ControllerError('target_body_unit is the zero vector: no direction to point at')
-    s = s / norm
-    axis = np.array([s[1], -s[0], 0.0])
-    sin_angle = float(np.linalg.norm(axis))
-    angle = math.atan2(sin_angle, s[2])
-    if sin_angle < 1e-12:
-        return np.array([angle, 0.0, 0.0])
-    return axis / sin_angle * angle
+    return np.array(pointing_error_xyz(as_xyz(target_body_unit, 'target_body_unit')))
 
 
 def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
     """Hamilton product q1 ⊗ q2 of (x, y, z, w) quaternions, so that R(q1 ⊗ q2) = R(q1) R(q2)."""
-    x1, y1, z1, w1 = q1
-    x2, y2, z2, w2 = q2
-    return np.array([
-        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-    ])
+    return np.array(quat_mul(q1, q2))
+
+
+def unit_quaternion_xyzw(q: object, name: str) -> Quat:
+    """Kernel of :func:`as_unit_quaternion`: the same checks, a float 4-tuple."""
+    try:
+        x, y, z, w = (float(c) for c in q)  # type: ignore[attr-defined]
+    except (TypeError, ValueError):
+        raise ControllerError(f'{name} must be a finite (x, y, z, w) quaternion, got {q!r}') from None
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z) and math.isfinite(w)):
+        raise ControllerError(f'{name} must be a finite (x, y, z, w) quaternion, got {q!r}')
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    if abs(norm - 1.0) > 1e-3:
+        raise ControllerError(f'{name} must be a unit quaternion, |q| = {norm:.6g}')
+    return x / norm, y / norm, z / norm, w / norm
 
 
 def as_unit_quaternion(q: object, name: str) -> np.ndarray:
     """Return ``q`` as a finite unit (x, y, z, w) quaternion or raise :class:`ControllerError`."""
-    qa = np.asarray(q, dtype=float)
-    if qa.shape != (4,) or not np.all(np.isfinite(qa)):
-        raise ControllerError(f'{name} must be a finite (x, y, z, w) quaternion, got {q!r}')
-    norm = float(np.linalg.norm(qa))
-    if abs(norm - 1.0) > 1e-3:
-        raise ControllerError(f'{name} must be a unit quaternion, |q| = {norm:.6g}')
-    return qa / norm
+    return np.array(unit_quaternion_xyzw(q, name))
+
+
+def rotate_to_body_xyz(q: Sequence[float], v_eci: Sequence[float]) -> Vec3:
+    """Kernel of :func:`rotate_to_body` (q a unit quaternion)."""
+    r = quat_mul(quat_mul((-q[0], -q[1], -q[2], q[3]), (v_eci[0], v_eci[1], v_eci[2], 0.0)), q)
+    return r[0], r[1], r[2]
 
 
 def rotate_to_body(q_body_to_eci: np.ndarray, v_eci: np.ndarray) -> np.ndarray:
     """Express an ECI vector in body axes: R(q)ᵀ v, q body→ECI (x, y, z, w)."""
-    q = as_unit_quaternion(q_body_to_eci, 'q_body_to_eci')
-    v = as_vector3(v_eci, 'v_eci')
-    q_conj = np.array([-q[0], -q[1], -q[2], q[3]])
-    return quat_multiply(quat_multiply(q_conj, np.append(v, 0.0)), q)[:3]
+    q = unit_quaternion_xyzw(q_body_to_eci, 'q_body_to_eci')
+    return np.array(rotate_to_body_xyz(q, as_xyz(v_eci, 'v_eci')))
+
+
+def inertial_hold_error_xyz(q: Sequence[float], q_target: Sequence[float]) -> Vec3:
+    """Kernel of :func:`inertial_hold_error` (unit quaternions)."""
+    x, y, z, w = quat_mul((-q_target[0], -q_target[1], -q_target[2], q_target[3]), q)
+    c = 2.0 * (1.0 if w >= 0.0 else -1.0)
+    return c * x, c * y, c * z
 
 
 def inertial_hold_error(q_body_to_eci: np.ndarray, q_target_body_to_eci: np.ndarray) -> np.ndarray:
@@ -182,8 +213,6 @@ def inertial_hold_error(q_body_to_eci: np.ndarray, q_target_body_to_eci: np.ndar
     q_t* ⊗ q is the body attitude relative to the target frame; a body rotated by +φ about
     its x axis beyond the target gives (φ, 0, 0), matching the wheel-law sign convention.
     """
-    q = as_unit_quaternion(q_body_to_eci, 'q_body_to_eci')
-    qt = as_unit_quaternion(q_target_body_to_eci, 'q_target_body_to_eci')
-    q_rel = quat_multiply(np.array([-qt[0], -qt[1], -qt[2], qt[3]]), q)
-    sign = 1.0 if q_rel[3] >= 0.0 else -1.0
-    return 2.0 * sign * q_rel[:3]
+    q = unit_quaternion_xyzw(q_body_to_eci, 'q_body_to_eci')
+    qt = unit_quaternion_xyzw(q_target_body_to_eci, 'q_target_body_to_eci')
+    return np.array(inertial_hold_error_xyz(q, qt))

@@ -71,7 +71,14 @@ class DirectRun:
                                                                                   out.child_frame_id), out)
                         for spec, out in self.graph.outputs()}
         self._clock = Codec(topics.TYPES[topics.CLOCK])
-        self._store: dict[str, dict[int, Any]] = {}
+        self._store: dict[str, dict[int, Any]] = {topic: {} for topic, _codec, out in self._codecs.values()
+                                                  if out.every_step}
+        # Per node and output key, what _emit needs every step: (topic, codec, stamp offset, its store or None,
+        # many, observed, hashed: the observer needs its bytes).
+        self._routes: dict[str, dict[str, tuple[Any, ...]]] = {name: {} for name in self.graph.nodes}
+        for (node, key), (topic, codec, out) in self._codecs.items():
+            self._routes[node][key] = (topic, codec, out.stamp_offset, self._store[topic] if out.every_step else None,
+                                       out.many, self.observer.wants(topic), self.observer.hashes(topic))
         self._max_lag = max((i.lag for spec in self.graph.nodes.values() for st in spec.stages for i in st.inputs),
                             default=0)
         self._writer: Any = None
@@ -79,23 +86,24 @@ class DirectRun:
         self.live_sink = live(self.params) if live is not None else None
 
     def _emit(self, node: str, outputs: dict[str, Any], k: int, *, initial: bool = False) -> None:
+        record, live = self._writer is not None, self.live_sink
+        routes = self._routes[node]
         for key, value in outputs.items():
-            entry = self._codecs.get((node, key))
-            if entry is None:
+            route = routes.get(key)
+            if route is None:
                 raise LaunchError(f'{node}: stepper returned undeclared output {key!r}')
-            topic, codec, out = entry
-            step = k if initial else k + out.stamp_offset
-            if out.every_step:
-                self._store.setdefault(topic, {})[step] = value
-            record = self._writer is not None
-            for item in (value if out.many else (value,)):
-                encode = record or self.live_sink is not None or self.observer.wants(topic)
-                data = codec.encode(step * self.dt_ns, item) if encode else None
-                if record:
-                    self._writer.write(topic, data)
-                if self.live_sink is not None:
-                    self.live_sink(topic, data, item)
-                self.observer.feed(topic, step, item, data)
+            topic, codec, offset, store, many, observed, hashed = route
+            step = k if initial else k + offset
+            if store is not None:
+                store[step] = value
+            if record or live is not None or observed:
+                for item in (value if many else (value,)):
+                    data = codec.encode(step * self.dt_ns, item) if record or live is not None or hashed else None
+                    if record:
+                        self._writer.write(topic, data)
+                    if live is not None:
+                        live(topic, data, item)
+                    self.observer.feed(topic, step, item, data)
 
     def _clock_tick(self, k: int) -> None:
         if self._writer is not None or self.live_sink is not None:
@@ -133,28 +141,36 @@ class DirectRun:
     def _loop(self, t0: float) -> int:
         owner_name = self.graph.time_owner
         owner = self.steppers[owner_name]
-        order = [(name, self.steppers[name], self.graph.nodes[name], stage)
-                 for name, stage in self.graph.firing_order()]
         present = set(self.graph.nodes)
+        # Per stage: its bound method, the inputs of absent sources (always None) and, per input of a present
+        # source, (key, store of its topic, lag, topic, source).
+        plan = []
+        for name, stage in self.graph.firing_order():
+            spec = self.graph.nodes[name]
+            absent = {inp.key: None for inp in stage.inputs if inp.source not in present}
+            live = tuple((inp.key, self._store.get(spec.topic(inp.topic), {}), inp.lag, spec.topic(inp.topic),
+                          inp.source) for inp in stage.inputs if inp.source in present)
+            plan.append((name, stage.name, getattr(self.steppers[name], stage.name), absent, live))
+        buffers = list(self._store.values())
         self._clock_tick(0)
         self._emit(owner_name, owner.start(), 0, initial=True)
         k = 0
         while True:
             t_s = k * self.dt_ns / 1e9
-            for name, stepper, spec, stage in order:
-                inputs = {}
-                for inp in stage.inputs:
-                    back = k - inp.lag
-                    if inp.source not in present or back < 0:
-                        inputs[inp.key] = None
+            for name, stage_name, method, absent, live in plan:
+                inputs = dict(absent)
+                for key, store, lag, topic, source in live:
+                    back = k - lag
+                    if back < 0:
+                        inputs[key] = None
                         continue
                     try:
-                        inputs[inp.key] = self._store[spec.topic(inp.topic)][back]
+                        inputs[key] = store[back]
                     except KeyError:
-                        raise LaunchError(f'node {inp.source} produced no {spec.topic(inp.topic)} for step '
-                                          f'{back} ({name}.{stage.name} needs it)') from None
+                        raise LaunchError(f'node {source} produced no {topic} for step '
+                                          f'{back} ({name}.{stage_name} needs it)') from None
                 try:
-                    outputs = getattr(stepper, stage.name)(k, t_s, inputs)
+                    outputs = method(k, t_s, inputs)
                 except StepError as exc:
                     raise LaunchError(f'node {name} failed at step {k}: {exc}') from None
                 self._emit(name, outputs, k)
@@ -165,5 +181,5 @@ class DirectRun:
             if self.progress is not None:
                 self.progress(k, self.steps, time.monotonic() - t0)
             oldest = k - self._max_lag - 1
-            for buf in self._store.values():
+            for buf in buffers:
                 buf.pop(oldest, None)

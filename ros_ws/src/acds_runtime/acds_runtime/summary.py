@@ -29,13 +29,12 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from acds_common import topics
 from acds_common.cdr import Codec
 from acds_common.graph import Graph
 from acds_common.inertia import inertia_tensor
-from acds_common.rotations import quat_to_dcm
 from acds_common.units import nms_to_ftlbs, tesla_to_gauss
+from acds_common.vec3 import dcm, dot, mat3, mv, norm
 
 #: Per-step topics the common (dynamics) summary reads.
 ODOMETRY, B_BODY, WHEEL_H, WHEEL_HDOT, TORQUE_MAG, TORQUE_GG = (topics.resolve(t) for t in (
@@ -71,6 +70,7 @@ class DynamicsSummary:
     def __init__(self, scenario: Any) -> None:
         sc = scenario
         self.inertia = inertia_tensor(*sc.get('spacecraft', 'inertia')) * sc.get('spacecraft', 'inertia_scale')
+        self._inertia = mat3(self.inertia)
         self.h0: float | None = None
         self.e0: float | None = None
         self.max_dh = 0.0
@@ -86,12 +86,13 @@ class DynamicsSummary:
         if self.torque_free and any(v is not None and any(v) for v in (values.get(t) for t in self.topics[3:])):
             self.torque_free = False
         odom = values.get(ODOMETRY)
-        if odom is not None:
-            omega = np.array(odom.angular)
+        if odom is not None:  # floats (vec3): this runs every step
+            omega = odom.angular
+            iw = mv(self._inertia, omega)
             wheel = values.get(WHEEL_H)
-            h_body = self.inertia @ omega + (np.array(wheel) if wheel is not None else 0.0)
-            h = float(np.linalg.norm(quat_to_dcm(odom.orientation) @ h_body))
-            e = 0.5 * float(omega @ self.inertia @ omega)
+            h_body = iw if wheel is None else (iw[0] + wheel[0], iw[1] + wheel[1], iw[2] + wheel[2])
+            h = norm(mv(dcm(odom.orientation), h_body))  # |H| in ECI
+            e = 0.5 * dot(omega, iw)
             if self.h0 is None:
                 self.h0, self.e0 = h, e
             self.max_dh = max(self.max_dh, abs(h - self.h0))
@@ -99,7 +100,7 @@ class DynamicsSummary:
             self.final_rates, self.final_h = odom.angular, h
         b = values.get(B_BODY)
         if b is not None:
-            g = float(tesla_to_gauss(np.linalg.norm(b[0])))
+            g = tesla_to_gauss(norm(b[0]))
             self.b_min, self.b_max = min(self.b_min, g), max(self.b_max, g)
 
     def contribute(self, summary: dict[str, Any]) -> None:
@@ -159,6 +160,10 @@ class RunObserver:
         """Whether this observer reads ``topic`` (absolute) at all (the direct engine skips the rest)."""
         return topic in self.codecs or topic in self._digests
 
+    def hashes(self, topic: str) -> bool:
+        """Whether :meth:`feed` needs the bytes of ``topic`` (a truth topic: hashed into the digest)."""
+        return topic in self._digests
+
     def feed_value(self, topic: str, k: int, value: Any) -> None:
         """A decoded value of step k."""
         if topic in self.events:
@@ -166,8 +171,10 @@ class RunObserver:
                 if hasattr(part, 'event'):
                     part.event(topic, value)
             return
-        self._pending.setdefault(k, {})[topic] = value
-        self._drain(final=False)
+        values = self._pending.setdefault(k, {})
+        values[topic] = value
+        if len(values) >= len(self.per_step):  # step k complete: it (and what waited for it) can go
+            self._drain(final=False)
 
     def _drain(self, final: bool) -> None:
         while self._next in self._pending:

@@ -35,11 +35,11 @@ and the node layer forwards them so that their owner applies them at its next st
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-import numpy as np
 from acds_common.units import deg, rad
+from acds_common.validation import finite_xyz
 
 from ascs_mode_manager.spin_mechanizations import AscsError  # the package's one exception type
 
@@ -155,7 +155,7 @@ class HeaoModeManager:
 
     # ----------------------------------------------------------------- stepping
     def step(
-        self, t_s: float, omega_rad_s: np.ndarray, sun_body_unit: np.ndarray, sun_present: bool
+        self, t_s: float, omega_rad_s: Sequence[float], sun_body_unit: Sequence[float], sun_present: bool
     ) -> list[Transition]:
         """Advance the mode logic to sim time ``t_s`` (s) with gyro rates (rad/s, body) and the sun sensor.
 
@@ -170,12 +170,12 @@ class HeaoModeManager:
         if self._last_t_s is not None and t < self._last_t_s:
             raise AscsError(f't_s = {t} s goes back in time (last step at {self._last_t_s} s)')
         self._last_t_s = t
-        omega = np.asarray(omega_rad_s, dtype=float)
-        sun = np.asarray(sun_body_unit, dtype=float)
-        if omega.shape != (3,) or sun.shape != (3,) or not np.all(np.isfinite(omega)) \
-                or not np.all(np.isfinite(sun)):
-            raise AscsError('omega_rad_s and sun_body_unit must be finite 3-vectors')
-        sun_norm = float(np.linalg.norm(sun))
+        try:
+            omega = finite_xyz('omega_rad_s', omega_rad_s, AscsError)
+            sun = finite_xyz('sun_body_unit', sun_body_unit, AscsError)
+        except AscsError:
+            raise AscsError('omega_rad_s and sun_body_unit must be finite 3-vectors') from None
+        sun_norm = math.sqrt(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2])
         present = bool(sun_present) and sun_norm > 0.0
 
         out: list[Transition] = []
@@ -192,13 +192,14 @@ class HeaoModeManager:
         if self.mode == 'mode_1b' and self.mode_1b_entry_t_s is None:
             self.mode_1b_entry_t_s = t  # started in Mode 1B (wheels on from separation)
         if self.mode == 'mode_1b' and not self.captured:
-            out.extend(self._check_capture(t, omega, sun / sun_norm if present else None))
+            out.extend(self._check_capture(t, omega, sun[2] / sun_norm if present else None))
         return out
 
-    def _check_capture(self, t: float, omega: np.ndarray, sun_unit: np.ndarray | None) -> list[Transition]:
+    def _check_capture(self, t: float, omega: tuple[float, float, float], sun_z: float | None) -> list[Transition]:
+        """Capture check; ``sun_z`` is the z component of the sun unit vector (None: sun absent)."""
         cfg = self.config
-        angle = math.pi if sun_unit is None else math.acos(max(-1.0, min(1.0, float(sun_unit[2]))))
-        if angle > cfg.capture_cone_rad or not bool(np.all(np.abs(omega) <= cfg.capture_rate_rad_s)):
+        angle = math.pi if sun_z is None else math.acos(max(-1.0, min(1.0, sun_z)))
+        if angle > cfg.capture_cone_rad or not all(abs(w) <= cfg.capture_rate_rad_s for w in omega):
             self._capture_since_t_s = None
             return []
         if self._capture_since_t_s is None:
@@ -209,7 +210,7 @@ class HeaoModeManager:
         self.capture_t_s = t
         out = [Transition(t, 'mode_1b', 'mode_1b',
                           f'acquisition capture: z {deg(angle):.2f}° from the sun line, rates nulled '
-                          f'(max |ω| {deg(float(np.max(np.abs(omega)))):.4f} deg/s)', kind='capture')]
+                          f'(max |ω| {deg(max(abs(w) for w in omega)):.4f} deg/s)', kind='capture')]
         if cfg.auto_cruise:
             out.append(self._enter(t, cfg.cruise_target, 'automatic transfer to cruise at acquisition capture'))
         return out

@@ -24,13 +24,13 @@ deterministic way to command a run.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
-import numpy as np
 from acds_common.cdr import Status
 from acds_common.dpa_commands import GAIN_LIMITS, LAW_CHOICES
-from acds_common.messages import MODE_STATUS, OK, WARN, diagnostic, vec
-from acds_common.validation import scenario_key
+from acds_common.messages import MODE_STATUS, OK, WARN, diagnostic, xyz
+from acds_common.validation import all_finite, scenario_key
 
 from ascs_mode_manager.heao_modes import CRUISE_MODES, HeaoModeConfig, HeaoModeManager, Transition
 from ascs_mode_manager.spin_mechanizations import AscsError
@@ -96,10 +96,10 @@ class HeaoPart:
         diagnostics: list[Status] = []
         forwarded = self._commands(t, diagnostics)
         transitions: list[Transition] = []
-        omega = vec(None if inp['gyro'] is None else inp['gyro'][0])
-        sun = vec(inp['sun'])
-        if np.all(np.isfinite(omega)) and np.all(np.isfinite(sun)):
-            transitions = self.core.step(t, omega, sun, bool(np.linalg.norm(sun) > 0.0))
+        omega = xyz(None if inp['gyro'] is None else inp['gyro'][0])
+        sun = xyz(inp['sun'])
+        if all_finite((*omega, *sun)):
+            transitions = self.core.step(t, omega, sun, math.sqrt(sun[0] ** 2 + sun[1] ** 2 + sun[2] ** 2) > 0.0)
         else:
             message = f'non-finite gyro/sun input rejected at step {k}: mode logic held'
             self.host.log('warn', message)

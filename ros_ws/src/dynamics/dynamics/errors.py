@@ -23,3 +23,8 @@ def finite_float(name: str, value: float) -> float:
 def finite_vector3(name: str, value: object) -> np.ndarray:
     """Return ``value`` as a finite float 3-vector or raise DynamicsError naming ``name``."""
     return validation.finite_vector3(name, value, DynamicsError)
+
+
+def finite_xyz(name: str, value: object) -> tuple[float, float, float]:
+    """Return ``value`` as a finite float triple (no numpy) or raise DynamicsError naming ``name``."""
+    return validation.finite_xyz(name, value, DynamicsError)

@@ -20,8 +20,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from acds_common.messages import WARN, diagnostic, vec, vector3
+from acds_common.messages import WARN, diagnostic, vec, vector3, xyz
 from acds_common.stepper import Stepper
+from acds_common.validation import all_finite
 
 from dynamics.configuration import build_cmgs, build_torque_wheels, build_wheels
 
@@ -44,20 +45,20 @@ class ReactionWheelsStep(Stepper):
             self._last_hdot = np.zeros(3)
         else:
             self.wheels: Any = build_torque_wheels(section) if self.torque_drive else build_wheels(section)
-        self._last_volts = np.zeros(3)
+        self._last_volts = (0.0, 0.0, 0.0)
 
     def drive(self, k: int, _t: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Apply the step-k drive (volts, or a torque command) for one control period."""
         if self.torque_drive:
             return self._torque_drive(k, inp)
-        volts = vec(inp['volts'])
+        volts = xyz(inp['volts'])
         warning = None
-        if not np.all(np.isfinite(volts)):
-            warning = f'non-finite drive volts {volts.tolist()} rejected at step {k}; holding the last valid ones'
+        if not all_finite(volts):
+            warning = f'non-finite drive volts {list(volts)} rejected at step {k}; holding the last valid ones'
             volts = self._last_volts
         self._last_volts = volts
-        h_start, hdot = self.wheels.step(volts, self.control_period_s)
-        out: dict[str, Any] = {'momentum': vector3(h_start), 'torque': vector3(hdot)}
+        h_start, hdot = self.wheels.step_xyz(volts, self.control_period_s)
+        out: dict[str, Any] = {'momentum': h_start, 'torque': hdot}
         if warning is not None or k % TELEMETRY_EVERY == 0:
             values = {**{f'wheel_{i}_momentum_nms': f'{h:.6g}' for i, h in enumerate(self.wheels.wheel_momenta_nms())},
                       **{f'drive_{a}_volts': f'{v:.4g}' for a, v in zip('xyz', volts, strict=True)}}

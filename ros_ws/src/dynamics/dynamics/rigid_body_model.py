@@ -10,25 +10,31 @@ Equations (spec §3; seed 002 §4.3 "three-degree-of-freedom rigid body angular 
 h is the wheels' momentum in body axes, ḣ its rate: the body feels −ḣ. T_d is an optional body-fixed
 disturbance torque (seed 000: the Workshop's aerodynamic bias, :mod:`dynamics.disturbances`), applied as
 its exact mean over each ``advance`` step (it varies at orbital rate, a step lasts seconds). Integration
-is RK4 with a fixed number of substeps per ``advance`` call; orbit position and field are evaluated at
-each RK4 stage time; the quaternion is renormalised after every substep.
+is RK4 with a fixed number of substeps per ``advance`` call; orbit position and field are evaluated once at each
+distinct RK4 stage time (2n + 1 per call, the end one shared with ``truth`` and the next call's
+start); the quaternion is renormalised after every substep.
+
+Speed: the kernel is written on plain Python floats (one derivative is ~200 float operations on
+3-vectors, where numpy's per-call overhead would dominate); IEEE doubles without fused operations
+give the same bits on every machine. Numpy appears only at the API edge (``Truth``'s arrays are
+built when read).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 from acds_common import units
-from acds_common.environment import Orbit, Sun, TiltedDipoleField, sun_frame_dcm
+from acds_common.environment import MagneticFieldModel, Orbit, Sun, field_xyz, sun_frame_dcm
 from acds_common.environment import ecliptic_normal_eci as default_ecliptic_normal_eci
 from acds_common.environment import gravity_gradient_torque_nm as gravity_gradient_torque_nm  # the public form
 from acds_common.inertia import InertiaError, inertia_tensor
+from acds_common.vec3 import ZERO, Mat3, Vec3, cross, dcm, mat3, mtv, mv
 
 from dynamics.disturbances import DisturbanceTorque
-from dynamics.errors import DynamicsError, finite_float, finite_vector3
+from dynamics.errors import DynamicsError, finite_float, finite_vector3, finite_xyz
 
 #: Default RK4 substeps per ``advance`` call (0.1 s substeps at the 0.5 s HEAO control period).
 DEFAULT_SUBSTEPS = 5
@@ -48,7 +54,7 @@ def heao_inertia_kg_m2(table: dict[str, float]) -> np.ndarray:
 
 def quat_to_dcm(q_xyzw: np.ndarray) -> np.ndarray:
     """Rotation matrix R (body → ECI: v_eci = R v_body) of a unit Hamilton quaternion (x, y, z, w)."""
-    return np.array(_dcm(tuple(float(c) for c in q_xyzw)))
+    return np.array(dcm(tuple(float(c) for c in q_xyzw)))
 
 
 def dcm_to_quat(dcm_body_to_eci: np.ndarray) -> np.ndarray:
@@ -76,53 +82,11 @@ def dcm_to_quat(dcm_body_to_eci: np.ndarray) -> np.ndarray:
     return -q if q[3] < 0.0 else q
 
 
-# Small-vector kernels on float tuples: the RK4 loop runs ~20 derivative evaluations per control
-# step, where numpy's per-call overhead on 3-vectors would dominate.
-Vec = tuple[float, float, float]
-Mat = tuple[Vec, Vec, Vec]
-
-
-def _cross(a: Sequence[float], b: Sequence[float]) -> Vec:
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def _mv(m: Mat, v: Sequence[float]) -> Vec:
-    return (m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2],
-            m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],
-            m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2])
-
-
-def _mtv(m: Mat, v: Sequence[float]) -> Vec:
-    return (m[0][0] * v[0] + m[1][0] * v[1] + m[2][0] * v[2],
-            m[0][1] * v[0] + m[1][1] * v[1] + m[2][1] * v[2],
-            m[0][2] * v[0] + m[1][2] * v[1] + m[2][2] * v[2])
-
-
-def _dcm(q: Sequence[float]) -> Mat:
-    x, y, z, w = q
-    return ((1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)),
-            (2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)),
-            (2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)))
-
-
-def _as_mat(m: np.ndarray) -> Mat:
-    return tuple(tuple(float(c) for c in row) for row in m)  # type: ignore[return-value]
-
-
-def _gg(inertia: Mat, r_body_m: Sequence[float]) -> Vec:
-    rn = math.sqrt(r_body_m[0] ** 2 + r_body_m[1] ** 2 + r_body_m[2] ** 2)
-    r_hat = (r_body_m[0] / rn, r_body_m[1] / rn, r_body_m[2] / rn)
-    k = 3.0 * units.EARTH_MU_M3_S2 / rn ** 3
-    t = _cross(r_hat, _mv(inertia, r_hat))
-    return (k * t[0], k * t[1], k * t[2])
-
-
 def magnetic_torque_nm(dipole_body_am2: np.ndarray, b_body_t: np.ndarray) -> np.ndarray:
     """Magnetic torque T_mag = M × B, N·m (spec §3); dipole in A·m², field in T, both body axes."""
-    return np.array(_cross([float(c) for c in dipole_body_am2], [float(c) for c in b_body_t]))
+    return np.array(cross([float(c) for c in dipole_body_am2], [float(c) for c in b_body_t]))
 
 
-@dataclass(frozen=True)
 class Truth:
     """True state at ``t_s`` for the truth topics and the ideal sensors (spec §2, §3).
 
@@ -131,38 +95,132 @@ class Truth:
     sun angle, B23 = roll error, B13 = −pitch error, B12 = rotation about the sun line. (B13, B23,
     B33) is also the sun unit vector in body axes. Torques are averages over the last ``advance``
     (zeros before the first).
+
+    The model computes the state as float triples, kept in the ``*_xyz`` attributes (what the
+    stepper publishes); the numpy attributes (``q_body_to_eci``, ``b_body_t``, …) and the derived
+    quantities (``dcm_body_sun``, total momentum, energy) are built when read.
     """
 
-    t_s: float
-    q_body_to_eci: np.ndarray
-    omega_body_rad_s: np.ndarray
-    r_eci_m: np.ndarray
-    v_eci_m_s: np.ndarray
-    b_eci_t: np.ndarray
-    b_body_t: np.ndarray
-    sun_body_unit: np.ndarray
-    sun_present: bool
-    sun_direction_cosines: np.ndarray
-    dcm_body_sun: np.ndarray
-    torque_magnetic_body_nm: np.ndarray
-    torque_gravity_gradient_body_nm: np.ndarray
-    wheel_h_body_nms: np.ndarray
-    h_total_body_nms: np.ndarray
-    h_total_eci_nms: np.ndarray
-    rotational_energy_j: float
-    attitude_to_sun_deg: float
+    def __init__(self, t_s: float, q_xyzw: tuple[float, float, float, float], omega_xyz: Vec3, r_xyz: Vec3,
+                 v_xyz: Vec3, b_eci_xyz: Vec3, sun_eci_xyz: Vec3, sun_present: bool, torque_magnetic_xyz: Vec3,
+                 torque_gravity_gradient_xyz: Vec3, wheel_h_xyz: Vec3, inertia: Mat3, sun_frame: Mat3) -> None:
+        self.t_s = t_s
+        self.q_xyzw = q_xyzw
+        self.omega_xyz = omega_xyz
+        self.r_xyz = r_xyz
+        self.v_xyz = v_xyz
+        self.b_eci_xyz = b_eci_xyz
+        self.sun_present = sun_present
+        self.torque_magnetic_xyz = torque_magnetic_xyz
+        self.torque_gravity_gradient_xyz = torque_gravity_gradient_xyz
+        self.wheel_h_xyz = wheel_h_xyz
+        self._rmat = dcm(q_xyzw)
+        self._inertia = inertia
+        self._sun_frame = sun_frame
+        self.b_body_xyz = mtv(self._rmat, b_eci_xyz)
+        self.sun_body_xyz = mtv(self._rmat, sun_eci_xyz)
+        #: (B13, B23, B33): the sun frame's z axis (the sun line) in body axes.
+        self.sun_cosines_xyz = mtv(self._rmat, sun_frame[2])
+
+    @property
+    def q_body_to_eci(self) -> np.ndarray:
+        """Attitude quaternion (x, y, z, w), body → ECI."""
+        return np.array(self.q_xyzw)
+
+    @property
+    def omega_body_rad_s(self) -> np.ndarray:
+        """Body rates, rad/s."""
+        return np.array(self.omega_xyz)
+
+    @property
+    def r_eci_m(self) -> np.ndarray:
+        """ECI position, m."""
+        return np.array(self.r_xyz)
+
+    @property
+    def v_eci_m_s(self) -> np.ndarray:
+        """ECI velocity, m/s."""
+        return np.array(self.v_xyz)
+
+    @property
+    def b_eci_t(self) -> np.ndarray:
+        """Earth field at the spacecraft, ECI, T."""
+        return np.array(self.b_eci_xyz)
+
+    @property
+    def b_body_t(self) -> np.ndarray:
+        """Earth field at the spacecraft, body axes, T."""
+        return np.array(self.b_body_xyz)
+
+    @property
+    def sun_body_unit(self) -> np.ndarray:
+        """Unit vector to the Sun, body axes."""
+        return np.array(self.sun_body_xyz)
+
+    @property
+    def sun_direction_cosines(self) -> np.ndarray:
+        """(B13, B23, B33), see the class docstring."""
+        return np.array(self.sun_cosines_xyz)
+
+    @property
+    def dcm_body_sun(self) -> np.ndarray:
+        """B (3×3), B_ij = (body axis i)·(sun-frame axis j)."""
+        return np.array([mtv(self._rmat, axis) for axis in self._sun_frame]).T
+
+    @property
+    def torque_magnetic_body_nm(self) -> np.ndarray:
+        """Magnetic torque averaged over the last ``advance``, body, N·m."""
+        return np.array(self.torque_magnetic_xyz)
+
+    @property
+    def torque_gravity_gradient_body_nm(self) -> np.ndarray:
+        """Gravity-gradient torque averaged over the last ``advance``, body, N·m."""
+        return np.array(self.torque_gravity_gradient_xyz)
+
+    @property
+    def wheel_h_body_nms(self) -> np.ndarray:
+        """Wheel momentum given to ``truth``, body, N·m·s."""
+        return np.array(self.wheel_h_xyz)
+
+    @property
+    def h_total_body_nms(self) -> np.ndarray:
+        """Total angular momentum I·ω + h, body, N·m·s."""
+        iw = mv(self._inertia, self.omega_xyz)
+        return np.array([iw[i] + self.wheel_h_xyz[i] for i in range(3)])
+
+    @property
+    def h_total_eci_nms(self) -> np.ndarray:
+        """Total angular momentum in ECI, N·m·s."""
+        return np.array(mv(self._rmat, self.h_total_body_nms.tolist()))
+
+    @property
+    def rotational_energy_j(self) -> float:
+        """Body rotational energy ½ ωᵀ I ω, J."""
+        w = self.omega_xyz
+        iw = mv(self._inertia, w)
+        return 0.5 * (w[0] * iw[0] + w[1] * iw[1] + w[2] * iw[2])
+
+    @property
+    def attitude_to_sun_deg(self) -> float:
+        """Angle between body z and the sun line, deg (acos B33)."""
+        return math.degrees(math.acos(max(-1.0, min(1.0, self.sun_cosines_xyz[2]))))
+
+
+#: One RK4 stage's attitude-independent environment: (r_eci, b_eci), None when not needed.
+_Env = tuple[Vec3 | None, Vec3 | None]
 
 
 class RigidBodyModel:
     """Spacecraft attitude dynamics in its orbit and environment (spec §3).
 
-    ``inertia_kg_m2`` 3×3 (see ``inertia_tensor``), ``orbit``, ``field``, ``sun``;
+    ``inertia_kg_m2`` 3×3 (see ``inertia_tensor``), ``orbit``, ``field`` (any ``MagneticFieldModel``),
+    ``sun`` (its direction is fixed over a run, so the sun-pointed frame is computed once);
     ``ecliptic_normal_eci`` (ECI unit vector, default obliquity 23.44°) defines the sun-pointed frame;
     ``gravity_gradient`` switches T_gg; ``substeps`` RK4 substeps per ``advance``;
     ``q0_body_to_eci`` (x, y, z, w), ``omega0_body_rad_s`` body rates; ``t0_s`` start time (s).
     """
 
-    def __init__(self, inertia_kg_m2: np.ndarray, orbit: Orbit, field: TiltedDipoleField, sun: Sun,
+    def __init__(self, inertia_kg_m2: np.ndarray, orbit: Orbit, field: MagneticFieldModel, sun: Sun,
                  ecliptic_normal_eci: np.ndarray | None = None, gravity_gradient: bool = True,
                  substeps: int = DEFAULT_SUBSTEPS,
                  q0_body_to_eci: Sequence[float] = (0.0, 0.0, 0.0, 1.0),
@@ -183,19 +241,24 @@ class RigidBodyModel:
         if q0.shape != (4,) or not np.all(np.isfinite(q0)) or np.linalg.norm(q0) < 1e-6:
             raise DynamicsError(f"q0_body_to_eci must be a finite non-zero (x, y, z, w) quaternion, got {q0}")
         self.inertia_kg_m2 = inertia
-        self._inertia_t = _as_mat(inertia)
-        self._inertia_inv_t = _as_mat(np.linalg.inv(inertia))
+        self._inertia_t = mat3(inertia)
+        self._inertia_inv_t = mat3(np.linalg.inv(inertia))
         self.orbit, self.field, self.sun = orbit, field, sun
+        self._b_eci = field_xyz(field)
         self.ecliptic_normal_eci = (default_ecliptic_normal_eci() if ecliptic_normal_eci is None
                                     else finite_vector3("ecliptic_normal_eci", ecliptic_normal_eci))
+        self._sun_frame = mat3(sun_frame_dcm(np.array(sun.direction_xyz), self.ecliptic_normal_eci))
         self.gravity_gradient = bool(gravity_gradient)
         self.substeps = int(substeps)
-        self._q = q0 / np.linalg.norm(q0)
-        self._w = finite_vector3("omega0_body_rad_s", omega0_body_rad_s)
+        self._q: tuple[float, float, float, float] = tuple(float(c) for c in q0 / np.linalg.norm(q0))  # type: ignore
+        self._w = finite_xyz("omega0_body_rad_s", omega0_body_rad_s)
         self._t = finite_float("t0_s", t0_s)
-        self._tmag_avg = np.zeros(3)
-        self._tgg_avg = np.zeros(3)
+        self._tmag_avg = ZERO
+        self._tgg_avg = ZERO
         self.disturbance = disturbance
+        #: The environment (t, r, v, b) at the last time it was needed in full: an ``advance`` ends
+        #: where ``truth`` and the next ``advance`` start.
+        self._env_cache: tuple[float, Vec3, Vec3, Vec3] | None = None
 
     @property
     def t_s(self) -> float:
@@ -205,119 +268,149 @@ class RigidBodyModel:
     @property
     def q_body_to_eci(self) -> np.ndarray:
         """Current attitude quaternion (x, y, z, w), body → ECI."""
-        return self._q.copy()
+        return np.array(self._q)
 
     @property
     def omega_body_rad_s(self) -> np.ndarray:
         """Current body rates, rad/s."""
-        return self._w.copy()
+        return np.array(self._w)
 
-    def _deriv(self, q: Sequence[float], w: Sequence[float], tau_s: float, env: tuple[Vec | None, Vec | None],
-               step: tuple[Vec, Vec, Vec, Vec]) -> tuple[tuple[float, ...], Vec, Vec, Vec]:
-        """(q̇, ω̇, T_mag, T_gg) at attitude q, rate w, ``tau_s`` into the step.
+    def _environment(self, t_s: float) -> tuple[Vec3, Vec3, Vec3]:
+        """(r_eci, v_eci, b_eci) at ``t_s``, from the one-entry cache when it is that time."""
+        cache = self._env_cache
+        if cache is not None and cache[0] == t_s:
+            return cache[1], cache[2], cache[3]
+        r, v = self.orbit.state_xyz(t_s)
+        b = self._b_eci(r, t_s)
+        self._env_cache = (t_s, r, v, b)
+        return r, v, b
 
-        ``env`` = (r_eci, b_eci) at the stage time (None when not needed); ``step`` = (dipole, h0, ḣ, T_d).
-        """
-        r_eci, b_eci = env
-        dipole, h0, hdot, t_d = step
-        zero = (0.0, 0.0, 0.0)
-        t_mag, t_gg = zero, zero
-        if r_eci is not None:
-            rmat = _dcm(q)
-            if b_eci is not None:
-                t_mag = _cross(dipole, _mtv(rmat, b_eci))
-            if self.gravity_gradient:
-                t_gg = _gg(self._inertia_t, _mtv(rmat, r_eci))
-        iw = _mv(self._inertia_t, w)
-        gyro = _cross(w, (iw[0] + h0[0] + hdot[0] * tau_s, iw[1] + h0[1] + hdot[1] * tau_s,
-                          iw[2] + h0[2] + hdot[2] * tau_s))
-        net = tuple(-gyro[i] - hdot[i] + t_mag[i] + t_gg[i] + t_d[i] for i in range(3))
-        wdot = _mv(self._inertia_inv_t, net)
-        qv = _cross(q[:3], w)
-        qdot = (0.5 * (q[3] * w[0] + qv[0]), 0.5 * (q[3] * w[1] + qv[1]), 0.5 * (q[3] * w[2] + qv[2]),
-                -0.5 * (q[0] * w[0] + q[1] * w[1] + q[2] * w[2]))
-        return qdot, wdot, t_mag, t_gg
+    def _stage_environment(self, t0: float, dt: float, need_pos: bool, need_field: bool) -> list[_Env]:
+        """The attitude-independent environment at the 2n+1 distinct stage times t0 + dt·j/(2n)."""
+        m = 2 * self.substeps
+        env: list[_Env] = []
+        for j in range(m + 1):
+            tj = t0 + dt * (j / m)
+            if j == 0 or j == m:
+                r, _v, b = self._environment(tj)
+                env.append((r if need_pos else None, b if need_field else None))
+            elif need_pos:
+                r = self.orbit.position_xyz(tj)
+                env.append((r, self._b_eci(r, tj) if need_field else None))
+            else:
+                env.append((None, None))
+        return env
 
-    def advance(self, dt_s: float, dipole_body_am2: np.ndarray, wheel_h_body_nms: np.ndarray,
-                wheel_hdot_body_nm: np.ndarray) -> None:
+    def advance(self, dt_s: float, dipole_body_am2: Sequence[float], wheel_h_body_nms: Sequence[float],
+                wheel_hdot_body_nm: Sequence[float]) -> None:
         """Integrate from t to t + ``dt_s`` (s).
 
         ``dipole_body_am2`` (A·m², constant over the step: the driver's time-averaged achieved
         dipole); wheel momentum h(τ) = ``wheel_h_body_nms`` + ``wheel_hdot_body_nm``·(τ − t) (N·m·s,
-        N·m, body axes); the disturbance torque at its exact mean over the step. Records the
-        step-average magnetic and gravity-gradient torques (RK4 stage weights, i.e. Simpson's rule per
-        substep).
+        N·m, body axes), 3-vectors as arrays or float triples; the disturbance torque at its exact mean
+        over the step. Records the step-average magnetic and gravity-gradient torques (RK4 stage weights,
+        i.e. Simpson's rule per substep).
         """
         dt = finite_float("dt_s", dt_s)
         if dt <= 0.0:
             raise DynamicsError(f"dt_s must be > 0 s, got {dt}")
-        t0 = self._t
-        t_d = (0.0, 0.0, 0.0) if self.disturbance is None else self.disturbance.momentum_nms(t0, t0 + dt) / dt
-        step: tuple[Vec, Vec, Vec, Vec] = tuple(  # type: ignore[assignment]
-            tuple(float(c) for c in finite_vector3(name, v)) for name, v in (
-                ("dipole_body_am2", dipole_body_am2), ("wheel_h_body_nms", wheel_h_body_nms),
-                ("wheel_hdot_body_nm", wheel_hdot_body_nm), ("disturbance torque", t_d)))
+        mx, my, mz = finite_xyz("dipole_body_am2", dipole_body_am2)
+        hx0, hy0, hz0 = finite_xyz("wheel_h_body_nms", wheel_h_body_nms)
+        hdx, hdy, hdz = finite_xyz("wheel_hdot_body_nm", wheel_hdot_body_nm)
         n = self.substeps
         sub = dt / n
-        need_field = any(c != 0.0 for c in step[0])
-        need_pos = need_field or self.gravity_gradient
-        # Attitude-independent environment at the 2n+1 distinct stage times t0 + j·sub/2.
-        env: list[tuple[Vec | None, Vec | None]] = []
-        for j in range(2 * n + 1):
-            tj = t0 + 0.5 * j * sub
-            r = self.orbit.position_velocity_eci(tj)[0] if need_pos else None
-            b = self.field.b_eci(r, tj) if need_field else None
-            env.append((None if r is None else tuple(r.tolist()), None if b is None else tuple(b.tolist())))
-        q: Sequence[float] = tuple(self._q.tolist())
-        w: Sequence[float] = tuple(self._w.tolist())
-        tmag_sum, tgg_sum = [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]
-        for k in range(n):
-            slopes = []
-            qs, ws = q, w
-            for weight, frac, j in ((1.0, 0.0, 2 * k), (2.0, 0.5, 2 * k + 1), (2.0, 0.5, 2 * k + 1),
-                                    (1.0, 1.0, 2 * k + 2)):
-                if slopes:
-                    a = frac * sub
-                    dq, dw = slopes[-1]
-                    qs = tuple(q[i] + a * dq[i] for i in range(4))
-                    ws = tuple(w[i] + a * dw[i] for i in range(3))
-                dq, dw, t_mag, t_gg = self._deriv(qs, ws, (k + frac) * sub, env[j], step)
-                slopes.append((dq, dw))
-                for i in range(3):
-                    tmag_sum[i] += weight * t_mag[i]
-                    tgg_sum[i] += weight * t_gg[i]
-            (q1, w1), (q2, w2), (q3, w3), (q4, w4) = slopes
-            c = sub / 6.0
-            q = tuple(q[i] + c * (q1[i] + 2.0 * q2[i] + 2.0 * q3[i] + q4[i]) for i in range(4))
-            w = tuple(w[i] + c * (w1[i] + 2.0 * w2[i] + 2.0 * w3[i] + w4[i]) for i in range(3))
-            norm = math.sqrt(sum(x * x for x in q))
-            q = tuple(x / norm for x in q)
-        q_arr, w_arr = np.array(q), np.array(w)
-        if not (np.all(np.isfinite(q_arr)) and np.all(np.isfinite(w_arr))):
-            raise DynamicsError("integration diverged (non-finite state): reduce dt_s or raise substeps")
-        self._q, self._w = q_arr, w_arr
-        self._t = t0 + dt
-        self._tmag_avg = np.array(tmag_sum) / (6.0 * n)
-        self._tgg_avg = np.array(tgg_sum) / (6.0 * n)
+        t0 = self._t
+        tdx = tdy = tdz = 0.0
+        if self.disturbance is not None:
+            tdx, tdy, tdz = finite_xyz("disturbance torque", self.disturbance.momentum_nms(t0, t0 + dt) / dt)
+        need_field = mx != 0.0 or my != 0.0 or mz != 0.0
+        gg = self.gravity_gradient
+        env = self._stage_environment(t0, dt, need_field or gg, need_field)
+        (i00, i01, i02), (i10, i11, i12), (i20, i21, i22) = self._inertia_t
+        (j00, j01, j02), (j10, j11, j12), (j20, j21, j22) = self._inertia_inv_t
+        k_gg = 3.0 * units.EARTH_MU_M3_S2
 
-    def truth(self, wheel_h_body_nms: np.ndarray) -> Truth:
+        def deriv(qx: float, qy: float, qz: float, qw: float, wx: float, wy: float, wz: float, tau: float,
+                  stage: _Env) -> tuple[float, ...]:
+            """(q̇, ω̇, T_mag, T_gg) as 13 floats at attitude q, rate ω, ``tau`` into the step."""
+            r, b = stage
+            tmx = tmy = tmz = tgx = tgy = tgz = 0.0
+            if r is not None:
+                # R (body → ECI) of q; a vector's body components are Rᵀ v.
+                xx, yy, zz = qx * qx, qy * qy, qz * qz
+                xy, xz, yz, xw, yw, zw = qx * qy, qx * qz, qy * qz, qx * qw, qy * qw, qz * qw
+                r00, r01, r02 = 1.0 - 2.0 * (yy + zz), 2.0 * (xy - zw), 2.0 * (xz + yw)
+                r10, r11, r12 = 2.0 * (xy + zw), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - xw)
+                r20, r21, r22 = 2.0 * (xz - yw), 2.0 * (yz + xw), 1.0 - 2.0 * (xx + yy)
+                if b is not None:  # T_mag = M × B_body
+                    bx, by, bz = b
+                    ux = r00 * bx + r10 * by + r20 * bz
+                    uy = r01 * bx + r11 * by + r21 * bz
+                    uz = r02 * bx + r12 * by + r22 * bz
+                    tmx, tmy, tmz = my * uz - mz * uy, mz * ux - mx * uz, mx * uy - my * ux
+                if gg:  # T_gg = 3μ/|r|⁵ · r_b × (I r_b)
+                    ex, ey, ez = r
+                    sx = r00 * ex + r10 * ey + r20 * ez
+                    sy = r01 * ex + r11 * ey + r21 * ez
+                    sz = r02 * ex + r12 * ey + r22 * ez
+                    r2 = sx * sx + sy * sy + sz * sz
+                    c = k_gg / (r2 * r2 * math.sqrt(r2))
+                    isx = i00 * sx + i01 * sy + i02 * sz
+                    isy = i10 * sx + i11 * sy + i12 * sz
+                    isz = i20 * sx + i21 * sy + i22 * sz
+                    tgx, tgy, tgz = c * (sy * isz - sz * isy), c * (sz * isx - sx * isz), c * (sx * isy - sy * isx)
+            # Total momentum I ω + h(τ); net torque −ω × H − ḣ + T_mag + T_gg + T_d; ω̇ = I⁻¹ net.
+            hx = i00 * wx + i01 * wy + i02 * wz + hx0 + hdx * tau
+            hy = i10 * wx + i11 * wy + i12 * wz + hy0 + hdy * tau
+            hz = i20 * wx + i21 * wy + i22 * wz + hz0 + hdz * tau
+            nx = -(wy * hz - wz * hy) - hdx + tmx + tgx + tdx
+            ny = -(wz * hx - wx * hz) - hdy + tmy + tgy + tdy
+            nz = -(wx * hy - wy * hx) - hdz + tmz + tgz + tdz
+            return (0.5 * (qw * wx + (qy * wz - qz * wy)), 0.5 * (qw * wy + (qz * wx - qx * wz)),
+                    0.5 * (qw * wz + (qx * wy - qy * wx)), -0.5 * (qx * wx + qy * wy + qz * wz),
+                    j00 * nx + j01 * ny + j02 * nz, j10 * nx + j11 * ny + j12 * nz, j20 * nx + j21 * ny + j22 * nz,
+                    tmx, tmy, tmz, tgx, tgy, tgz)
+
+        qx, qy, qz, qw = self._q
+        wx, wy, wz = self._w
+        smx = smy = smz = sgx = sgy = sgz = 0.0  # Σ stage weight · (T_mag, T_gg)
+        half, sixth = 0.5 * sub, sub / 6.0
+        for k in range(n):
+            e0, eh, e1 = env[2 * k], env[2 * k + 1], env[2 * k + 2]
+            a = deriv(qx, qy, qz, qw, wx, wy, wz, k * sub, e0)
+            b = deriv(qx + half * a[0], qy + half * a[1], qz + half * a[2], qw + half * a[3],
+                      wx + half * a[4], wy + half * a[5], wz + half * a[6], (k + 0.5) * sub, eh)
+            c = deriv(qx + half * b[0], qy + half * b[1], qz + half * b[2], qw + half * b[3],
+                      wx + half * b[4], wy + half * b[5], wz + half * b[6], (k + 0.5) * sub, eh)
+            d = deriv(qx + sub * c[0], qy + sub * c[1], qz + sub * c[2], qw + sub * c[3],
+                      wx + sub * c[4], wy + sub * c[5], wz + sub * c[6], (k + 1.0) * sub, e1)
+            qx += sixth * (a[0] + 2.0 * b[0] + 2.0 * c[0] + d[0])
+            qy += sixth * (a[1] + 2.0 * b[1] + 2.0 * c[1] + d[1])
+            qz += sixth * (a[2] + 2.0 * b[2] + 2.0 * c[2] + d[2])
+            qw += sixth * (a[3] + 2.0 * b[3] + 2.0 * c[3] + d[3])
+            wx += sixth * (a[4] + 2.0 * b[4] + 2.0 * c[4] + d[4])
+            wy += sixth * (a[5] + 2.0 * b[5] + 2.0 * c[5] + d[5])
+            wz += sixth * (a[6] + 2.0 * b[6] + 2.0 * c[6] + d[6])
+            norm = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+            qx, qy, qz, qw = qx / norm, qy / norm, qz / norm, qw / norm
+            smx += a[7] + 2.0 * b[7] + 2.0 * c[7] + d[7]
+            smy += a[8] + 2.0 * b[8] + 2.0 * c[8] + d[8]
+            smz += a[9] + 2.0 * b[9] + 2.0 * c[9] + d[9]
+            sgx += a[10] + 2.0 * b[10] + 2.0 * c[10] + d[10]
+            sgy += a[11] + 2.0 * b[11] + 2.0 * c[11] + d[11]
+            sgz += a[12] + 2.0 * b[12] + 2.0 * c[12] + d[12]
+        if not math.isfinite(qx + qy + qz + qw + wx + wy + wz):  # a finite sum: every component finite
+            raise DynamicsError("integration diverged (non-finite state): reduce dt_s or raise substeps")
+        self._q, self._w = (qx, qy, qz, qw), (wx, wy, wz)
+        self._t = t0 + dt
+        w6 = 6.0 * n
+        self._tmag_avg = (smx / w6, smy / w6, smz / w6)
+        self._tgg_avg = (sgx / w6, sgy / w6, sgz / w6)
+
+    def truth(self, wheel_h_body_nms: Sequence[float]) -> Truth:
         """Truth at the current time; ``wheel_h_body_nms`` (N·m·s, body) for the total momentum."""
-        h = finite_vector3("wheel_h_body_nms", wheel_h_body_nms)
+        h = finite_xyz("wheel_h_body_nms", wheel_h_body_nms)
         t = self._t
-        rmat = quat_to_dcm(self._q)
-        r, v = self.orbit.position_velocity_eci(t)
-        b_eci = self.field.b_eci(r, t)
-        sun_eci = self.sun.direction_eci(t)
-        dcm_body_sun = (sun_frame_dcm(sun_eci, self.ecliptic_normal_eci) @ rmat).T
-        sun_body = rmat.T @ sun_eci
-        h_total = self.inertia_kg_m2 @ self._w + h
-        return Truth(
-            t_s=t, q_body_to_eci=self._q.copy(), omega_body_rad_s=self._w.copy(), r_eci_m=r,
-            v_eci_m_s=v, b_eci_t=b_eci, b_body_t=rmat.T @ b_eci, sun_body_unit=sun_body,
-            sun_present=self.sun.present(r, t), sun_direction_cosines=dcm_body_sun[:, 2].copy(),
-            dcm_body_sun=dcm_body_sun, torque_magnetic_body_nm=self._tmag_avg.copy(),
-            torque_gravity_gradient_body_nm=self._tgg_avg.copy(), wheel_h_body_nms=h,
-            h_total_body_nms=h_total, h_total_eci_nms=rmat @ h_total,
-            rotational_energy_j=0.5 * float(self._w @ self.inertia_kg_m2 @ self._w),
-            attitude_to_sun_deg=math.degrees(math.acos(max(-1.0, min(1.0, float(dcm_body_sun[2, 2]))))),
-        )
+        r, v, b = self._environment(t)
+        return Truth(t, self._q, self._w, r, v, b, self.sun.direction_xyz, self.sun.present_xyz(r), self._tmag_avg,
+                     self._tgg_avg, h, self._inertia_t, self._sun_frame)

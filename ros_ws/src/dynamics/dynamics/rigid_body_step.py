@@ -23,13 +23,14 @@ rates with an all-zero ``angular_velocity_covariance``.
 
 from __future__ import annotations
 
+import math
 import time
 from typing import Any
 
 import numpy as np
 from acds_common import topics
 from acds_common.cdr import OdometryValue
-from acds_common.messages import MODE_STATUS, OK, WALL_CLOCK_PREFIX, WARN, diagnostic, magnetic_field, status_value, vec, vector3
+from acds_common.messages import MODE_STATUS, OK, WALL_CLOCK_PREFIX, WARN, diagnostic, status_value, xyz
 from acds_common.stepper import StepError, Stepper
 
 from dynamics.configuration import RIGID_BODY_SECTIONS, actuator_limits, build_rigid_body
@@ -43,6 +44,8 @@ DIAGNOSTICS_EVERY = 20
 QUATERNION_NORM_TOLERANCE = 1e-9
 #: WARN when a torque-free run's momentum or energy has drifted by more than this fraction of its initial value.
 DRIFT_TOLERANCE = 1e-6
+_ZERO_COV = (0.0,) * 9  # a truth field's covariance: unknown
+_ZERO = (0.0, 0.0, 0.0)
 
 
 def run_complete(mode: Any) -> bool:
@@ -52,17 +55,21 @@ def run_complete(mode: Any) -> bool:
 
 def truth_outputs(truth: Truth) -> dict[str, Any]:
     """Truth and ideal sensors of one step (spec §3 "Sensors in the study are ideal")."""
-    omega = vector3(truth.omega_body_rad_s)
+    omega = truth.omega_xyz
     return {
-        'odometry': OdometryValue(vector3(truth.r_eci_m), tuple(float(c) for c in truth.q_body_to_eci),
-                                  vector3(truth.v_eci_m_s), omega),
-        'b_body': magnetic_field(truth.b_body_t),
-        'sun_cosines': vector3(truth.sun_direction_cosines),
-        'torque_mag': vector3(truth.torque_magnetic_body_nm),
-        'torque_gg': vector3(truth.torque_gravity_gradient_body_nm),
+        'odometry': OdometryValue(truth.r_xyz, truth.q_xyzw, truth.v_xyz, omega),
+        'b_body': (truth.b_body_xyz, _ZERO_COV),
+        'sun_cosines': truth.sun_cosines_xyz,
+        'torque_mag': truth.torque_magnetic_xyz,
+        'torque_gg': truth.torque_gravity_gradient_xyz,
         'gyro': (omega, GYRO_COVARIANCE),
-        'sun_sensor': vector3(truth.sun_body_unit if truth.sun_present else (0.0, 0.0, 0.0)),
+        'sun_sensor': truth.sun_body_xyz if truth.sun_present else _ZERO,
     }
+
+
+def _within(value: Any, bound: tuple[float, ...]) -> bool:
+    """Every |component| within its bound."""
+    return abs(value[0]) <= bound[0] and abs(value[1]) <= bound[1] and abs(value[2]) <= bound[2]
 
 
 class RigidBodyStep(Stepper):
@@ -75,7 +82,9 @@ class RigidBodyStep(Stepper):
         self.total_steps: int = params['total_steps']
         self.model = build_rigid_body(*(self.section(s) for s in RIGID_BODY_SECTIONS))
         self.limits = actuator_limits(self.section('em_driver'), self.section('wheels'))
-        self._wheel_h = np.zeros(3)
+        self._bounds = tuple(tuple(float(x) * (1.0 + 1e-9) for x in limit)
+                             for limit in (self.limits.dipole_am2, self.limits.wheel_momentum_nms))
+        self._wheel_h = _ZERO
         #: Torque-free so far (external and wheel torques all zero): the drifts are integration error.
         self.torque_free = not self.model.gravity_gradient
         self._h0_eci: np.ndarray | None = None  # H in ECI and the rotational energy at t_0
@@ -114,29 +123,22 @@ class RigidBodyStep(Stepper):
         if k >= self.total_steps or run_complete(inp['mode']):
             self.finished = True
             return {}
-        h, hdot, dipole = vec(inp['wheel_h']), vec(inp['wheel_hdot']), vec(inp['dipole'])
-        for topic, value in ((topics.WHEEL_MOMENTUM, h), (topics.WHEEL_TORQUE, hdot), (topics.DIPOLE_AVG, dipole)):
-            if not np.all(np.isfinite(value)):
-                raise StepError(f'non-finite {topics.resolve(topic)} at step {k}: {value.tolist()}; '
-                                'the physics cannot go on')
+        h, hdot, dipole = xyz(inp['wheel_h']), xyz(inp['wheel_hdot']), xyz(inp['dipole'])
         dt = self.control_period_s
-        for topic, value, limit, unit in (
-                (topics.DIPOLE_AVG, dipole, self.limits.dipole_am2, 'A·m²'),
-                (topics.WHEEL_MOMENTUM, h, self.limits.wheel_momentum_nms, 'N·m·s'),
-                (topics.WHEEL_TORQUE, h + hdot * dt, self.limits.wheel_momentum_nms, 'N·m·s at the step end')):
-            if np.any(np.abs(value) > limit * (1.0 + 1e-9)):
-                raise StepError(f'{topics.resolve(topic)} at step {k} gives {value.tolist()} {unit}, beyond what '
-                                f'the hardware can produce (±{limit.tolist()} per axis): not from this graph\'s '
-                                'actuators; the run stops')
+        h_end = (h[0] + hdot[0] * dt, h[1] + hdot[1] * dt, h[2] + hdot[2] * dt)
+        dipole_bound, wheel_bound = self._bounds
+        if not (math.isfinite(h[0] + h[1] + h[2] + hdot[0] + hdot[1] + hdot[2] + dipole[0] + dipole[1] + dipole[2])
+                and _within(dipole, dipole_bound) and _within(h, wheel_bound) and _within(h_end, wheel_bound)):
+            self._refuse(k, h, hdot, dipole, h_end)
         wall0 = time.perf_counter()
         if self._h0_eci is None:  # the constants of the motion at t_0, with the wheels' momentum h(t_0)
             truth0 = self.model.truth(h)
             self._h0_eci, self._e0_j = truth0.h_total_eci_nms, truth0.rotational_energy_j
-        self.model.advance(self.control_period_s, dipole, h, hdot)
-        self._wheel_h = h + hdot * self.control_period_s
-        truth = self.model.truth(self._wheel_h)
+        self.model.advance(dt, dipole, h, hdot)
+        self._wheel_h = h_end
+        truth = self.model.truth(h_end)
         out = truth_outputs(truth)
-        if self.torque_free and (np.any(dipole) or np.any(hdot)):
+        if self.torque_free and (any(dipole) or any(hdot)):
             self.torque_free = False
         wall = time.perf_counter() - wall0
         self._wall_s += wall
@@ -144,3 +146,19 @@ class RigidBodyStep(Stepper):
         if k % DIAGNOSTICS_EVERY == 0:
             out['diagnostics'] = self.health(truth, wall)
         return out
+
+    def _refuse(self, k: int, h: Any, hdot: Any, dipole: Any, h_end: Any) -> None:
+        """Raise the StepError naming the actuator input that is non-finite or beyond the hardware."""
+        for topic, value in ((topics.WHEEL_MOMENTUM, h), (topics.WHEEL_TORQUE, hdot), (topics.DIPOLE_AVG, dipole)):
+            if not all(math.isfinite(x) for x in value):
+                raise StepError(f'non-finite {topics.resolve(topic)} at step {k}: {list(value)}; '
+                                'the physics cannot go on')
+        dipole_bound, wheel_bound = self._bounds
+        for topic, value, bound, limit, unit in (
+                (topics.DIPOLE_AVG, dipole, dipole_bound, self.limits.dipole_am2, 'A·m²'),
+                (topics.WHEEL_MOMENTUM, h, wheel_bound, self.limits.wheel_momentum_nms, 'N·m·s'),
+                (topics.WHEEL_TORQUE, h_end, wheel_bound, self.limits.wheel_momentum_nms, 'N·m·s at the step end')):
+            if not _within(value, bound):
+                raise StepError(f'{topics.resolve(topic)} at step {k} gives {list(value)} {unit}, beyond what '
+                                f'the hardware can produce (±{limit.tolist()} per axis): not from this graph\'s '
+                                'actuators; the run stops')

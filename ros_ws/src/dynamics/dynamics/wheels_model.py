@@ -13,12 +13,13 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from acds_common import units
 
-from dynamics.errors import DynamicsError, finite_float, finite_vector3
+from dynamics.errors import DynamicsError, finite_float, finite_vector3, finite_xyz
 
 #: Drive saturation voltage, V (seed 002 §4.2.2).
 V_SAT_V = 17.1
@@ -66,6 +67,17 @@ def _min_max_norm(a_scaled: np.ndarray, v: np.ndarray) -> float:
             if abs(den) > 1e-12:
                 cands.append(-(m0[i] - sign * m0[j]) / den)
     return min(float(np.max(np.abs(m0 + t * z))) for t in cands)
+
+
+def _rows_times(rows: tuple[tuple[float, ...], ...], v: Sequence[float]) -> tuple[float, float, float]:
+    """A 3×N matrix (its rows) times an N-vector, on floats."""
+    out = [0.0, 0.0, 0.0]
+    for i, row in enumerate(rows):
+        acc = 0.0
+        for a, x in zip(row, v, strict=True):
+            acc += a * x
+        out[i] = acc
+    return out[0], out[1], out[2]
 
 
 def box_capacity_nms(axes_body: np.ndarray, capacities_nms: np.ndarray) -> np.ndarray:
@@ -154,19 +166,27 @@ class ReactionWheels:
         self._dist = np.zeros((self._axes.shape[1], 3))
         self._dist[self._active] = np.linalg.pinv(self._axes[:, self._active])
         h0 = np.zeros(3) if h0_body_nms is None else finite_vector3("h0_body_nms", h0_body_nms)
-        self._h = self._dist @ h0
-        if np.any(np.abs(self._h) > self._caps * (1.0 + 1e-12)):
-            raise DynamicsError(f"h0_body_nms {h0.tolist()} needs wheel momenta {self._h.tolist()} N·m·s "
+        h = self._dist @ h0
+        if np.any(np.abs(h) > self._caps * (1.0 + 1e-12)):
+            raise DynamicsError(f"h0_body_nms {h0.tolist()} needs wheel momenta {h.tolist()} N·m·s "
                                 f"beyond the wheel capacities {self._caps.tolist()} N·m·s")
-        self._torque = np.zeros_like(self._h)
+        # The per-step state and matrices as floats (N wheels): momenta, axis rows (3×N), distribution rows (N×3).
+        self._h: tuple[float, ...] = tuple(h.tolist())
+        self._torque: tuple[float, ...] = (0.0,) * len(self._h)
+        self._axes_rows = tuple(tuple(row) for row in self._axes.tolist())
+        self._dist_rows = tuple(tuple(row) for row in self._dist.tolist())
+        self._caps_t = tuple(self._caps.tolist())
+        #: One wheel per body axis (three_orthogonal): the body-axis and per-wheel quantities coincide.
+        self._orthogonal = self._axes.shape == (3, 3) and bool(np.all(self._axes == np.eye(3))) and bool(
+            np.all(self._dist == np.eye(3)))
 
     def momentum_body_nms(self) -> np.ndarray:
         """Total wheel momentum in body axes, N·m·s."""
-        return self._axes @ self._h
+        return self._axes @ np.array(self._h)
 
     def wheel_momenta_nms(self) -> np.ndarray:
         """Signed momentum of each wheel along its own axis, N·m·s."""
-        return self._h.copy()
+        return np.array(self._h)
 
     def wheel_capacities_nms(self) -> np.ndarray:
         """Momentum capacity of each wheel, N·m·s."""
@@ -178,35 +198,51 @@ class ReactionWheels:
 
     def wheel_torques_nm(self) -> np.ndarray:
         """Torque applied to each wheel during the last step before capacity limiting, N·m."""
-        return self._torque.copy()
+        return np.array(self._torque)
 
     def saturated(self) -> np.ndarray:
         """Per wheel: True when the wheel is at its momentum capacity (either sign)."""
-        return np.abs(self._h) >= self._caps
+        return np.abs(np.array(self._h)) >= self._caps
 
     def capacity_per_axis_nms(self) -> np.ndarray:
         """Body-axis momentum capacities, N·m·s (Table 4-6 box, see ``box_capacity_nms``)."""
         return box_capacity_nms(self._axes[:, self._active], self._caps[self._active])
+
+    def step_xyz(self, volts_body_axes_v: object, dt_s: float) -> tuple[tuple[float, float, float],
+                                                                      tuple[float, float, float]]:
+        """:meth:`step` on floats: (h at step start, mean ḣ) in body axes as float triples."""
+        volts = finite_xyz("volts_body_axes_v", volts_body_axes_v)
+        dt = finite_float("dt_s", dt_s)
+        if dt <= 0.0:
+            raise DynamicsError(f"dt_s must be > 0 s, got {dt}")
+        k, vsat = self.cfg.torque_gain_nm_per_v2, self.cfg.v_sat_v
+        request = []  # body-axis torque requests k·V|V|, V limited to ±V_sat
+        for v in volts:
+            v = -vsat if v < -vsat else vsat if v > vsat else v
+            request.append(k * v * abs(v))
+        r0, r1, r2 = request
+        torque = request if self._orthogonal else [d0 * r0 + d1 * r1 + d2 * r2 for d0, d1, d2 in self._dist_rows]
+        peak = max(map(abs, torque))
+        t_max = k * vsat * vsat
+        if peak > t_max:
+            torque = [t * (t_max / peak) for t in torque]
+        self._torque = tuple(torque)
+        h_start = self._h
+        h_end = []
+        for h, t, c in zip(h_start, torque, self._caps_t, strict=True):
+            h = h + t * dt
+            h_end.append(-c if h < -c else c if h > c else h)
+        self._h = tuple(h_end)
+        if self._orthogonal:
+            start, end = h_start, h_end
+        else:
+            start, end = _rows_times(self._axes_rows, h_start), _rows_times(self._axes_rows, h_end)
+        return start, ((end[0] - start[0]) / dt, (end[1] - start[1]) / dt, (end[2] - start[2]) / dt)
 
     def step(self, volts_body_axes_v: np.ndarray, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
         """Apply body-axis drive volts for ``dt_s`` s; return (h at step start, mean ḣ) in body axes.
 
         h in N·m·s, ḣ = (h_end − h_start)/dt in N·m (the wheels' momentum rate; the body feels −ḣ).
         """
-        volts = finite_vector3("volts_body_axes_v", volts_body_axes_v)
-        dt = finite_float("dt_s", dt_s)
-        if dt <= 0.0:
-            raise DynamicsError(f"dt_s must be > 0 s, got {dt}")
-        k, vsat = self.cfg.torque_gain_nm_per_v2, self.cfg.v_sat_v
-        v = np.clip(volts, -vsat, vsat)
-        torque = self._dist @ (k * v * np.abs(v))
-        peak = float(np.max(np.abs(torque)))
-        t_max = k * vsat * vsat
-        if peak > t_max:
-            torque = torque * (t_max / peak)
-        self._torque = torque
-        h_start = self._h
-        h_end = np.clip(h_start + torque * dt, -self._caps, self._caps)
-        self._h = h_end
-        h_start_body = self._axes @ h_start
-        return h_start_body, (self._axes @ h_end - h_start_body) / dt
+        h_start, hdot = self.step_xyz(volts_body_axes_v, dt_s)
+        return np.array(h_start), np.array(hdot)

@@ -42,6 +42,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import StrEnum
+from typing import NamedTuple
 
 import numpy as np
 
@@ -208,8 +209,7 @@ class Waveform:
     bridge_on: np.ndarray
 
 
-@dataclass(frozen=True)
-class PeriodResult:
+class PeriodResult(NamedTuple):
     """What one driver reports per control period (spec §6).
 
     Currents in A, moments in A·m², energies in J, power in W, e_ft in V.
@@ -276,6 +276,11 @@ class BridgeSwitchCoil:
         self.driver = driver
         self._i_on = _on_current_a(coil, driver)
         self._i_off = _off_current_a(coil, driver)
+        self._tau = coil.tau_s
+        #: One band cycle's (t_on, t_off, areas) for the last band (lo, hi): a held command reuses it.
+        self._cycle: tuple[float, float, tuple[float, float, float, float]] | None = None
+        #: The (all-zero) result of an idle period, built once.
+        self._idle: PeriodResult | None = None
         self._current_a = float(current0_a)
         self._bridge_on = False
         self._polarity = 1.0 if current0_a >= 0.0 else -1.0
@@ -323,6 +328,9 @@ class BridgeSwitchCoil:
         off and the current decays to zero through the diodes. ``record`` keeps the
         waveform with points at most ``record_step_s`` apart (default τ/200).
         """
+        if (self._idle is not None and command_current_a == 0.0 and 0.0 < duration_s < math.inf and self.fault is None
+                and not (record or self.powered or self._bridge_on or self._current_a)):
+            return self._idle  # nothing to drive and nothing flowing (a standby unit): see _simulate
         if not math.isfinite(command_current_a):
             raise EmDriverError(f'command current must be finite, got {command_current_a!r}')
         magnitude = abs(float(command_current_a))
@@ -355,7 +363,7 @@ class BridgeSwitchCoil:
         """Event-driven exact integration over one period (see the module docstring)."""
         if not (math.isfinite(duration_s) and duration_s > 0.0):
             raise EmDriverError(f'duration_s must be a finite positive time, got {duration_s!r}')
-        tau = self.coil.tau_s
+        tau = self._tau
         supply = self.driver.supply_v
         recorder = None
         if record:
@@ -374,6 +382,14 @@ class BridgeSwitchCoil:
         s = self._polarity
         i = self._current_a
         on = self._bridge_on
+        if not (active or on or i) and recorder is None:
+            # Off at zero current and nothing to drive (a standby unit): the diodes block, nothing happens.
+            self._current_a = 0.0
+            if self._idle is None:
+                self._idle = self._result(0.0, 0.0, 0, 0.0, 0.0, duration_s, None)  # all zeros, any duration
+            return self._idle
+        i_on, i_off = self._i_on, self._i_off
+        time_to_reach, segment = rl_circuit.time_to_reach_s, rl_circuit.segment
         t = 0.0
         integral_i = 0.0
         on_time = 0.0
@@ -389,19 +405,19 @@ class BridgeSwitchCoil:
                 on = new_on
             # The path and the event that ends this segment.
             if on and x >= 0.0:  # transistor path along the polarity
-                i_inf, target, transistor = s * self._i_on, s * hi, True
+                i_inf, target, transistor = s * i_on, s * hi, True
             elif on:  # reversal: opposite pair's diodes carry the current down to zero
-                i_inf, target, transistor = s * self._i_off, 0.0, False
+                i_inf, target, transistor = s * i_off, 0.0, False
             elif i != 0.0:  # freewheel through the diodes
-                i_inf = -math.copysign(self._i_off, i)
+                i_inf = -math.copysign(i_off, i)
                 target = s * lo if (active and s * i > lo) else 0.0
                 transistor = False
             else:  # off at zero current: the diodes block, nothing happens
                 i_inf, target, transistor = 0.0, 0.0, False
-            if transistor and x == lo and recorder is None and 0.0 < lo < hi < self._i_on:
+            if transistor and x == lo and recorder is None and 0.0 < lo < hi < i_on:
                 # Settled in the band at the turn-on edge: the waveform is exactly periodic until the
-                # period ends, so whole on/off cycles are added in closed form (all but the last).
-                n, cycle = self._whole_cycles(lo, hi, duration_s - t)
+                # period ends, so the whole on/off cycles that end before it are added in closed form.
+                n, cycle = self._whole_cycles(lo, hi, t, duration_s)
                 if n > 0:
                     t_on, t_off, area_on, area_off = cycle
                     t += n * (t_on + t_off)
@@ -411,9 +427,9 @@ class BridgeSwitchCoil:
                     returned += n * supply * area_off
                     switches += 2 * n
             remaining = duration_s - t
-            dt = min(remaining, rl_circuit.time_to_reach_s(i, i_inf, target, tau))
+            dt = min(remaining, time_to_reach(i, i_inf, target, tau))
             hit = dt < remaining
-            i_free, area = rl_circuit.segment(i, i_inf, tau, dt)  # area = ∫ i dt over the segment
+            i_free, area = segment(i, i_inf, tau, dt)  # area = ∫ i dt over the segment
             i_end = target if hit else i_free
             if recorder is not None:
                 recorder.segment(t, dt, i, i_inf, tau, on)
@@ -434,15 +450,26 @@ class BridgeSwitchCoil:
         return self._result(integral_i / duration_s, on_time / duration_s, switches, drawn, returned,
                             duration_s, waveform)
 
-    def _whole_cycles(self, lo: float, hi: float, remaining_s: float) -> tuple[int, tuple[float, float, float, float]]:
-        """Number of whole band cycles to skip (leaving one to integrate edge by edge) and one cycle's
-        (t_on, t_off, ∫|i| dt on, ∫|i| dt off), from the same exponentials as eq. 4-27."""
-        tau = self.coil.tau_s
-        t_on = tau * math.log((self._i_on - lo) / (self._i_on - hi))
-        t_off = tau * math.log((hi + self._i_off) / (lo + self._i_off))
-        area_on = self._i_on * t_on + (lo - self._i_on) * tau * (1.0 - math.exp(-t_on / tau))
-        area_off = -self._i_off * t_off + (hi + self._i_off) * tau * (1.0 - math.exp(-t_off / tau))
-        return int(remaining_s / (t_on + t_off)) - 1, (t_on, t_off, area_on, area_off)
+    def _whole_cycles(self, lo: float, hi: float, t_s: float,
+                      duration_s: float) -> tuple[int, tuple[float, float, float, float]]:
+        """Number of whole band cycles from ``t_s`` that end strictly before ``duration_s`` (the rest is
+        integrated edge by edge) and one cycle's (t_on, t_off, ∫|i| dt on, ∫|i| dt off), from the same
+        exponentials as eq. 4-27."""
+        if self._cycle is not None and self._cycle[0] == lo and self._cycle[1] == hi:
+            cycle = self._cycle[2]
+        else:
+            tau, i_on, i_off = self._tau, self._i_on, self._i_off
+            t_on = tau * math.log((i_on - lo) / (i_on - hi))
+            t_off = tau * math.log((hi + i_off) / (lo + i_off))
+            area_on = i_on * t_on + (lo - i_on) * tau * (1.0 - math.exp(-t_on / tau))
+            area_off = -i_off * t_off + (hi + i_off) * tau * (1.0 - math.exp(-t_off / tau))
+            cycle = (t_on, t_off, area_on, area_off)
+            self._cycle = (lo, hi, cycle)
+        period = cycle[0] + cycle[1]
+        n = int((duration_s - t_s) / period)
+        if n > 0 and t_s + n * period >= duration_s:  # rounding: keep the period's end for the edges
+            n -= 1
+        return n, cycle
 
     def _open_winding_result(self, active: bool, duration_s: float, recorder: _Recorder | None) -> PeriodResult:
         """Open winding: no current flows; the comparator sees zero current and holds the bridge on."""

@@ -81,7 +81,6 @@ class AxisConfig:
         return cls('constant_level', coil, _default_constant_level_driver())
 
 
-@dataclass(frozen=True)
 class AssemblyResult:
     """Per-axis outputs of one control period (arrays indexed x, y, z).
 
@@ -95,20 +94,75 @@ class AssemblyResult:
     active_units: 'A' or 'B' per axis.
     events: unit switch-overs and alarm transitions this period.
     diagnostics: rejected commands (NaN/inf) this period.
+
+    The per-axis values are kept as given (the assembly gives float tuples, what the stepper
+    publishes through :meth:`xyz`); the attributes are them as numpy arrays, built when read.
     """
 
-    avg_dipole_am2: np.ndarray
-    end_dipole_am2: np.ndarray
-    coil_current_a: np.ndarray
-    commanded_current_a: np.ndarray
-    e_ft_v: np.ndarray
-    duty: np.ndarray
-    switch_count: np.ndarray
-    power_w: np.ndarray
-    alarms: np.ndarray
-    active_units: tuple[str, str, str]
-    events: tuple[str, ...]
-    diagnostics: tuple[str, ...]
+    def __init__(self, *, avg_dipole_am2: Sequence[float], end_dipole_am2: Sequence[float],
+                 coil_current_a: Sequence[float], commanded_current_a: Sequence[float], e_ft_v: Sequence[float],
+                 duty: Sequence[float], switch_count: Sequence[int], power_w: Sequence[float],
+                 alarms: Sequence[bool], active_units: tuple[str, str, str], events: tuple[str, ...],
+                 diagnostics: tuple[str, ...]) -> None:
+        self._values = {'avg_dipole_am2': avg_dipole_am2, 'end_dipole_am2': end_dipole_am2,
+                        'coil_current_a': coil_current_a, 'commanded_current_a': commanded_current_a,
+                        'e_ft_v': e_ft_v, 'duty': duty, 'switch_count': switch_count, 'power_w': power_w,
+                        'alarms': alarms}
+        self.active_units = active_units
+        self.events = events
+        self.diagnostics = diagnostics
+        #: The alarms as a tuple of bools (what the stepper compares step to step).
+        self.alarm_flags = tuple(map(bool, alarms))
+
+    def xyz(self, name: str) -> tuple[float, float, float]:
+        """One per-axis quantity (by its attribute name) as a float triple."""
+        x, y, z = self._values[name]
+        return float(x), float(y), float(z)
+
+    @property
+    def avg_dipole_am2(self) -> np.ndarray:
+        """Time-averaged dipole, A·m²."""
+        return np.asarray(self._values['avg_dipole_am2'])
+
+    @property
+    def end_dipole_am2(self) -> np.ndarray:
+        """Dipole at the end, A·m²."""
+        return np.asarray(self._values['end_dipole_am2'])
+
+    @property
+    def coil_current_a(self) -> np.ndarray:
+        """Active winding current at the end, A."""
+        return np.asarray(self._values['coil_current_a'])
+
+    @property
+    def commanded_current_a(self) -> np.ndarray:
+        """Current command, A."""
+        return np.asarray(self._values['commanded_current_a'])
+
+    @property
+    def e_ft_v(self) -> np.ndarray:
+        """Active unit's current telemetry, V."""
+        return np.asarray(self._values['e_ft_v'])
+
+    @property
+    def duty(self) -> np.ndarray:
+        """Active unit's duty cycle."""
+        return np.asarray(self._values['duty'])
+
+    @property
+    def switch_count(self) -> np.ndarray:
+        """Active unit's bridge transitions."""
+        return np.asarray(self._values['switch_count'])
+
+    @property
+    def power_w(self) -> np.ndarray:
+        """Electrical power of both units, W."""
+        return np.asarray(self._values['power_w'])
+
+    @property
+    def alarms(self) -> np.ndarray:
+        """Excess-coil-current / mismatch alarm."""
+        return np.asarray(self._values['alarms'])
 
 
 class _Axis:
@@ -121,23 +175,31 @@ class _Axis:
         self.command = 0.0
         self.mismatch_time_s = 0.0
         self.alarm = False
+        on_current_a = self.units[UNITS[0]].on_current_a  # both units: the same coil and driver
+        #: Mismatch monitor: the current the bridge can hold and the axis full-scale current, A.
+        self.on_current_a = on_current_a
+        self.full_scale_a = on_current_a if config.drive_type == 'constant_level' else config.coil.max_current_a
+
+    def level(self) -> int:
+        """Sign of the held command: −1, 0 or +1 (the constant-level drive's level)."""
+        return (self.command > 0.0) - (self.command < 0.0)
 
     def current_command_a(self) -> float:
         """Current command for the held moment / level command, A (signed)."""
         coil = self.config.coil
         if self.config.drive_type == 'constant_level':
-            return float(np.sign(self.command)) * self.units[self.active].on_current_a
-        moment = float(np.clip(self.command, -coil.max_moment_am2, coil.max_moment_am2))
-        return moment / coil.moment_per_amp_am2
+            return self.level() * self.units[self.active].on_current_a
+        limit = coil.max_moment_am2
+        return min(max(self.command, -limit), limit) / coil.moment_per_amp_am2
 
-    def run_unit(self, name: str, dt_s: float) -> PeriodResult:
+    def run_unit(self, name: str, dt_s: float, command_a: float) -> PeriodResult:
+        """Run one unit for the period; ``command_a`` is :meth:`current_command_a` (the active one's)."""
         unit = self.units[name]
         powered = name == self.active
         unit.powered = powered
         if self.config.drive_type == 'constant_level':
-            level = int(np.sign(self.command)) if powered else 0
-            return unit.run_constant_level(level, dt_s)
-        return unit.run(self.current_command_a() if powered else 0.0, dt_s)
+            return unit.run_constant_level(self.level() if powered else 0, dt_s)
+        return unit.run(command_a if powered else 0.0, dt_s)
 
 
 class DriveAssembly:
@@ -169,8 +231,8 @@ class DriveAssembly:
     @property
     def active_units(self) -> tuple[str, str, str]:
         """Active unit per axis."""
-        x, y, z = (a.active for a in self._axes)
-        return x, y, z
+        x, y, z = self._axes
+        return x.active, y.active, z.active
 
     def select_eea(self, axis: int, unit: str) -> None:
         """EEA SELECT (Table 4-11): make ``unit`` ('A'/'B') the active driver + winding of ``axis`` (0…2)."""
@@ -197,48 +259,45 @@ class DriveAssembly:
         A NaN/inf component is rejected: that axis holds its last valid command and
         the result carries a diagnostic (no exception: the node keeps running).
         """
-        command = np.asarray(moment_command_am2, dtype=float)
-        if command.shape != (3,):
-            raise EmDriverError(f'moment_command_am2 must have shape (3,), got {command.shape}')
+        try:
+            command = [float(c) for c in moment_command_am2]
+        except TypeError:
+            command = []
+        if len(command) != 3:
+            raise EmDriverError(f'moment_command_am2 must have shape (3,), got {np.shape(moment_command_am2)}')
         if not (math.isfinite(dt_s) and dt_s > 0.0):
             raise EmDriverError(f'dt_s must be a finite positive time, got {dt_s!r}')
         diagnostics: list[str] = []
         events, self._pending_events = self._pending_events, []
-        out = {k: np.zeros(3) for k in ('avg', 'end', 'cur', 'cmd', 'eft', 'duty', 'power')}
-        switches = np.zeros(3, dtype=int)
+        rows: list[tuple[float, float, float, float, float, float, float, int]] = []
         for k, ax in enumerate(self._axes):
             if ax.config.drive_type == 'none':  # no coil on this axis: nothing to drive, nothing to monitor
+                rows.append((0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0))
                 continue
             if math.isfinite(command[k]):
-                ax.command = float(command[k])
+                ax.command = command[k]
             else:
                 diagnostics.append(f'axis {k}: rejected non-finite moment command {command[k]!r}; '
                                    f'holding last valid command {ax.command:g}')
-            results = {name: ax.run_unit(name, dt_s) for name in UNITS}
-            active = results[ax.active]
-            out['avg'][k] = sum(r.avg_moment_am2 for r in results.values())
-            out['end'][k] = sum(r.end_moment_am2 for r in results.values())
-            out['power'][k] = sum(r.power_w for r in results.values())
-            out['cur'][k] = active.end_current_a
-            out['cmd'][k] = ax.current_command_a()
-            out['eft'][k] = active.e_ft_v
-            out['duty'][k] = active.duty
-            switches[k] = active.switch_count
-            events.extend(self._monitor(k, ax, active, dt_s))
+            command_a = ax.current_command_a()
+            a, b = ax.run_unit(UNITS[0], dt_s, command_a), ax.run_unit(UNITS[1], dt_s, command_a)
+            active = a if ax.active == UNITS[0] else b
+            rows.append((a.avg_moment_am2 + b.avg_moment_am2, a.end_moment_am2 + b.end_moment_am2,
+                         active.end_current_a, command_a, active.e_ft_v, active.duty,
+                         a.power_w + b.power_w, active.switch_count))
+            events.extend(self._monitor(k, ax, active, command_a, dt_s))
+        avg, end, cur, cmd, eft, duty, power, switches = zip(*rows, strict=True)
         return AssemblyResult(
-            avg_dipole_am2=out['avg'], end_dipole_am2=out['end'], coil_current_a=out['cur'],
-            commanded_current_a=out['cmd'], e_ft_v=out['eft'], duty=out['duty'], switch_count=switches,
-            power_w=out['power'], alarms=np.array([a.alarm for a in self._axes]),
+            avg_dipole_am2=avg, end_dipole_am2=end, coil_current_a=cur, commanded_current_a=cmd, e_ft_v=eft, duty=duty,
+            switch_count=switches, power_w=power, alarms=tuple(a.alarm for a in self._axes),
             active_units=self.active_units, events=tuple(events), diagnostics=tuple(diagnostics))
 
-    def _monitor(self, k: int, ax: _Axis, active: PeriodResult, dt_s: float) -> list[str]:
-        """Mismatch alarm: e_ft against the expected current; optional auto switch to standby."""
-        unit = ax.units[ax.active]
+    def _monitor(self, k: int, ax: _Axis, active: PeriodResult, command_a: float, dt_s: float) -> list[str]:
+        """Mismatch alarm: e_ft against the expected current (``command_a`` limited to what the supply
+        reaches); optional auto switch to standby."""
         measured_a = active.e_ft_v / ax.config.driver.current_sense_gain_v_per_a
-        expected_a = float(np.clip(ax.current_command_a(), -unit.on_current_a, unit.on_current_a))
-        full_scale_a = (unit.on_current_a if ax.config.drive_type == 'constant_level'
-                        else ax.config.coil.max_current_a)
-        if abs(measured_a - expected_a) > self.mismatch_tolerance_frac * full_scale_a:
+        expected_a = min(max(command_a, -ax.on_current_a), ax.on_current_a)
+        if abs(measured_a - expected_a) > self.mismatch_tolerance_frac * ax.full_scale_a:
             ax.mismatch_time_s += dt_s
         else:
             ax.mismatch_time_s = 0.0

@@ -23,7 +23,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from acds_common.messages import ERROR, OK, WARN, diagnostic, mode_status, vec, vector3
+from acds_common.messages import ERROR, OK, WARN, diagnostic, mode_status, vector3
 from acds_common.stepper import Stepper
 from acds_common.validation import scenario_key
 
@@ -45,7 +45,9 @@ class EmDriverStep(Stepper):
         self.source = self.cfg['command_source']
         self._electrical = self.cfg['driver_kind'] == 'torque_rod'
         self._failure_pending = self.cfg['failure'] != 'none'
-        self._alarms = np.zeros(3, dtype=bool)
+        self._bench_command = vector3(self.cfg['bench_command'])
+        self._commanded = self.present(self.source)
+        self._alarms = (False, False, False)
 
     def drive(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Apply commands and failures due at step k, drive the coils for one control period."""
@@ -61,21 +63,24 @@ class EmDriverStep(Stepper):
             axis, unit, kind = self.cfg['failure_axis'], self.cfg['failure_unit'], self.cfg['failure']
             self.assembly.inject_failure(axis, unit, kind)
             events.append(f'scenario failure at t={t_s:g} s: axis {"xyz"[axis]} unit {unit} {kind}')
-        command = vec(inp['command']) if self.present(self.source) else np.array(self.cfg['bench_command'])
+        if not self._commanded:
+            command = self._bench_command
+        else:
+            command = (0.0, 0.0, 0.0) if inp['command'] is None else inp['command']
         result = self.assembly.step(command, self.control_period_s)
         events.extend(result.events)
         rejected.extend(result.diagnostics)
         out: dict[str, Any] = {
-            'dipole_avg': vector3(result.avg_dipole_am2),
-            'dipole_end': vector3(result.end_dipole_am2),
-            'coil_current': vector3(result.coil_current_a),
-            'e_ft': vector3(result.e_ft_v),
+            'dipole_avg': result.xyz('avg_dipole_am2'),
+            'dipole_end': result.xyz('end_dipole_am2'),
+            'coil_current': result.xyz('coil_current_a'),
+            'e_ft': result.xyz('e_ft_v'),
         }
         if self._electrical:
-            out['power'] = vector3(result.power_w)
-            out['duty'] = vector3(result.duty)
-        alarm_changed = bool(np.any(result.alarms != self._alarms))
-        self._alarms = result.alarms.copy()
+            out['power'] = result.xyz('power_w')
+            out['duty'] = result.xyz('duty')
+        alarm_changed = result.alarm_flags != self._alarms
+        self._alarms = result.alarm_flags
         if events or rejected or alarm_changed or k % self.cfg['telemetry_every'] == 0:
             out['diagnostics'] = self.telemetry(result, command, events, rejected)
         for line in rejected:
@@ -84,7 +89,7 @@ class EmDriverStep(Stepper):
             self.log('info', f't={t_s:g} s: {line}')
         return out
 
-    def telemetry(self, r: AssemblyResult, command: np.ndarray, events: list[str], rejected: list[str]) -> Any:
+    def telemetry(self, r: AssemblyResult, command: tuple[float, ...], events: list[str], rejected: list[str]) -> Any:
         """Table 4-11 driver telemetry: coil current, current command, alarms, active units; plus duty/power."""
         level, message = OK, 'ok'
         if rejected:

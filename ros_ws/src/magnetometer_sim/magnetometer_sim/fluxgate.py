@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from acds_common import validation
 from acds_common.units import GAUSS_T
+from acds_common.vec3 import Vec3, mat3, mv
 
 __all__ = [
     'MagnetometerError',
@@ -117,7 +118,6 @@ class FluxgateAxisParams:
         return self.resolution_g**2 / 12.0 + accuracy_g**2 / 3.0 + self.noise_std_g**2
 
 
-@dataclass(frozen=True)
 class MagnetometerReading:
     """One magnetometer sample (spec §5, Table 4-11 telemetry).
 
@@ -128,14 +128,45 @@ class MagnetometerReading:
     b_sensed_t: the field at the sensor the volts came from (truth + residual + Δ·M), T.
     active_unit: 'A' or 'B'.
     covariance_t2: 3×3 reading covariance, T² (diagonal, from resolution/accuracy/noise).
+
+    The model computes float triples (``volts_xyz``, ``bias_xyz``, ``field_xyz``, ``b_sensed_xyz``
+    and the row-major ``covariance9``: what the stepper publishes); the numpy attributes are built
+    from them when read.
     """
 
-    volts: np.ndarray
-    bias_volts: np.ndarray
-    field_t: np.ndarray
-    b_sensed_t: np.ndarray
-    active_unit: str
-    covariance_t2: np.ndarray
+    def __init__(self, volts_xyz: Vec3, bias_xyz: Vec3, field_xyz: Vec3, b_sensed_xyz: Vec3, active_unit: str,
+                 covariance9: tuple[float, ...]) -> None:
+        self.volts_xyz = volts_xyz
+        self.bias_xyz = bias_xyz
+        self.field_xyz = field_xyz
+        self.b_sensed_xyz = b_sensed_xyz
+        self.active_unit = active_unit
+        self.covariance9 = covariance9
+
+    @property
+    def volts(self) -> np.ndarray:
+        """Per-axis field voltages, V."""
+        return np.array(self.volts_xyz)
+
+    @property
+    def bias_volts(self) -> np.ndarray:
+        """Per-axis bias reference voltages, V."""
+        return np.array(self.bias_xyz)
+
+    @property
+    def field_t(self) -> np.ndarray:
+        """Field the volts mean to a naive reader, T."""
+        return np.array(self.field_xyz)
+
+    @property
+    def b_sensed_t(self) -> np.ndarray:
+        """Field at the sensor, T."""
+        return np.array(self.b_sensed_xyz)
+
+    @property
+    def covariance_t2(self) -> np.ndarray:
+        """3×3 reading covariance, T²."""
+        return np.array(self.covariance9).reshape(3, 3)
 
 
 class FluxgateAssembly:
@@ -152,20 +183,21 @@ class FluxgateAssembly:
         if p.accuracy_error_enabled:
             # Offset and scale errors each take up to half the ±0.1 % FS budget.
             half_g = 0.5 * p.accuracy_frac_fs * p.range_g
-            self._offset_g = self._rng.uniform(-half_g, half_g, 3)
-            self._scale_err = self._rng.uniform(-half_g, half_g, 3) / p.range_g
+            self._offset_g = tuple(self._rng.uniform(-half_g, half_g, 3).tolist())
+            self._scale_err = tuple((self._rng.uniform(-half_g, half_g, 3) / p.range_g).tolist())
         else:
-            self._offset_g = np.zeros(3)
-            self._scale_err = np.zeros(3)
-        self._bias_shift_v = np.zeros(3)
-        self._stuck = np.zeros(3, dtype=bool)
+            self._offset_g = (0.0, 0.0, 0.0)
+            self._scale_err = (0.0, 0.0, 0.0)
+        self._bias_shift_v = [0.0, 0.0, 0.0]
+        self._stuck = [False, False, False]
         self._dead = False
-        self._last_v = np.full(3, p.bias_v)
+        self._last_v = (p.bias_v, p.bias_v, p.bias_v)
+        self._step_v = p.step_v
 
     def clear_faults(self) -> None:
         """Remove every injected fault."""
-        self._bias_shift_v[:] = 0.0
-        self._stuck[:] = False
+        self._bias_shift_v = [0.0, 0.0, 0.0]
+        self._stuck = [False, False, False]
         self._dead = False
 
     def inject_fault(self, kind: str, axis: int | None = None, value: float | None = None) -> None:
@@ -174,38 +206,63 @@ class FluxgateAssembly:
         if kind == 'bias_shift':
             if value is None or not math.isfinite(value):
                 raise MagnetometerError(f'bias_shift needs a finite value in volts, got {value!r}')
-            self._bias_shift_v[axes] += value
+            for i in axes:
+                self._bias_shift_v[i] += value
         elif kind == 'stuck_axis':
-            self._stuck[axes] = True
+            for i in axes:
+                self._stuck[i] = True
         elif kind == 'dead_unit':
             self._dead = True
         else:
             raise MagnetometerError(f'unknown magnetometer fault {kind!r}; expected one of {FAULT_KINDS}')
 
+    def _volts(self, b_g: float, bias_v: float) -> float:
+        """One axis: field (G) → output volts about ``bias_v``, clipped to the rails, quantised."""
+        p = self.params
+        c = 0.5 * p.nonlinearity_frac
+        v = p.bias_v + p.scale_v_per_g * (b_g + c * (b_g ** 3 - b_g * p.range_g ** 2)) - p.bias_v + bias_v
+        v = p.rail_low_v if v < p.rail_low_v else p.rail_high_v if v > p.rail_high_v else v  # the rails
+        return round(v / self._step_v) * self._step_v
+
+    def sample_xyz(self, b_sensed_t: Sequence[float]) -> tuple[Vec3, Vec3]:
+        """:meth:`sample` on a float triple: (axis volts, bias volts) as float triples."""
+        p = self.params
+        (sx, sy, sz), (ox, oy, oz) = self._scale_err, self._offset_g
+        bx = b_sensed_t[0] / GAUSS_T * (1.0 + sx) + ox
+        by = b_sensed_t[1] / GAUSS_T * (1.0 + sy) + oy
+        bz = b_sensed_t[2] / GAUSS_T * (1.0 + sz) + oz
+        if p.noise_std_g > 0.0:
+            nx, ny, nz = self._rng.normal(0.0, p.noise_std_g, 3).tolist()
+            bx, by, bz = bx + nx, by + ny, bz + nz
+        ex, ey, ez = (p.bias_v + shift for shift in self._bias_shift_v)
+        if any(self._stuck):  # a stuck axis repeats its last output
+            last, stuck = self._last_v, self._stuck
+            out: Vec3 = (last[0] if stuck[0] else self._volts(bx, ex), last[1] if stuck[1] else self._volts(by, ey),
+                         last[2] if stuck[2] else self._volts(bz, ez))
+        else:
+            out = (self._volts(bx, ex), self._volts(by, ey), self._volts(bz, ez))
+        self._last_v = out
+        if self._dead:
+            return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+        lo, hi = p.rail_low_v, p.rail_high_v
+        return out, (min(max(ex, lo), hi), min(max(ey, lo), hi), min(max(ez, lo), hi))
+
     def sample(self, b_sensed_t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Output (axis volts, bias volts), V, for the field at the sensor b_sensed_t (T, body axes)."""
-        p = self.params
-        b_g = np.asarray(b_sensed_t, dtype=float) / GAUSS_T
-        b_g = b_g * (1.0 + self._scale_err) + self._offset_g
-        if p.noise_std_g > 0.0:
-            b_g = b_g + self._rng.normal(0.0, p.noise_std_g, 3)
-        bias = p.bias_v + self._bias_shift_v
-        volts = p.ideal_volts(b_g) - p.bias_v + bias
-        volts = np.clip(volts, p.rail_low_v, p.rail_high_v)
-        volts = np.round(volts / p.step_v) * p.step_v
-        volts = np.where(self._stuck, self._last_v, volts)
-        self._last_v = volts
-        if self._dead:
-            return np.zeros(3), np.zeros(3)
-        return volts.copy(), np.clip(bias, p.rail_low_v, p.rail_high_v)
+        volts, bias = self.sample_xyz(_check_xyz('b_sensed_t', b_sensed_t))
+        return np.array(volts), np.array(bias)
 
     @staticmethod
-    def _axes(axis: int | None) -> slice | int:
+    def _axes(axis: int | None) -> tuple[int, ...]:
         if axis is None:
-            return slice(None)
+            return (0, 1, 2)
         if axis not in (0, 1, 2):
             raise MagnetometerError(f'axis must be 0, 1, 2 (x, y, z) or None for all, got {axis!r}')
-        return axis
+        return (axis,)
+
+
+def _check_xyz(name: str, value: np.ndarray | Sequence[float]) -> Vec3:
+    return validation.finite_xyz(name, value, MagnetometerError)
 
 
 def _check_vec3(name: str, value: np.ndarray | Sequence[float]) -> np.ndarray:
@@ -230,6 +287,13 @@ class Magnetometer:
         if delta.shape != (3, 3) or not np.all(np.isfinite(delta)):
             raise MagnetometerError(f'coupling_t_per_am2 must be a finite 3x3 matrix, got shape {delta.shape}')
         self.coupling_t_per_am2 = delta
+        self._residual = tuple(self.residual_field_t.tolist())
+        #: Each unit's reading covariance, row-major, T² (diagonal: resolution, accuracy, noise).
+        self._covariance9 = {}
+        for name, unit in self.units.items():
+            var = unit.params.variance_g2() * GAUSS_T**2
+            self._covariance9[name] = (var, 0.0, 0.0, 0.0, var, 0.0, 0.0, 0.0, var)
+        self._delta = mat3(delta)
         self.active_unit = UNITS[0]
 
     def select_unit(self, unit: str) -> None:
@@ -257,16 +321,17 @@ class Magnetometer:
         b_true_body_t: Earth field at the spacecraft, body axes, T.
         em_dipole_am2: the electromagnets' achieved dipole from the previous step, A·m².
         """
-        b_true = _check_vec3('b_true_body_t', b_true_body_t)
-        dipole = _check_vec3('em_dipole_am2', em_dipole_am2)
-        b_sensed = b_true + self.residual_field_t + self.coupling_t_per_am2 @ dipole
-        samples = {name: unit.sample(b_sensed) for name, unit in self.units.items()}
+        bx, by, bz = _check_xyz('b_true_body_t', b_true_body_t)
+        dipole = _check_xyz('em_dipole_am2', em_dipole_am2)
+        rx, ry, rz = self._residual
+        dx, dy, dz = mv(self._delta, dipole)
+        b_sensed = (bx + rx + dx, by + ry + dy, bz + rz + dz)
+        samples = {name: unit.sample_xyz(b_sensed) for name, unit in self.units.items()}
         volts, bias = samples[self.active_unit]
         p = self.units[self.active_unit].params
-        field_t = (volts - p.bias_v) / p.scale_v_per_g * GAUSS_T
-        covariance = np.eye(3) * p.variance_g2() * GAUSS_T**2
-        return MagnetometerReading(volts=volts, bias_volts=bias, field_t=field_t, b_sensed_t=b_sensed,
-                                   active_unit=self.active_unit, covariance_t2=covariance)
+        field_t = ((volts[0] - p.bias_v) / p.scale_v_per_g * GAUSS_T, (volts[1] - p.bias_v) / p.scale_v_per_g * GAUSS_T,
+                   (volts[2] - p.bias_v) / p.scale_v_per_g * GAUSS_T)
+        return MagnetometerReading(volts, bias, field_t, b_sensed, self.active_unit, self._covariance9[self.active_unit])
 
     @staticmethod
     def _check_unit(unit: str) -> None:

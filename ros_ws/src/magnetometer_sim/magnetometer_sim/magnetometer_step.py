@@ -15,10 +15,9 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-from acds_common.messages import ERROR, OK, WARN, diagnostic, field, magnetic_field, mode_status, vec, vector3
+from acds_common.messages import ERROR, OK, WARN, diagnostic, mode_status, xyz
 from acds_common.stepper import Stepper
-from acds_common.validation import scenario_key
+from acds_common.validation import all_finite, scenario_key
 
 from magnetometer_sim.configuration import build_magnetometer, parse_command
 from magnetometer_sim.fluxgate import MagnetometerError, MagnetometerReading
@@ -38,8 +37,8 @@ class MagnetometerStep(Stepper):
         with scenario_key('magnetometer', MagnetometerError):
             self.mag = build_magnetometer(self.cfg, self.seed)
         self._fault_pending = self.cfg['fault'] != 'none'
-        self._b_true = np.zeros(3)
-        self._dipole = np.zeros(3)
+        self._b_true = (0.0, 0.0, 0.0)
+        self._dipole = (0.0, 0.0, 0.0)
 
     def sample(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Apply commands and faults due at step k, sample both units, return the active one."""
@@ -58,21 +57,21 @@ class MagnetometerStep(Stepper):
             events.append(f'scenario fault at t={t_s:g} s: unit {self.cfg["fault_unit"]} {self.cfg["fault"]}'
                           + (f' {value:+g} V' if value is not None else '')
                           + (' on all axes' if axis is None else f' on axis {"xyz"[axis]}'))
-        b_true = field(inp['b_true'])
-        if np.all(np.isfinite(b_true)):
+        b_true = (0.0, 0.0, 0.0) if inp['b_true'] is None else inp['b_true'][0]
+        if all_finite(b_true):
             self._b_true = b_true
         else:
-            errors.append(f'rejected non-finite B_true {b_true.tolist()}; holding the last valid field')
-        dipole = vec(inp['dipole'])
-        if np.all(np.isfinite(dipole)):
+            errors.append(f'rejected non-finite B_true {list(b_true)}; holding the last valid field')
+        dipole = xyz(inp['dipole'])
+        if all_finite(dipole):
             self._dipole = dipole
         else:
-            errors.append(f'rejected non-finite achieved dipole {dipole.tolist()}; holding the last valid dipole')
+            errors.append(f'rejected non-finite achieved dipole {list(dipole)}; holding the last valid dipole')
         reading = self.mag.read(self._b_true, self._dipole)
         out: dict[str, Any] = {
-            'volts': vector3(reading.volts),
-            'bias_volts': vector3(reading.bias_volts),
-            'field': magnetic_field(reading.field_t, reading.covariance_t2.ravel()),
+            'volts': reading.volts_xyz,
+            'bias_volts': reading.bias_xyz,
+            'field': (reading.field_xyz, reading.covariance9),
         }
         if events or errors or k % self.cfg['telemetry_every'] == 0:
             out['diagnostics'] = self.telemetry(reading, events, errors)
@@ -84,15 +83,15 @@ class MagnetometerStep(Stepper):
 
     def telemetry(self, reading: MagnetometerReading, events: list[str], errors: list[str]) -> Any:
         """Table 4-11 magnetometer telemetry: bias voltage, per-axis volts, active unit; events."""
-        bias_off = float(np.max(np.abs(reading.bias_volts - 2.5)))
+        bias_off = max(abs(v - 2.5) for v in reading.bias_xyz)
         level, message = OK, 'ok'
         if bias_off > BIAS_WARN_V:
             level, message = WARN, f'bias voltage off nominal 2.5 V by {bias_off:.3f} V'
         if errors:
             level, message = ERROR, errors[0]
         values: dict[str, object] = {'active_unit': reading.active_unit}
-        values.update({f'bias_volts_{a}': f'{v:.4f}' for a, v in zip('xyz', reading.bias_volts, strict=True)})
-        values.update({f'volts_{a}': f'{v:.4f}' for a, v in zip('xyz', reading.volts, strict=True)})
+        values.update({f'bias_volts_{a}': f'{v:.4f}' for a, v in zip('xyz', reading.bias_xyz, strict=True)})
+        values.update({f'volts_{a}': f'{v:.4f}' for a, v in zip('xyz', reading.volts_xyz, strict=True)})
         values.update({f'event_{i}': e for i, e in enumerate(events)})
         values.update({f'error_{i}': e for i, e in enumerate(errors)})
         return diagnostic(self.node, values, message, level)

@@ -15,12 +15,15 @@ capacity"; for the 4-wheel cluster it is the axis-box criterion.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 from acds_common import topics
 from acds_common.units import nms_to_ftlbs
 
+_MODE, _WHEEL_MOMENTUM, _WHEEL_TORQUE, _MOMENT_COMMAND = (
+    topics.resolve(t) for t in (topics.MODE, topics.WHEEL_MOMENTUM, topics.WHEEL_TORQUE, topics.MOMENT_COMMAND))
 _NULL_KEYS = ('time_magnetics_only_min', 'time_wheels_magnetics_min', 'acquisition_time_min',
               'final_wheel_momentum_ftlbs', 'peak_wheel_momentum_ftlbs', 'peak_moment_am2',
               'wheel_saturation_time_min', 'mode_transitions')
@@ -84,26 +87,29 @@ class Accumulator:
         self.capacity = ReactionWheels(WheelsConfig(layout=scenario.get('wheels', 'layout'),
                                                     failed_wheel=failed if failed >= 0 else None)
                                        ).capacity_per_axis_nms()
+        self._saturation_at = tuple((np.asarray(self.capacity) * (1.0 - 1e-9)).tolist())  # as saturated()
         #: The mode history's change points: (t_s, mode, cause, captured), what the times need.
         self.history: list[tuple[float, str, str, bool]] = []
         self._last_state: tuple[str, bool] | None = None
-        self.peak_h = np.zeros(3)
+        # Running peaks and last values as float triples (every step; arrays only in contribute).
+        self.peak_h = (0.0, 0.0, 0.0)
         self.peak_rss = 0.0
-        self.last_h: tuple[int, np.ndarray] | None = None
-        self.last_hdot: tuple[int, np.ndarray] | None = None
+        self.last_h: tuple[int, tuple[float, ...]] | None = None
+        self.last_hdot: tuple[int, tuple[float, ...]] | None = None
         self.saturation_s: float | None = None
-        self.peak_m: np.ndarray | None = None
+        self.peak_m: tuple[float, ...] | None = None
 
-    def _wheel(self, t_s: float, h: np.ndarray) -> None:
-        self.peak_h = np.maximum(self.peak_h, np.abs(h))
-        self.peak_rss = max(self.peak_rss, float(np.linalg.norm(h)))
-        if self.saturation_s is None and saturated(h, self.capacity):
+    def _wheel(self, t_s: float, h: tuple[float, ...]) -> None:
+        ph = self.peak_h
+        self.peak_h = (max(ph[0], abs(h[0])), max(ph[1], abs(h[1])), max(ph[2], abs(h[2])))
+        self.peak_rss = max(self.peak_rss, math.sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]))
+        if self.saturation_s is None and any(abs(x) >= c for x, c in zip(h, self._saturation_at, strict=True)):
             self.saturation_s = t_s
 
     def step(self, k: int, values: dict[str, Any]) -> None:
         """One step: keep the mode history's change points and the running peaks."""
         t = k * self.dt_s
-        mode = values.get(topics.resolve(topics.MODE))
+        mode = values.get(_MODE)
         status = next((st for st in mode or () if st.name == 'ascs_mode_manager'), None)
         if status is not None:
             kv = dict(status.values)
@@ -111,26 +117,27 @@ class Accumulator:
             if (entry[1], entry[3]) != self._last_state or entry[2]:
                 self.history.append(entry)
                 self._last_state = (entry[1], entry[3])
-        h = values.get(topics.resolve(topics.WHEEL_MOMENTUM))
+        h = values.get(_WHEEL_MOMENTUM)
         if h is not None:
-            self.last_h = (k, np.array(h))
-            self._wheel(t, self.last_h[1])
-        hdot = values.get(topics.resolve(topics.WHEEL_TORQUE))
+            self.last_h = (k, h)
+            self._wheel(t, h)
+        hdot = values.get(_WHEEL_TORQUE)
         if hdot is not None:
-            self.last_hdot = (k, np.array(hdot))
-        m = values.get(topics.resolve(topics.MOMENT_COMMAND))
+            self.last_hdot = (k, hdot)
+        m = values.get(_MOMENT_COMMAND)
         if m is not None:
-            self.peak_m = np.abs(m) if self.peak_m is None else np.maximum(self.peak_m, np.abs(m))
+            pm = self.peak_m or (0.0, 0.0, 0.0)
+            self.peak_m = (max(pm[0], abs(m[0])), max(pm[1], abs(m[1])), max(pm[2], abs(m[2])))
 
     def contribute(self, summary: dict[str, Any]) -> None:
         """Add the HEAO keys (Table 4-7 columns, peaks, transitions)."""
         summary.update(acquisition_times(self.history))
         if self.last_h is not None:
-            final = self.last_h[1]
+            final = np.array(self.last_h[1])
             if self.last_hdot is not None and self.last_hdot[0] == self.last_h[0]:  # h(t_N) = h_N−1 + ḣ·Δt
-                final = final + self.last_hdot[1] * self.dt_s
-                self._wheel((self.last_h[0] + 1) * self.dt_s, final)
-            peak = nms_to_ftlbs(self.peak_h)
+                final = final + np.array(self.last_hdot[1]) * self.dt_s
+                self._wheel((self.last_h[0] + 1) * self.dt_s, tuple(final.tolist()))
+            peak = nms_to_ftlbs(np.array(self.peak_h))
             summary['final_wheel_momentum_ftlbs'] = float(np.linalg.norm(nms_to_ftlbs(final)))
             summary['peak_wheel_momentum_ftlbs'] = {'x': float(peak[0]), 'y': float(peak[1]), 'z': float(peak[2]),
                                                     'rss': float(nms_to_ftlbs(self.peak_rss))}
