@@ -86,7 +86,7 @@ class RigidBodyStep(Stepper):
                              for limit in (self.limits.dipole_am2, self.limits.wheel_momentum_nms))
         self._wheel_h = _ZERO
         #: Torque-free so far (external and wheel torques all zero): the drifts are integration error.
-        self.torque_free = not self.model.gravity_gradient
+        self.torque_free = not self.model.gravity_gradient and self.model.disturbance is None
         self._h0_eci: np.ndarray | None = None  # H in ECI and the rotational energy at t_0
         self._e0_j = 0.0
         self._wall_s = 0.0
