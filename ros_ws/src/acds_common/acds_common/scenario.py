@@ -169,7 +169,8 @@ SCHEMA: dict[str, dict[str, Field]] = {
                           '(torque-free and with gravity gradient; 2 substeps: 4.0e-8 deg, 5: 1.2e-9 deg, '
                           '10 and more: rounding, 3e-10 deg); Basilisk 2.12.1 at the same 0.5 s step differs '
                           'from 1 substep by 1e-7 deg and from its own 0.05 s run by 5.8e-7 deg. Closed loop '
-                          '(heao_b_acquisition, direct engine), 1, 2, 5, 10, 20 and 100 substeps reach Mode 1B '
+                          '(heao_b_acquisition_fast_geometry, direct engine), 1, 2, 5, 10, 20 and 100 substeps '
+                          'reach Mode 1B '
                           '(56.59 min) and capture (86.32 min) at the same step, final wheel momentum within '
                           '9e-6 ft-lb-s. Raise it for faster bodies or longer control periods', 1, lo=1, hi=10000),
     },
