@@ -194,6 +194,17 @@ class CoilFault(StrEnum):
     STUCK_ON_BRIDGE = 'stuck_on_bridge'  # bridge pair always on: current → I_on
     DEAD_DRIVER = 'dead_driver'  # no drive at all: current decays through the diodes
 
+    @classmethod
+    def parse(cls, fault: CoilFault | str | None, what: str) -> CoilFault | None:
+        """``fault`` as a CoilFault (None clears it); an unknown kind is refused naming ``what`` failed."""
+        if fault is None:
+            return None
+        try:
+            return cls(fault)
+        except ValueError:
+            kinds = ', '.join(f.value for f in cls)
+            raise EmDriverError(f'unknown {what} fault {fault!r}; expected one of: {kinds}') from None
+
 
 @dataclass(frozen=True)
 class Waveform:
@@ -310,14 +321,7 @@ class BridgeSwitchCoil:
 
     def set_fault(self, fault: CoilFault | str | None) -> None:
         """Inject a failure ('open_winding', 'stuck_on_bridge', 'dead_driver') or clear it with None."""
-        if fault is None:
-            self.fault = None
-            return
-        try:
-            self.fault = CoilFault(fault)
-        except ValueError:
-            kinds = ', '.join(f.value for f in CoilFault)
-            raise EmDriverError(f'unknown coil fault {fault!r}; expected one of: {kinds}') from None
+        self.fault = CoilFault.parse(fault, 'coil')
 
     def run(self, command_current_a: float, duration_s: float, record: bool = False,
             record_step_s: float | None = None) -> PeriodResult:

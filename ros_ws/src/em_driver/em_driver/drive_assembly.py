@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -51,6 +52,30 @@ __all__ = ['DRIVE_TYPES', 'UNITS', 'AxisConfig', 'AssemblyResult', 'DriveAssembl
 DRIVE_TYPES = ('bridge_switch', 'constant_level', 'none')
 #: Redundant unit names per axis (driver + winding).
 UNITS = ('A', 'B')
+
+
+def axis_of(axes: Sequence[Any], axis: int) -> Any:
+    """``axes[axis]`` of a three-axis assembly (0, 1, 2 = x, y, z); anything else is refused by name."""
+    if axis not in (0, 1, 2):
+        raise EmDriverError(f'axis must be 0, 1 or 2 (x, y, z), got {axis!r}')
+    return axes[axis]
+
+
+def alarm_events(k: int, ax: Any, alarm: bool, measured: str, expected: str, switch: bool) -> list[str]:
+    """The mismatch alarm's edges on axis ``k`` (spec §6 failure detection; ``ax`` has ``alarm`` and ``active``),
+    and, when it trips with ``switch``, the automatic switch to the standby unit; returns the events."""
+    events: list[str] = []
+    if alarm and not ax.alarm:
+        events.append(f'axis {k}: excess coil current / mismatch alarm on unit {ax.active} '
+                      f'(measured {measured}, expected {expected})')
+    elif ax.alarm and not alarm:
+        events.append(f'axis {k}: mismatch alarm cleared')
+    ax.alarm = alarm
+    if alarm and switch:
+        standby = UNITS[1] if ax.active == UNITS[0] else UNITS[0]
+        events.append(f'axis {k}: auto switch from unit {ax.active} to standby unit {standby}')
+        ax.active = standby
+    return events
 
 
 def _default_constant_level_driver() -> DriverParams:
@@ -301,25 +326,15 @@ class DriveAssembly:
             ax.mismatch_time_s += dt_s
         else:
             ax.mismatch_time_s = 0.0
-        events: list[str] = []
         alarm = ax.mismatch_time_s > self.mismatch_settle_s
-        if alarm and not ax.alarm:
-            events.append(f'axis {k}: excess coil current / mismatch alarm on unit {ax.active} '
-                          f'(measured {measured_a:.4f} A, expected {expected_a:.4f} A)')
-        elif ax.alarm and not alarm:
-            events.append(f'axis {k}: mismatch alarm cleared')
-        ax.alarm = alarm
-        if alarm and self.auto_switch_to_standby:
-            standby = UNITS[1] if ax.active == UNITS[0] else UNITS[0]
-            events.append(f'axis {k}: auto switch from unit {ax.active} to standby unit {standby}')
-            ax.active = standby
+        switch = alarm and self.auto_switch_to_standby
+        events = alarm_events(k, ax, alarm, f'{measured_a:.4f} A', f'{expected_a:.4f} A', switch)
+        if switch:
             ax.mismatch_time_s = 0.0
         return events
 
     def _axis(self, axis: int) -> _Axis:
-        if axis not in (0, 1, 2):
-            raise EmDriverError(f'axis must be 0, 1 or 2 (x, y, z), got {axis!r}')
-        return self._axes[axis]
+        return axis_of(self._axes, axis)
 
     @staticmethod
     def _check_unit(unit: str) -> None:

@@ -73,7 +73,7 @@ from acds_common.units import MU0
 
 from em_driver import rl_circuit
 from em_driver.bridge_switch import CoilFault, EmDriverError
-from em_driver.drive_assembly import UNITS, AssemblyResult
+from em_driver.drive_assembly import UNITS, AssemblyResult, alarm_events, axis_of
 
 __all__ = [
     'CoreMaterial',
@@ -417,14 +417,7 @@ class TorqueRodWinding:
 
     def set_fault(self, fault: CoilFault | str | None) -> None:
         """Inject 'open_winding', 'stuck_on_bridge' or 'dead_driver', or clear with None."""
-        if fault is None:
-            self.fault = None
-            return
-        try:
-            self.fault = CoilFault(fault)
-        except ValueError:
-            kinds = ', '.join(f.value for f in CoilFault)
-            raise EmDriverError(f'unknown winding fault {fault!r}; expected one of: {kinds}') from None
+        self.fault = CoilFault.parse(fault, 'winding')
 
     def run(self, duty: float, dt_s: float) -> _Run:
         """Drive at signed ``duty`` (−1…1, already quantised) for dt_s, s, as the fault and power state allow."""
@@ -638,24 +631,12 @@ class TorqueRodAssembly:
 
     def _monitor(self, k: int, ax: _Axis, measured_a: float, expected_a: float) -> list[str]:
         """Mismatch alarm on the active winding; optional switch to the standby winding."""
-        events: list[str] = []
         alarm = abs(measured_a - expected_a) > self.mismatch_tolerance_frac * ax.full_current_a
-        if alarm and not ax.alarm:
-            events.append(f'axis {k}: excess coil current / mismatch alarm on unit {ax.active} '
-                          f'(measured {measured_a * 1e3:.3f} mA, expected {expected_a * 1e3:.3f} mA)')
-        elif ax.alarm and not alarm:
-            events.append(f'axis {k}: mismatch alarm cleared')
-        ax.alarm = alarm
-        if alarm and self.auto_switch_to_standby and len(ax.units) == 2:
-            standby = UNITS[1] if ax.active == UNITS[0] else UNITS[0]
-            events.append(f'axis {k}: auto switch from unit {ax.active} to standby unit {standby}')
-            ax.active = standby
-        return events
+        return alarm_events(k, ax, alarm, f'{measured_a * 1e3:.3f} mA', f'{expected_a * 1e3:.3f} mA',
+                            alarm and self.auto_switch_to_standby and len(ax.units) == 2)
 
     def _axis(self, axis: int) -> _Axis:
-        if axis not in (0, 1, 2):
-            raise EmDriverError(f'axis must be 0, 1 or 2 (x, y, z), got {axis!r}')
-        return self._axes[axis]
+        return axis_of(self._axes, axis)
 
     @staticmethod
     def _check_unit(ax: _Axis, unit: str) -> None:
