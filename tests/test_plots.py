@@ -85,3 +85,30 @@ def test_unknown_format_is_refused_before_reading(tmp_path):
     with pytest.raises(BagError, match='choose one of png, svg, pdf'):
         make_plots(tmp_path / 'no_bag', tmp_path / 'out', 'jpg')
     assert not (tmp_path / 'out').exists()
+
+
+def test_long_series_are_gathered_at_a_common_stride_and_the_modes_whole(acquisition):
+    """Bounded plotting memory: at most ~max_steps steps per numeric series, the same steps on every topic
+    (series combine at common stamps), every mode message kept."""
+    from acds_cli.bag.plots import _gather
+    from acds_cli.bag.reader import open_bag
+
+    bag = open_bag(acquisition[0])
+    vectors = {topics.GYRO: lambda m: [m.angular_velocity.x], topics.WHEEL_MOMENTUM: lambda m: [m.vector.x]}
+    texts = {topics.MODE: lambda m: m.status[0].message if m.status else ''}
+    full = _gather(bag, vectors, texts)
+    part = _gather(bag, vectors, texts, max_steps=20)
+    dt = bag.control_period_ns
+    longest = max(bag.count(t) for t in vectors)
+    stride = -(-longest // 20)
+    assert stride > 1
+    for topic in map(topics.resolve, vectors):
+        kept = list(part[topic][0])
+        assert kept == [t for t in full[topic][0] if (t // dt) % stride == 0]
+        assert 0 < len(kept) <= 21
+        assert list(part[topic][1]) == [v for t, v in zip(full[topic][0], full[topic][1], strict=True)
+                                        if (t // dt) % stride == 0]
+    gyro, wheels = (set(part[topics.resolve(t)][0]) for t in vectors)
+    assert gyro & wheels, 'the kept steps are common to both series'
+    mode = topics.resolve(topics.MODE)
+    assert list(part[mode][0]) == list(full[mode][0]) and part[mode][1] == full[mode][1]

@@ -46,13 +46,28 @@ AXES = (('x', 'roll'), ('y', 'pitch'), ('z', 'yaw'))
 Gathered = dict[str, tuple[array, Any]]
 
 
+#: The most steps a plotted series keeps: a longer run is plotted at every k-th step (the same steps on every
+#: topic, so series still combine at common stamps), and plotting takes bounded memory at any run length.
+MAX_PLOT_STEPS = 20_000
+
+
 def _gather(bag: Bag, vectors: dict[str, Callable[[Any], list[float]]],
-            texts: dict[str, Callable[[Any], Any]]) -> Gathered:
-    """{topic: (timestamps ns, values)} in one pass over the bag: numbers packed as doubles, other values a list."""
+            texts: dict[str, Callable[[Any], Any]], max_steps: int = MAX_PLOT_STEPS) -> Gathered:
+    """{topic: (timestamps ns, values)} in one pass over the bag: numbers packed as doubles, other values a list.
+
+    Numeric series keep at most about ``max_steps`` steps (every k-th control step, k from the longest series);
+    the ``texts`` (the mode stream: every transition) are kept whole.
+    """
     ts = typestore()
     getters = {topics.resolve(t): get for t, get in (*vectors.items(), *texts.items()) if bag.has(t)}
-    out: Gathered = {t: (array('q'), [] if t in {topics.resolve(x) for x in texts} else array('d')) for t in getters}
+    whole = {topics.resolve(x) for x in texts}
+    out: Gathered = {t: (array('q'), [] if t in whole else array('d')) for t in getters}
+    dt = bag.control_period_ns or 0
+    longest = max((bag.count(t) for t in getters if t not in whole), default=0)
+    stride = max(1, math.ceil(longest / max_steps)) if dt > 0 else 1
     for topic, t, data in bag.messages(getters):
+        if stride > 1 and topic not in whole and (t // dt) % stride:
+            continue
         stamps, values = out[topic]
         stamps.append(t)
         got = getters[topic](ts.deserialize_cdr(data, bag.types[topic]))
