@@ -90,6 +90,8 @@ PARENT_DEATH_SIGNAL = signal.SIGUSR2
 #: Seconds an orphaned node gives its DDS teardown before it leaves without it (issue 9 §2: every node
 #: exits within 2 s of its launcher's death, even when the teardown hangs).
 ORPHAN_TEARDOWN_S = 1.0
+#: Wall seconds the graph may take to become ready and fire its first step (at least; ``input_timeout_s`` if longer).
+READY_TIMEOUT_S = 20.0
 #: Seconds between checks that every input topic has only its declared publisher.
 INTRUDER_CHECK_PERIOD_S = 1.0
 #: What discovery reports for a publisher whose node name it has not learnt yet, and how long it may stay so.
@@ -479,7 +481,10 @@ class LockstepNode(Node):
         if now - self._last_intruder_check > INTRUDER_CHECK_PERIOD_S:
             self._check_intruders(now)
         waited = now - self._last_progress
-        if waited <= self.input_timeout_s:
+        # Until its first stage fires, a node waits on the graph's start (the last nodes' discovery), not on a
+        # step's inputs: the start has the readiness timeout.
+        first = all(st.next_step == 0 for st in self._stages)
+        if waited <= (max(self.input_timeout_s, READY_TIMEOUT_S) if first else self.input_timeout_s):
             return
         for i, stage in enumerate(self._stages):
             k = stage.next_step
@@ -515,7 +520,7 @@ class LockstepNode(Node):
             self._last_progress = now
             self._try_fire()
             return
-        if now - self._created > max(self.input_timeout_s, 20.0):
+        if now - self._created > max(self.input_timeout_s, READY_TIMEOUT_S):
             parts = []
             if missing:
                 parts.append('no publisher on ' + ', '.join(missing))

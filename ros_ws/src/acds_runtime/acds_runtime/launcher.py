@@ -282,6 +282,14 @@ class GraphRun:
             except subprocess.TimeoutExpired:
                 pass
 
+    def exit_report(self) -> str | None:
+        """The death report of the first node process that has exited, or None while every node runs."""
+        for proc in self.processes.values():
+            code = proc.popen.poll()
+            if code is not None:
+                return self._death_report(proc, code)
+        return None
+
     def _check_health(self) -> None:
         """Fail the run at once on a bag write error or on data from outside the graph."""
         if self.bag_writer is not None and self.bag_writer.error:

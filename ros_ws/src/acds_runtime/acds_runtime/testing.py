@@ -32,13 +32,25 @@ def alive(pid: int) -> bool:
 
 
 def wait_for_messages(graph: GraphRun, topic: str, count: int, timeout_s: float = 60.0) -> list[Any]:
-    """Wait until ``count`` messages of ``topic`` arrived; fail naming the topic and what did arrive."""
+    """Wait until ``count`` messages of ``topic`` arrived; fail naming the topic and what did arrive, or the
+    node that ended first."""
     monitor = graph.monitor
     assert monitor is not None
     name = topics.resolve(topic)
-    if not monitor.wait_for(lambda: monitor.count(name) >= count, timeout_s):
+    ended: list[str] = []
+
+    def done() -> bool:
+        if monitor.count(name) >= count:
+            return True
+        report = graph.exit_report()
+        if report is not None:
+            ended.append(report)
+        return bool(ended)
+    arrived = monitor.wait_for(done, timeout_s) and not ended
+    if not arrived:
         got = {t: len(v) for t, v in monitor.snapshot().items()}
-        pytest.fail(f'waited {timeout_s:.0f} s for {count} messages on {name}; received per topic: {got}')
+        why = f'; a node ended first: {ended[0]}' if ended else ''
+        pytest.fail(f'waited for {count} messages on {name}; received per topic: {got}{why}')
     return monitor.messages(topic)
 
 
