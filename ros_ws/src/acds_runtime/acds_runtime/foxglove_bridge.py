@@ -31,6 +31,7 @@ import json
 import math
 import sys
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -181,8 +182,18 @@ class FoxgloveBridge:
         return self._subscriptions.wait(lambda subscribed: bool(subscribed), timeout_s)
 
     def wait_for_subscriptions(self, wanted: set[str], timeout_s: float) -> bool:
-        """Wait until clients subscribe to every topic of ``wanted`` (True), or ``timeout_s`` passed (False)."""
-        return self._subscriptions.wait(lambda subscribed: wanted <= subscribed, timeout_s)
+        """Wait until clients subscribe to every topic of ``wanted`` and the SDK routes each of those channels to
+        them (True), or ``timeout_s`` passed (False). The listener hears of a subscription before the server has
+        attached its sink to the channel: until then a message logged there reaches nobody."""
+        deadline = time.monotonic() + timeout_s
+        if not self._subscriptions.wait(lambda subscribed: wanted <= subscribed, timeout_s):
+            return False
+        channels = {**self.channels, TF_TOPIC: self._tf, **self.view_channels}
+        while not all(channels[t].has_sinks() for t in wanted):
+            if time.monotonic() > deadline:
+                return False
+            self._subscriptions.wait(lambda _subscribed: False, 0.01)  # poll the SDK's routing, with the deadline
+        return True
 
     def __call__(self, topic: str, data: bytes, value: Any = None) -> None:
         """One message of ``topic`` (absolute): raw CDR, and its decoded value when the caller holds it.
