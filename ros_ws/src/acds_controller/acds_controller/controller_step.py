@@ -103,11 +103,7 @@ class ControllerStep(Stepper):
                 self.log('info', f'step {k}: {apply_command(self.dpa, text)}')
             except ControllerError as exc:
                 warnings.append((f'command refused: {text!r}: {exc}', {'command': text, 'reason': str(exc)}))
-        if mode is None:
-            mode = 'mode_1a'
-        elif mode not in MODES:
-            warnings.append((f'unknown mode {mode!r} from the mode manager: standby', {'mode': mode}))
-            mode = 'standby'
+        mode = _resolve_mode(mode, 'mode_1a', MODES, warnings, f'unknown mode {mode!r} from the mode manager')
         try:
             result = self._dpa_step(k, mode, inp)
         except ControllerError as exc:
@@ -133,11 +129,8 @@ class ControllerStep(Stepper):
         for text in commands:
             warnings.append((f'command refused: {text!r}: the Workshop computer takes no forwarded commands',
                              {'command': text}))
-        if mode is None:
-            mode = 'cmg_dump'
-        elif mode not in WORKSHOP_MODES:
-            warnings.append((f'{mode!r} is not a Workshop mode ({", ".join(WORKSHOP_MODES)}): standby', {'mode': mode}))
-            mode = 'standby'
+        mode = _resolve_mode(mode, 'cmg_dump', WORKSHOP_MODES, warnings,
+                             f'{mode!r} is not a Workshop mode ({", ".join(WORKSHOP_MODES)})')
         try:
             volts, bias = vec(inp['mag_volts'], _MID_SCALE_V), vec(inp['mag_bias'], _MID_SCALE_V)
             omega, h = vec(None if inp['gyro'] is None else inp['gyro'][0]), np.array(self._store_momentum(inp))
@@ -182,3 +175,14 @@ class ControllerStep(Stepper):
             telemetry = {**out.telemetry, **self.ta.telemetry(b, out.moment_xyz, bias, coil, alarms)}
             result['diagnostics'] = diagnostic(self.node, telemetry)
         return result
+
+
+def _resolve_mode(mode: str | None, default: str, known: Any, warnings: list[tuple[str, dict[str, str]]],
+                  unknown: str) -> str:
+    """The mode to run: ``default`` before the mode manager speaks, standby (with a warning) for one not ``known``."""
+    if mode is None:
+        return default
+    if mode not in known:
+        warnings.append((f'{unknown}: standby', {'mode': mode}))
+        return 'standby'
+    return mode
