@@ -15,10 +15,9 @@ from acds_cli.bag.compare import run_compare
 from acds_cli.bag.player import Player
 from acds_cli.bag.reader import open_bag
 from acds_common import topics
-from acds_common.lockstep import LOCKSTEP_QOS
+from acds_common.lockstep import LOCKSTEP_QOS, release_node
 from acds_common.scenario import load_scenario
 from acds_runtime.launcher import DomainLease, GraphRun
-from acds_runtime.monitor import release_node
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor

@@ -23,10 +23,10 @@ import pytest
 import rclpy
 import yaml
 from acds_cli.__main__ import main
+from acds_common.lockstep import release_node
 from acds_common.parameters import node_parameters, parameters_yaml
 from acds_common.scenario import load_scenario
 from acds_runtime.launcher import FASTDDS_PROFILE, DomainLease
-from acds_runtime.monitor import release_node
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import DescribeParameters, SetParameters
 from rclpy.context import Context

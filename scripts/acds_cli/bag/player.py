@@ -20,10 +20,9 @@ from typing import Any
 
 import rclpy
 from acds_common import topics
-from acds_common.lockstep import message_class
+from acds_common.lockstep import message_class, release_node
 from acds_runtime.bag.writer import BagError, offered_qos
 from acds_runtime.launcher import FASTDDS_PROFILE
-from acds_runtime.monitor import release_node
 from rclpy.context import Context
 from rclpy.duration import Duration
 from rclpy.executors import SingleThreadedExecutor

@@ -17,9 +17,8 @@ from typing import Any
 import rclpy
 import yaml
 from acds_common import topics
-from acds_common.lockstep import message_class
+from acds_common.lockstep import message_class, release_node
 from acds_runtime.bag.writer import SKIP, BagError, BagWriter, RecordingSink, cdr_stamp_ns, check_target, stamped
-from acds_runtime.monitor import release_node
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node

@@ -30,7 +30,6 @@ import importlib
 import os
 import signal
 import sys
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -78,18 +77,11 @@ COMMAND_QOS = QoSProfile(
 )
 #: Exit codes of a node process (EXIT_ORPHANED: the launcher that started it died).
 EXIT_OK, EXIT_CONFIG, EXIT_LOCKSTEP, EXIT_ORPHANED = 0, 2, 3, 4
-#: Environment variable the launcher sets to its own pid: a node whose parent is no longer
-#: that process (the launcher was killed, even by SIGKILL) stops within one watchdog tick.
+#: Environment variable the launcher sets to its own pid: a node started by a launcher asks the kernel to
+#: SIGKILL it when that launcher dies (``PR_SET_PDEATHSIG``), and leaves at once if it already has.
 LAUNCHER_PID_ENV = 'ACDS_LAUNCHER_PID'
 #: Signals that stop a node cleanly (flush, exit 0): Ctrl-C, kill, a closed terminal.
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-#: The signal the kernel sends a node when its launcher dies (``PR_SET_PDEATHSIG``, set by the launcher):
-#: its own signal, since at delivery the dying launcher may still be the node's parent (a SIGTERM then read
-#: as an ordinary stop, and the node waited on acknowledgements nobody would send).
-PARENT_DEATH_SIGNAL = signal.SIGUSR2
-#: Seconds an orphaned node gives its DDS teardown before it leaves without it (issue 9 §2: every node
-#: exits within 2 s of its launcher's death, even when the teardown hangs).
-ORPHAN_TEARDOWN_S = 1.0
 #: Wall seconds the graph may take to become ready and fire its first step (at least; ``input_timeout_s`` if longer).
 READY_TIMEOUT_S = 20.0
 #: Seconds between checks that every input topic has only its declared publisher.
@@ -180,8 +172,6 @@ class LockstepNode(Node):
         self.stepper = stepper_cls(self.params, log=self._log)
         self.failure: str | None = None
         self.done = False
-        self.orphaned = False
-        self.launcher_pid = int(os.environ.get(LAUNCHER_PID_ENV, '0') or 0)
         self._ports: dict[str, _Port] = {}
         for out in self.spec.outputs:
             qos = LOCKSTEP_QOS if out.lockstep else COMMAND_QOS
@@ -463,16 +453,8 @@ class LockstepNode(Node):
                 out[self.resolve_topic_name(topics.MONITOR_ACK)] = {MONITOR_NAME}
         return out
 
-    def check_parent(self) -> bool:
-        """Whether the launcher that started this node has died (sets :attr:`orphaned`)."""
-        if self.launcher_pid and os.getppid() != self.launcher_pid:
-            self.orphaned = True
-        return self.orphaned
-
     def _watchdog(self) -> None:
         now = time.monotonic()
-        if self.check_parent():
-            return
         if not self._started:
             self._check_ready(now)
             return
@@ -553,46 +535,78 @@ class LockstepNode(Node):
             pub.wait_for_all_acked(rclpy.duration.Duration(seconds=max(0.0, deadline - time.monotonic())))
 
 
+def release_node(executor: Any, node: Any, context: Any = None) -> None:
+    """Shut down a node with its executor and context (either may be None: not created), so its DDS
+    participant ends now.
+
+    The executor holds the node's entities: without its shutdown the participant outlives its owner and
+    keeps serving its transient-local history (a run's READY and acknowledgements) on the domain, where
+    the next run leasing it would take them for its own; in a node process, its threads are left to the
+    interpreter's exit.
+    """
+    if executor is not None:
+        executor.shutdown()
+    if node is not None:
+        node.destroy_node()
+    rclpy.try_shutdown(context=context)
+
+
+def _die_with_launcher() -> bool:
+    """Ask the kernel to SIGKILL this node the moment the launcher that started it dies (issue 9 §2).
+
+    ``prctl(PR_SET_PDEATHSIG, SIGKILL)``: the kernel acts even on a node that is stopped, hung in DDS or
+    holding the interpreter lock, so no orphan outlives its launcher and none can reach the next run on
+    the domain. The parent pid is checked after the call, which covers a launcher that died before it.
+    Returns False when that launcher is already gone. A node started by hand (no ``ACDS_LAUNCHER_PID``)
+    has no launcher to follow.
+    """
+    launcher = int(os.environ.get(LAUNCHER_PID_ENV, '0') or 0)
+    if not launcher:
+        return True
+    import ctypes
+
+    pr_set_pdeathsig = 1
+    ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL, 0, 0, 0)
+    return os.getppid() == launcher
+
+
 def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
     """Entry-point body of every node: init, spin, report, shut down cleanly.
 
     Returns the process exit code: 0 on completion or SIGINT/SIGTERM/SIGHUP, 2 on a
     configuration error, 3 on a lockstep failure, 4 when the launcher that started it
-    died. Errors are one line on stderr, prefixed by the node name, without a traceback.
+    had died before the node came up (once up, the kernel kills it with its launcher).
+    Errors are one line on stderr, prefixed by the node name, without a traceback.
     """
     name = stepper_cls.node
+    if not _die_with_launcher():
+        print(f'[{name}] STOPPED: the launcher that started it (pid {os.environ[LAUNCHER_PID_ENV]}) has died',
+              file=sys.stderr, flush=True)
+        return EXIT_ORPHANED
     os.environ.setdefault('ROS_LOG_DIR', os.path.join(os.environ.get('TMPDIR', '/tmp'), 'acds_ros_log'))
     try:
         rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     except RuntimeError as exc:  # rclpy's RCLError: bad --ros-args or params file
         print(f'[{name}] CONFIGURATION ERROR: {str(exc).splitlines()[0]}', file=sys.stderr, flush=True)
         return EXIT_CONFIG
-    stop: dict[str, Any] = {'signal': None, 'orphaned': False}
+    stop: dict[str, Any] = {'signal': None}
 
     def on_signal(signum: int, _frame: Any) -> None:
         stop['signal'] = signum
 
-    def on_parent_death(_signum: int, _frame: Any) -> None:
-        stop['orphaned'] = True
-
     for sig in STOP_SIGNALS:
         signal.signal(sig, on_signal)
-    signal.signal(PARENT_DEATH_SIGNAL, on_parent_death)
     node: LockstepNode | None = None
+    executor: Any = None
     code = EXIT_OK
     try:
         node = LockstepNode(stepper_cls)
         from rclpy.experimental import EventsExecutor
         executor = EventsExecutor()
         executor.add_node(node)
-        while not (node.may_exit() or node.failure is not None or stop['signal'] is not None or stop['orphaned']
-                   or node.orphaned):
+        while not (node.may_exit() or node.failure is not None or stop['signal'] is not None):
             executor.spin_once(timeout_sec=0.1)
-        node.orphaned = node.orphaned or stop['orphaned'] or node.check_parent()  # nobody is left to flush to
-        if node.orphaned:
-            print(f'[{name}] STOPPED: its launcher (pid {node.launcher_pid}) died', file=sys.stderr, flush=True)
-            code = EXIT_ORPHANED
-        elif node.failure is not None:
+        if node.failure is not None:
             print(f'[{name}] LOCKSTEP FAILURE: {node.failure}', file=sys.stderr, flush=True)
             code = EXIT_LOCKSTEP
         else:  # completed, or stopped by a signal: deliver what was published before leaving
@@ -603,14 +617,9 @@ def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
     except (KeyboardInterrupt, ExternalShutdownException):
         code = EXIT_OK
     finally:
-        if node is not None and node.orphaned:  # nobody will stop a hung DDS teardown: bound it
-            guard = threading.Timer(ORPHAN_TEARDOWN_S, os._exit, (EXIT_ORPHANED,))
-            guard.daemon = True
-            guard.start()
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+        release_node(executor, node)
     return code
 
 
-__all__ = ['COMMAND_QOS', 'LOCKSTEP_QOS', 'ConfigError', 'LockstepError', 'LockstepNode', 'message_class', 'run_node']
+__all__ = ['COMMAND_QOS', 'LOCKSTEP_QOS', 'ConfigError', 'LockstepError', 'LockstepNode', 'message_class',
+           'release_node', 'run_node']

@@ -27,7 +27,7 @@ from typing import IO, Any
 import yaml
 from acds_common import topics
 from acds_common.graph import Graph, build_graph
-from acds_common.lockstep import LAUNCHER_PID_ENV, PARENT_DEATH_SIGNAL
+from acds_common.lockstep import LAUNCHER_PID_ENV
 from acds_common.parameters import node_parameters, parameters_yaml
 from acds_common.scenario import Scenario
 
@@ -55,6 +55,8 @@ class NodeProcess:
     popen: subprocess.Popen[str]
     tail: deque[str] = field(default_factory=lambda: deque(maxlen=15))
     reader: threading.Thread | None = None
+    #: Seconds it was given to stop after SIGINT when the launcher had to SIGKILL it (None: it stopped, or died).
+    killed_after_s: float | None = None
 
 
 @dataclass
@@ -69,20 +71,6 @@ class RunResult:
     bag: Path | None = None
     #: The run's monitor (its kept messages, when the run was started with ``keep=True``).
     monitor: RunMonitor | None = None
-
-
-def _die_with_parent() -> None:
-    """In a child between fork and exec: ask the kernel for a signal when the launcher dies.
-
-    Linux ``prctl(PR_SET_PDEATHSIG, PARENT_DEATH_SIGNAL)`` (the lockstep base's own signal for it);
-    survives the exec of the node's entry point.
-    The node's lockstep base also watches its parent pid (``ACDS_LAUNCHER_PID``), which covers
-    a launcher that died before this call ran.
-    """
-    import ctypes
-
-    pr_set_pdeathsig = 1
-    ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, PARENT_DEATH_SIGNAL, 0, 0, 0)
 
 
 class DomainLease:
@@ -245,8 +233,7 @@ class GraphRun:
             popen = subprocess.Popen(
                 [str(exe), '--ros-args', *namespace, '--params-file', str(params_file)],
                 stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                text=True, env=env, start_new_session=True, pass_fds=(self.lease.fd,),
-                preexec_fn=_die_with_parent)
+                text=True, env=env, start_new_session=True, pass_fds=(self.lease.fd,))
             proc = NodeProcess(name, popen)
             proc.reader = threading.Thread(target=self._forward, args=(proc, popen.stdout), daemon=True)
             proc.reader.start()
@@ -306,6 +293,8 @@ class GraphRun:
         failure = [line for line in proc.tail if 'FAILURE' in line or 'ERROR' in line]
         lines = '\n'.join(f'    {line}' for line in proc.tail)
         head = f'node {proc.name} died ({how})'
+        if proc.killed_after_s is not None:
+            head = f'node {proc.name} did not stop within {proc.killed_after_s:g} s of SIGINT (the launcher killed it)'
         if failure:
             head += f': {failure[-1]}'
         blame = self.monitor.blame() if self.monitor is not None and code == 3 else None
@@ -349,6 +338,7 @@ class GraphRun:
                 codes[name] = proc.popen.wait(timeout=max(0.1, deadline - time.monotonic()))
             except subprocess.TimeoutExpired:
                 os.killpg(proc.popen.pid, signal.SIGKILL)
+                proc.killed_after_s = grace_s
                 codes[name] = proc.popen.wait()
         return codes
 

@@ -28,24 +28,12 @@ import rclpy
 from acds_common import topics
 from acds_common.cdr import Codec, stamp_ns
 from acds_common.graph import MONITOR_ACK_EVERY, MONITOR_NAME, Graph, instance_name
-from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS, UNNAMED, UNNAMED_GRACE_S, message_class
+from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS, UNNAMED, UNNAMED_GRACE_S, message_class, release_node
 from rclpy.context import Context
 from rclpy.node import Node
 
 #: Seconds between checks of who publishes on the graph's topics.
 PUBLISHER_CHECK_PERIOD_S = 1.0
-
-
-def release_node(executor: Any, node: Any, context: Any) -> None:
-    """Shut down an in-process node with its executor and context, so its DDS participant ends now.
-
-    The executor holds the node's entities: without its shutdown the participant outlives its owner and
-    keeps serving its transient-local history (a run's READY and acknowledgements) on the domain, where
-    the next run leasing it would take them for its own.
-    """
-    executor.shutdown()
-    node.destroy_node()
-    rclpy.try_shutdown(context=context)
 
 
 @dataclass
