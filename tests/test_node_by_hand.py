@@ -65,10 +65,12 @@ def ros_domain(tmp_path):
         lease.close()
 
 
-def _params_file(tmp_path: Path, node: str, drop: str | None = None) -> Path:
+def _params_file(tmp_path: Path, node: str, drop: str | None = None, **values: float) -> Path:
     data = yaml.safe_load(_params_text(SCENARIO, '--node', node, '--steps', '50'))
+    params = data[f'/acds/{node}']['ros__parameters']
     if drop is not None:
-        del data[f'/acds/{node}']['ros__parameters'][drop]
+        del params[drop]
+    params.update(values)
     path = tmp_path / f'{node}.yaml'
     path.write_text(yaml.safe_dump(data))
     return path
@@ -84,17 +86,24 @@ def test_node_without_a_required_parameter_names_it(tmp_path, ros_domain):
     assert 'positive definite' not in proc.stderr
 
 
-def _call(executor: SingleThreadedExecutor, client, request, timeout_s: float = 20.0):
-    future = client.call_async(request)
-    executor.spin_until_future_complete(future, timeout_sec=timeout_s)
-    assert future.done(), f'no answer from {client.srv_name} within {timeout_s} s'
-    return future.result()
+def _call(executor: SingleThreadedExecutor, client, request, timeout_s: float = 30.0, attempt_s: float = 2.0):
+    """Call a service, sending the request again every ``attempt_s``: ``service_is_ready`` means the server's
+    request reader is matched, not that it has matched this client's response reader, and a response sent
+    before that is lost (ROS 2 services do not resend). Describe and a refused set are idempotent."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        future = client.call_async(request)
+        executor.spin_until_future_complete(future, timeout_sec=min(attempt_s, deadline - time.monotonic()))
+        if future.done():
+            return future.result()
+        client.remove_pending_request(future)
+    raise AssertionError(f'no answer from {client.srv_name} within {timeout_s} s')
 
 
 def test_running_node_refuses_to_set_its_read_only_parameters(tmp_path, ros_domain):
     domain, env = ros_domain
-    path = _params_file(tmp_path, 'reaction_wheels')
-    # Its graph is absent, so it waits for /acds/controller/wheel_volts: long enough to be asked.
+    path = _params_file(tmp_path, 'reaction_wheels', input_timeout_s=120.0)
+    # Its graph is absent, so it waits for /acds/controller/wheel_volts: 120 s (its readiness timeout) to be asked.
     proc = subprocess.Popen([str(VENV_BIN / 'reaction_wheels'), '--ros-args', '--params-file', str(path)], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
     context = Context()

@@ -122,7 +122,10 @@ def cmd_run(args: argparse.Namespace) -> int:
                       file=sys.stderr, flush=True)
                 if engine.live_sink is not None:
                     _announce_live(engine.live_sink.port, args.foxglove_host)
-                summary = engine.wait().summary
+                result = engine.wait()
+                for warning in result.warnings:
+                    print(f'[acds] WARNING: {warning}', file=sys.stderr)
+                summary = result.summary
     except LaunchError as exc:
         print(f'[acds] run failed: {exc}', file=sys.stderr)
         return 1

@@ -26,6 +26,7 @@ with its source. Step identity is exact: stamps are integer nanoseconds, k = t_n
 
 from __future__ import annotations
 
+import faulthandler
 import importlib
 import os
 import signal
@@ -82,6 +83,11 @@ EXIT_OK, EXIT_CONFIG, EXIT_LOCKSTEP, EXIT_ORPHANED = 0, 2, 3, 4
 LAUNCHER_PID_ENV = 'ACDS_LAUNCHER_PID'
 #: Signals that stop a node cleanly (flush, exit 0): Ctrl-C, kill, a closed terminal.
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+#: Seconds a launcher gives a node to stop after SIGINT before it SIGKILLs it.
+STOP_GRACE_S = 10.0
+#: A node still running this long after its main loop ended (its flush takes at most 5 s) prints every thread's
+#: stack to its output, so the launcher's report of a hung exit says where it hung.
+STUCK_TRACE_S = 7.0
 #: Wall seconds the graph may take to become ready and fire its first step (at least; ``input_timeout_s`` if longer).
 READY_TIMEOUT_S = 20.0
 #: Seconds between checks that every input topic has only its declared publisher.
@@ -571,11 +577,11 @@ def _die_with_launcher() -> bool:
 
 
 def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
-    """Entry-point body of every node: init, spin, report, shut down cleanly.
+    """Entry-point body of every node: init, spin, report, shut down cleanly, end the process.
 
-    Returns the process exit code: 0 on completion or SIGINT/SIGTERM/SIGHUP, 2 on a
-    configuration error, 3 on a lockstep failure, 4 when the launcher that started it
-    had died before the node came up (once up, the kernel kills it with its launcher).
+    The exit code (returned before ROS is up, the process's own once it is): 0 on completion or
+    SIGINT/SIGTERM/SIGHUP, 2 on a configuration error, 3 on a lockstep failure, 4 when the launcher that
+    started it had died before the node came up (once up, the kernel kills it with its launcher).
     Errors are one line on stderr, prefixed by the node name, without a traceback.
     """
     name = stepper_cls.node
@@ -606,6 +612,7 @@ def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
         executor.add_node(node)
         while not (node.may_exit() or node.failure is not None or stop['signal'] is not None):
             executor.spin_once(timeout_sec=0.1)
+        faulthandler.dump_traceback_later(STUCK_TRACE_S, file=sys.stderr)
         if node.failure is not None:
             print(f'[{name}] LOCKSTEP FAILURE: {node.failure}', file=sys.stderr, flush=True)
             code = EXIT_LOCKSTEP
@@ -618,7 +625,13 @@ def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
         code = EXIT_OK
     finally:
         release_node(executor, node)
-    return code
+    # Leave without the interpreter's finalization: it deletes the DDS participant, which then talks to peers
+    # that are leaving too and once hung there for over 10 s (CI). Nothing is left to deliver: the outputs are
+    # acknowledged (flush), the context is shut down and its log closed; the kernel releases the SHM locks
+    # and the launcher removes the files.
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
 
 
 __all__ = ['COMMAND_QOS', 'LOCKSTEP_QOS', 'ConfigError', 'LockstepError', 'LockstepNode', 'message_class',

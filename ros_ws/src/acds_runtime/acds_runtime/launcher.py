@@ -27,7 +27,7 @@ from typing import IO, Any
 import yaml
 from acds_common import topics
 from acds_common.graph import Graph, build_graph
-from acds_common.lockstep import LAUNCHER_PID_ENV
+from acds_common.lockstep import LAUNCHER_PID_ENV, STOP_GRACE_S
 from acds_common.parameters import node_parameters, parameters_yaml
 from acds_common.scenario import Scenario
 
@@ -71,6 +71,8 @@ class RunResult:
     bag: Path | None = None
     #: The run's monitor (its kept messages, when the run was started with ``keep=True``).
     monitor: RunMonitor | None = None
+    #: What went wrong without costing the run anything (a node that hung on its way out).
+    warnings: list[str] = field(default_factory=list)
 
 
 class DomainLease:
@@ -316,15 +318,18 @@ class GraphRun:
             raise LaunchError(f'run monitor did not receive step {final} of ' +
                               ', '.join(f'{t} (last step {k})' for t, k in sorted(late.items())))
         codes = self._stop_children()
-        bad = {n: c for n, c in codes.items() if c != 0}
+        # Every output of every step is in (above): a node that hung on its way out cost nothing but is reported.
+        warnings = [self._death_report(proc, codes[name]) for name, proc in self.processes.items()
+                    if proc.killed_after_s is not None]
+        bad = {n: c for n, c in codes.items() if c != 0 and self.processes[n].killed_after_s is None}
         if bad:
             name = next(iter(bad))
             raise LaunchError(self._death_report(self.processes[name], bad[name]))
         self._check_health()
         summary = self.observer.summary(final, wall)
-        return RunResult(self.scenario, final, wall, summary, codes, self.record, mon)
+        return RunResult(self.scenario, final, wall, summary, codes, self.record, mon, warnings)
 
-    def _stop_children(self, grace_s: float = 10.0) -> dict[str, int]:
+    def _stop_children(self, grace_s: float = STOP_GRACE_S) -> dict[str, int]:
         for proc in self.processes.values():
             if proc.popen.poll() is None:
                 try:
