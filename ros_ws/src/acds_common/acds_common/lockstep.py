@@ -26,6 +26,7 @@ with its source. Step identity is exact: stamps are integer nanoseconds, k = t_n
 
 from __future__ import annotations
 
+import ctypes
 import faulthandler
 import importlib
 import os
@@ -547,8 +548,8 @@ def release_node(executor: Any, node: Any, context: Any = None) -> None:
 
     The executor holds the node's entities: without its shutdown the participant outlives its owner and
     keeps serving its transient-local history (a run's READY and acknowledgements) on the domain, where
-    the next run leasing it would take them for its own; in a node process, its threads are left to the
-    interpreter's exit.
+    the next run leasing it would take them for its own. A node process ends its executor's threads here
+    too, before it leaves.
     """
     if executor is not None:
         executor.shutdown()
@@ -569,8 +570,6 @@ def _die_with_launcher() -> bool:
     launcher = int(os.environ.get(LAUNCHER_PID_ENV, '0') or 0)
     if not launcher:
         return True
-    import ctypes
-
     pr_set_pdeathsig = 1
     ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL, 0, 0, 0)
     return os.getppid() == launcher
