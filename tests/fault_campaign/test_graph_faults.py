@@ -27,7 +27,9 @@ from rclpy.context import Context
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _short_timeout(name: str, seconds: float = 3.0):
+def _short_timeout(name: str, seconds: float = 5.0):
+    """Short enough for a quick test, long enough for a run monitor that a loaded machine has put 50 steps behind
+    to catch up (it paces the graph)."""
     sc = load_scenario(name)
     sc.values['']['input_timeout'] = seconds
     return sc

@@ -235,12 +235,26 @@ class RunMonitor:
             self._stop.wait(0.02)
         return predicate()
 
+    def settle(self, quiet_s: float = 0.5, timeout_s: float = 5.0) -> None:
+        """Let what was in flight when the graph stopped arrive: wait until no per-step topic has advanced for
+        ``quiet_s`` (at most ``timeout_s``). A monitor that had fallen behind a stopped graph (a loaded machine)
+        then sees where each node truly stopped."""
+        def advanced_since(before: dict[str, int]) -> Callable[[], bool]:
+            return lambda: self.last_steps() != before
+
+        deadline = time.monotonic() + timeout_s
+        while (left := deadline - time.monotonic()) > 0:
+            if not self.wait_for(advanced_since(self.last_steps()), timeout_s=min(quiet_s, left)):
+                return
+
     def blame(self) -> str | None:
         """The node whose outputs stopped while its inputs were there (a hung node), from what arrived.
 
         For each node of the graph: the first step it has not published on all its per-step
-        outputs; the culprit is a node whose lag-0 inputs for that step have all arrived.
+        outputs; the culprit is a node whose lag-0 inputs for that step have all arrived. What was in
+        flight is counted first (:meth:`settle`).
         """
+        self.settle()
         last = self.last_steps()
         candidates = []
         for name, spec in self.graph.nodes.items():
