@@ -294,8 +294,9 @@ class GraphRun:
         how = f'killed by signal {signal.Signals(-code).name}' if code < 0 else f'exit code {code}'
         failure = [line for line in proc.tail if 'FAILURE' in line or 'ERROR' in line]
         lines = '\n'.join(f'    {line}' for line in proc.tail)
-        head = f'node {proc.name} died ({how})'
-        if proc.killed_after_s is not None:
+        if proc.killed_after_s is None:
+            head = f'node {proc.name} died ({how})'
+        else:
             head = f'node {proc.name} did not stop within {proc.killed_after_s:g} s of SIGINT (the launcher killed it)'
         if failure:
             head += f': {failure[-1]}'

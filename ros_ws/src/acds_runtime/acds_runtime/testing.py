@@ -37,19 +37,11 @@ def wait_for_messages(graph: GraphRun, topic: str, count: int, timeout_s: float 
     monitor = graph.monitor
     assert monitor is not None
     name = topics.resolve(topic)
-    ended: list[str] = []
-
-    def done() -> bool:
-        if monitor.count(name) >= count:
-            return True
-        report = graph.exit_report()
-        if report is not None:
-            ended.append(report)
-        return bool(ended)
-    arrived = monitor.wait_for(done, timeout_s) and not ended
-    if not arrived:
+    monitor.wait_for(lambda: monitor.count(name) >= count or graph.exit_report() is not None, timeout_s)
+    if monitor.count(name) < count:
         got = {t: len(v) for t, v in monitor.snapshot().items()}
-        why = f'; a node ended first: {ended[0]}' if ended else ''
+        ended = graph.exit_report()
+        why = f'; a node ended first: {ended}' if ended is not None else ''
         pytest.fail(f'waited for {count} messages on {name}; received per topic: {got}{why}')
     return monitor.messages(topic)
 
