@@ -89,6 +89,9 @@ STOP_GRACE_S = 10.0
 #: A node still running this long after its main loop ended (its flush takes at most 5 s) prints every thread's
 #: stack to its output, so the launcher's report of a hung exit says where it hung.
 STUCK_TRACE_S = 7.0
+#: What the time owner prints as it leaves a completed run, followed by its last step: the launcher's word for where
+#: the run ends (the run monitor may still be draining steps before it; issue 18 §1).
+COMPLETE_PREFIX = 'RUN COMPLETE at step '
 #: Wall seconds the graph may take to become ready and fire its first step (at least; ``input_timeout_s`` if longer).
 READY_TIMEOUT_S = 20.0
 #: Seconds between checks that every input topic has only its declared publisher.
@@ -179,6 +182,8 @@ class LockstepNode(Node):
         self.stepper = stepper_cls(self.params, log=self._log)
         self.failure: str | None = None
         self.done = False
+        #: The step whose stage found the stepper finished (the run's last step), once done.
+        self.last_step: int | None = None
         self._ports: dict[str, _Port] = {}
         for out in self.spec.outputs:
             qos = LOCKSTEP_QOS if out.lockstep else COMMAND_QOS
@@ -409,6 +414,7 @@ class LockstepNode(Node):
         self._publish(outputs, k)
         if self.stepper.finished:
             self.done = True
+            self.last_step = k
         elif self.time_owner and stage is self._stages[-1]:
             self._publish_clock(k + 1)
 
@@ -617,6 +623,8 @@ def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
             code = EXIT_LOCKSTEP
         else:  # completed, or stopped by a signal: deliver what was published before leaving
             node.flush(timeout_s=2.0 if stop['signal'] is not None else 5.0)
+            if node.time_owner and node.done:
+                print(f'[{name}] {COMPLETE_PREFIX}{node.last_step}', flush=True)
     except (ConfigError, ValueError) as exc:
         print(f'[{name}] CONFIGURATION ERROR: {exc}', file=sys.stderr, flush=True)
         code = EXIT_CONFIG
@@ -634,5 +642,11 @@ def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
     os._exit(code)
 
 
-__all__ = ['COMMAND_QOS', 'LOCKSTEP_QOS', 'ConfigError', 'LockstepError', 'LockstepNode', 'message_class',
-           'release_node', 'run_node']
+def completed_step(line: str) -> int | None:
+    """The last step a time owner's output line announces (:data:`COMPLETE_PREFIX`), or None."""
+    _, mark, rest = line.partition(COMPLETE_PREFIX)
+    return int(rest) if mark and rest.strip().isdigit() else None
+
+
+__all__ = ['COMMAND_QOS', 'COMPLETE_PREFIX', 'LOCKSTEP_QOS', 'ConfigError', 'LockstepError', 'LockstepNode',
+           'completed_step', 'message_class', 'release_node', 'run_node']
