@@ -94,6 +94,9 @@ STUCK_TRACE_S = 7.0
 COMPLETE_PREFIX = 'RUN COMPLETE at step '
 #: Wall seconds the graph may take to become ready and fire its first step (at least; ``input_timeout_s`` if longer).
 READY_TIMEOUT_S = 20.0
+#: A watchdog tick (every 0.1 s) this much later than the one before means the process did not run in between
+#: (SIGSTOP, a cgroup freezer, a starved or suspended machine): that gap is not time spent waiting (issue 18 §4).
+FROZEN_GAP_S = 1.0
 #: Seconds between checks that every input topic has only its declared publisher.
 INTRUDER_CHECK_PERIOD_S = 1.0
 #: What discovery reports for a publisher whose node name it has not learnt yet, and how long it may stay so.
@@ -206,6 +209,9 @@ class LockstepNode(Node):
         self._ready_from: set[str] = set()
         self._last_progress = time.monotonic()
         self._created = time.monotonic()
+        self._last_tick = time.monotonic()
+        #: The launcher that started this node (0: started by hand); while it is stopped the graph is paused.
+        self._launcher = int(os.environ.get(LAUNCHER_PID_ENV, '0') or 0)
         self._last_intruder_check = 0.0
         self._unnamed_since: dict[str, float] = {}
         self._max_lag = max((i.lag for s in self._stages for i in s.inputs), default=0)
@@ -466,8 +472,17 @@ class LockstepNode(Node):
                 out[self.resolve_topic_name(topics.MONITOR_ACK)] = {MONITOR_NAME}
         return out
 
+    def _paused_for(self, now: float) -> float:
+        """Seconds since the last watchdog tick that were a pause, not waiting: the whole gap when this process was
+        not running, or the tick when its launcher is stopped (Ctrl-Z, SIGSTOP: it paces the graph)."""
+        gap, self._last_tick = now - self._last_tick, now
+        return gap if gap > FROZEN_GAP_S or (self._launcher and _stopped(self._launcher)) else 0.0
+
     def _watchdog(self) -> None:
         now = time.monotonic()
+        paused = self._paused_for(now)
+        self._last_progress += paused
+        self._created += paused
         if not self._started:
             self._check_ready(now)
             return
@@ -562,6 +577,16 @@ def release_node(executor: Any, node: Any, context: Any = None) -> None:
     if node is not None:
         node.destroy_node()
     rclpy.try_shutdown(context=context)
+
+
+def _stopped(pid: int) -> bool:
+    """Whether process ``pid`` is stopped (state T: SIGSTOP/SIGTSTP, or t: traced); False when it is gone."""
+    try:
+        with open(f'/proc/{pid}/stat', 'rb') as fh:
+            stat = fh.read()
+    except OSError:
+        return False
+    return stat[stat.rindex(b')') + 2:stat.rindex(b')') + 3] in (b'T', b't')
 
 
 def _die_with_launcher() -> bool:

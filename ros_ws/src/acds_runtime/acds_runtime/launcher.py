@@ -157,6 +157,8 @@ class GraphRun:
         self.lease: DomainLease | None = None
         self.monitor: RunMonitor | None = None
         self._t0 = 0.0
+        #: The SIGTSTP handler this run replaced (restored when it stops); None when not installed.
+        self._tstp_before: Any = None
 
     # ---- lifecycle ----------------------------------------------------------------------------------
     def __enter__(self) -> GraphRun:
@@ -245,6 +247,26 @@ class GraphRun:
             proc.reader = threading.Thread(target=self._forward, args=(proc, popen.stdout), daemon=True)
             proc.reader.start()
             self.processes[name] = proc
+        if threading.current_thread() is threading.main_thread():
+            self._tstp_before = signal.signal(signal.SIGTSTP, self._suspend)
+
+    def _suspend(self, _signum: int, _frame: Any) -> None:
+        """Ctrl-Z (SIGTSTP): stop every node with the launcher, and continue them when it is continued (issue 18
+        §4). The nodes run in sessions of their own, so the terminal's signal reaches only the launcher; a graph
+        whose nodes ran on would wait on a stopped run monitor and time out."""
+        self._signal_nodes(signal.SIGSTOP)
+        # SIGSTOP, not the default action of SIGTSTP, which the kernel discards in an orphaned process group (a
+        # launcher started in a session of its own); the shell sees the job stopped either way.
+        os.kill(os.getpid(), signal.SIGSTOP)  # returns on SIGCONT (fg, bg)
+        self._signal_nodes(signal.SIGCONT)
+
+    def _signal_nodes(self, sig: signal.Signals) -> None:
+        for proc in self.processes.values():
+            if proc.popen.poll() is None:
+                try:
+                    os.killpg(proc.popen.pid, sig)
+                except ProcessLookupError:
+                    pass
 
     def _forward(self, proc: NodeProcess, stream: IO[str] | None) -> None:
         assert stream is not None
@@ -351,12 +373,7 @@ class GraphRun:
                               ': the summary and the bag would miss them, so the run is not valid')
 
     def _stop_children(self, grace_s: float = STOP_GRACE_S) -> dict[str, int]:
-        for proc in self.processes.values():
-            if proc.popen.poll() is None:
-                try:
-                    os.killpg(proc.popen.pid, signal.SIGINT)
-                except ProcessLookupError:
-                    pass
+        self._signal_nodes(signal.SIGINT)
         deadline = time.monotonic() + grace_s
         codes: dict[str, int] = {}
         for name, proc in self.processes.items():
@@ -370,6 +387,9 @@ class GraphRun:
 
     def stop(self) -> None:
         """Stop every child (SIGINT, then SIGKILL after a grace period) and release the domain."""
+        if self._tstp_before is not None:
+            signal.signal(signal.SIGTSTP, self._tstp_before)
+            self._tstp_before = None
         if any(p.popen.poll() is None for p in self.processes.values()):
             self._stop_children()
         for proc in self.processes.values():
