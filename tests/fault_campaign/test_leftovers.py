@@ -5,12 +5,19 @@
 - A Ctrl-C in a Monte Carlo study's report phase left samples but no report and no mark: the
   interruption is raised from the report writer, as a Ctrl-C arriving there would.
 - The ``montecarlo`` header printed the base scenario's step count when ``control_period_s`` is varied.
+- A SIGKILLed ``montecarlo --jobs 2`` printed "There appear to be 12 leaked semaphore objects": the
+  resource tracker unlinking the named semaphores of the Dask nannies' worker queues.
 """
 
 from __future__ import annotations
 
 import errno
 import json
+import os
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -18,6 +25,8 @@ from acds_common import topics
 from acds_common.cdr import Codec
 from acds_common.scenario import load_scenario
 from acds_runtime.bag.writer import BagWriter
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.mark.parametrize('temporary', ['metadata.yaml.tmp', 'acds_run.yaml.tmp'])
@@ -82,3 +91,31 @@ def test_the_montecarlo_header_gives_the_samples_step_counts_when_the_control_pe
     text = _run_length(base, None, samples)
     assert text.startswith('1800–7200 steps of 0.5–2 s (control_period_s varied; 60.0–60.0 min sim)'), text
     assert _run_length(base, None).startswith('3600 steps of 1 s (60.0 min sim)')
+
+
+@pytest.mark.slow
+def test_a_sigkilled_local_cluster_study_reports_no_leaked_semaphores(tmp_path: Path) -> None:
+    import psutil
+
+    err = tmp_path / 'stderr'
+    with err.open('w') as fh:
+        proc = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'montecarlo', 'heao_b_acquisition_short', '--runs',
+                                 '6', '--jobs', '2', '--until-min', '30', '--quiet', '--out', str(tmp_path / 'mc')],
+                                cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT / 'scripts')),
+                                stdout=subprocess.DEVNULL, stderr=fh)
+    try:
+        parent = psutil.Process(proc.pid)
+        deadline = time.monotonic() + 180
+        while sum('spawn_main' in ' '.join(c.cmdline()) for c in parent.children()) < 2:  # the queues exist by then
+            assert proc.poll() is None and time.monotonic() < deadline, (
+                f'no 2 Dask worker processes within 180 s: {err.read_text()}')
+            time.sleep(0.1)
+        children = parent.children(recursive=True)
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=30)
+        _, alive = psutil.wait_procs(children, timeout=120)  # the workers and the tracker end after their parent
+        assert alive == [], f'still running 120 s after the SIGKILL: {alive}'
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert 'leaked semaphore' not in err.read_text(), err.read_text()
