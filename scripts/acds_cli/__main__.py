@@ -65,6 +65,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from acds_runtime.launcher import GraphRun, LaunchError
     from acds_runtime.preflight import preflight
     from acds_runtime.report import format_summary
+    from acds_runtime.run_folder import create_run_folder
     from acds_runtime.summary import print_tables, write_summary_json
 
     scenario, sample_text = sample_for_run(load_scenario(args.scenario or DEFAULT_SCENARIO), args)
@@ -78,10 +79,11 @@ def cmd_run(args: argparse.Namespace) -> int:
     direct = args.engine == 'direct'
     if direct and args.rtf:
         raise UsageError('--rtf paces the process graph\'s clock; the direct engine has none (use --engine graph)')
-    run_dir = Path(args.run_dir or ROOT / 'runs' / f'{scenario.name}_{time.strftime("%Y%m%d_%H%M%S")}')
-    check_output_dir('--run-dir' if args.run_dir else 'run folder', run_dir)
+    check_output_dir('--run-dir' if args.run_dir else 'run folder', Path(args.run_dir or ROOT / 'runs'))
     if args.summary_json:
         check_output_file('--summary-json', Path(args.summary_json))
+    # The default folder is created exclusively (a run started in the same second gets its own).
+    run_dir = Path(args.run_dir) if args.run_dir else create_run_folder(ROOT / 'runs', scenario.name)
     if sample_text is not None:  # the drawn scenario with how it was drawn (the launcher adds scenario.yaml)
         run_dir.mkdir(parents=True, exist_ok=True)
         (run_dir / 'sample.yaml').write_text(sample_text)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import yaml
+from acds_runtime.bag.coverage import GAPS_KEY, describe
 
 from .reader import open_bag
 
@@ -26,6 +27,9 @@ def bag_info(bag_path: Path | str, *, scenario: bool = True) -> str:
         lines.append(f'unclosed:   read {bag.unclosed}, without changing it (acds recover writes a repaired copy)')
     if 'recovered' in bag.info:
         lines.append(f'recovered:  {bag.info["recovered"]}')
+    gaps = describe(bag.info.get(GAPS_KEY))
+    if gaps is not None:
+        lines.append(f'gaps:       {gaps}')
     pubs = yaml.safe_load(bag.info.get('publishers', '') or '{}') or {}
     width = max((len(t) for t in bag.types), default=10)
     lines.append('')

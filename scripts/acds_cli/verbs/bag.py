@@ -174,7 +174,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_bag_options(p)
     p.add_argument('--topics', nargs='+', metavar='TOPIC', help='record only these topics (default: all)')
     p.add_argument('--domain', type=int, help='ROS domain id of the graph (printed by acds run, in RUN/domain_id)')
-    p.add_argument('--run-dir', help='run folder of the graph: domain, scenario and parameters are read from it')
+    p.add_argument('--run-dir', help='run folder of the graph: domain, scenario and parameters are read from it (and '
+                                     'the control period and per-step topics that the gap check needs)')
+    p.add_argument('--allow-gaps', action='store_true',
+                   help='exit 0 even when steps are missing between a topic\'s first and last (they are stored in '
+                        'the bag\'s metadata either way)')
     p.set_defaults(func=_record)
 
     p = sub.add_parser('play', help="publish a bag's messages (raw, original types, /clock)",

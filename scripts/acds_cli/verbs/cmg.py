@@ -195,8 +195,6 @@ def _scenario_with_sets(name: str, sets: list[str]) -> Any:
 
 def cmd_dump_report(args: argparse.Namespace) -> int:
     """Print the dump report of a bag or of a scenario's direct-engine run; write its JSON and plots."""
-    import time
-
     from acds_common.scenario import ScenarioError
     from acds_runtime.bag.writer import BagError, check_out_dir, check_target
     from acds_runtime.launcher import LaunchError
@@ -220,14 +218,19 @@ def cmd_dump_report(args: argparse.Namespace) -> int:
         else:
             from acds_runtime.direct import DirectRun
             from acds_runtime.preflight import preflight
+            from acds_runtime.run_folder import create_run_folder
 
             from ..__main__ import ROOT, Progress
 
             scenario = _scenario_with_sets(args.source, args.set or [])
             check_workshop(scenario)
             preflight(scenario)
-            out = Path(args.out) if args.out else ROOT / 'runs' / f'{scenario.name}_dump_{time.strftime("%Y%m%d_%H%M%S")}'
-            check_out_dir(out)
+            if args.out:
+                out = Path(args.out)
+                check_out_dir(out)
+            else:
+                check_out_dir(ROOT / 'runs')
+                out = create_run_folder(ROOT / 'runs', f'{scenario.name}_dump')
             bag_path = out / 'bag'
             check_target(bag_path)
             run = DirectRun(scenario, steps=args.steps, record=bag_path, progress=Progress(scenario.control_period_s))

@@ -120,9 +120,18 @@ def _steps(scenario: Scenario, until_min: float | None) -> int | None:
     return steps
 
 
-def _run_length(scenario: Scenario, steps: int | None) -> str:
-    n = steps if steps is not None else scenario.total_steps()
-    text = f'{n} steps of {scenario.control_period_s:g} s ({n * scenario.control_period_s / 60:.1f} min sim)'
+def _run_length(scenario: Scenario, steps: int | None, samples: list[Any] | None = None) -> str:
+    """How long each run is: its steps and control period (their ranges when the samples vary the period)."""
+    runs = [s.scenario for s in samples or []] or [scenario]
+    lengths = sorted({(steps if steps is not None else sc.total_steps(), sc.control_period_s) for sc in runs},
+                     key=lambda nd: nd[0] * nd[1])
+    if len({dt for _, dt in lengths}) > 1:
+        counts, periods = sorted(n for n, _ in lengths), sorted(dt for _, dt in lengths)
+        text = (f'{counts[0]}–{counts[-1]} steps of {periods[0]:g}–{periods[-1]:g} s (control_period_s varied; '
+                f'{lengths[0][0] * lengths[0][1] / 60:.1f}–{lengths[-1][0] * lengths[-1][1] / 60:.1f} min sim)')
+    else:
+        n, dt = lengths[0]
+        text = f'{n} steps of {dt:g} s ({n * dt / 60:.1f} min sim)'
     if scenario.get('modes', 'stop_at_capture'):
         text += ', each run stopping at acquisition capture'
     return text
@@ -179,7 +188,20 @@ def rows_of(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def _default_out(prefix: str, name: str, seed: int, runs: int) -> Path:
-    return ROOT / 'runs' / f'{prefix}_{name}_s{seed}_n{runs}_{time.strftime("%Y%m%d_%H%M%S")}'
+    """A new study folder under runs/, created exclusively (a study started in the same second gets its own)."""
+    from acds_runtime.run_folder import create_run_folder
+
+    check_output_dir('output folder', ROOT / 'runs')
+    return create_run_folder(ROOT / 'runs', f'{prefix}_{name}_s{seed}_n{runs}')
+
+
+def mark_complete(out: Path, spec: dict[str, Any], complete: bool) -> None:
+    """Write ``montecarlo.json`` saying whether the report phase finished: ``complete: false`` from its start until its
+    last file is written, so a study interrupted there (Ctrl-C, a crash) says it is incomplete and ``pick-sample``
+    refuses it."""
+    from acds_runtime.dispersion_report import write_json
+
+    write_json(out / 'montecarlo.json', {**spec, 'complete': complete})
 
 
 def cmd_montecarlo(args: argparse.Namespace) -> int:
@@ -194,8 +216,9 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     rerun = rerun_command(args.scenario, args.seed, '{index}', args.vary, args.until_min)
     sampler, samples = draw_samples(base, args.seed, args.runs, args.vary, rerun)
     variables = [v.text for v in sampler.variables]
+    run_length = _run_length(base, steps, samples)
     print(f'[montecarlo] {base.name}: {args.runs} samples of seed {args.seed} ({"; ".join(variables)}), '
-          f'{_run_length(base, steps)}, engine {args.engine}; output {out}', file=sys.stderr, flush=True)
+          f'{run_length}, engine {args.engine}; output {out}', file=sys.stderr, flush=True)
     t0 = time.monotonic()
     summaries, execution = _run(samples, args, steps)
     wall = time.monotonic() - t0
@@ -206,14 +229,15 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     spec = {'scenario': base.name, 'scenario_path': str(base.path), 'seed': args.seed, 'runs': args.runs,
             'vary': variables, 'user_vary': args.vary, 'engine': args.engine, 'until_min': args.until_min,
-            'steps': steps, 'run_length': _run_length(base, steps), 'execution': _execution_text(execution),
+            'steps': steps, 'run_length': run_length, 'execution': _execution_text(execution),
             'wall_seconds': wall, 'command': study_command(['montecarlo', args.scenario], args), 'rerun': rerun}
-    dr.write_json(out / 'montecarlo.json', spec)
+    mark_complete(out, spec, False)
     dr.write_rows(out, rows, records)
     dr.write_json(out / 'percentiles.json', stats)
     plots = dr.plot_distributions(out, rows, stats)
     report = dr.write_report(out, spec, rows, stats, sens, plots)
-    print(f'\n== {base.name}: {args.runs} samples (seed {args.seed}), {_run_length(base, steps)}; '
+    mark_complete(out, spec, True)
+    print(f'\n== {base.name}: {args.runs} samples (seed {args.seed}), {run_length}; '
           f'{_execution_text(execution)}; {wall:.0f} s wall ==')
     print(dr.percentile_table(stats))
     top = sens.get('acquisition_time_min', {})
@@ -243,6 +267,9 @@ def cmd_pick_sample(args: argparse.Namespace) -> int:
         records = json.loads((folder / 'samples.json').read_text())
     except (OSError, json.JSONDecodeError) as exc:
         raise UsageError(f'{folder}: not a montecarlo output folder ({exc})') from None
+    if spec.get('complete') is False:
+        raise UsageError(f'{folder}: the study is incomplete (its report phase was interrupted: montecarlo.json says '
+                         'complete: false); run it again')
     rows = rows_of(records)
     try:
         index, target = pick_sample(rows, args.quantity, args.percentile)

@@ -104,6 +104,27 @@ def run_samples(texts: Sequence[str], *, engine: str = 'direct', steps: int | No
         bar.close()
 
 
+#: The resource tracker's report of the semaphores it unlinks after its parent died (-W syntax).
+TRACKER_REPORT = 'ignore:resource_tracker:UserWarning:multiprocessing.resource_tracker'
+
+
+def quiet_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker without its report of "leaked semaphore objects" (issue 18 item 8).
+
+    A local cluster's nannies hand each worker process two multiprocessing queues (three named
+    semaphores each), which the tracker, shared by this process and its workers, unlinks when this
+    process is SIGKILLed: nothing is left in /dev/shm, but it printed "There appear to be 12 leaked
+    semaphore objects" (two workers) over the user's terminal. The tracker takes its warning filters
+    from this interpreter's ``-W`` options when it starts, so the filter is added first; a tracker
+    already running is left as it is.
+    """
+    from multiprocessing import resource_tracker
+
+    if TRACKER_REPORT not in sys.warnoptions:
+        sys.warnoptions.append(TRACKER_REPORT)
+    resource_tracker.ensure_running()
+
+
 def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:
     """(client, cluster or None) for a local cluster of ``jobs`` workers or the user's ``scheduler``."""
     import logging
@@ -111,6 +132,7 @@ def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:
     from dask.distributed import Client, LocalCluster
 
     if scheduler is None:
+        quiet_resource_tracker()
         cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None,
                                silence_logs=logging.ERROR)
         return Client(cluster, set_as_default=False), cluster

@@ -31,10 +31,12 @@ from typing import Any
 
 from acds_common import topics
 from acds_common.cdr import Codec
+from acds_common.environment import orbit_from_section
 from acds_common.graph import Graph
 from acds_common.inertia import inertia_tensor
 from acds_common.units import nms_to_ftlbs, tesla_to_gauss
 from acds_common.vec3 import dcm, dot, mat3, mv, norm
+from dynamics import integration_accuracy as accuracy
 
 #: Per-step topics the common (dynamics) summary reads.
 ODOMETRY, B_BODY, WHEEL_H, WHEEL_HDOT, TORQUE_MAG, TORQUE_GG = (topics.resolve(t) for t in (
@@ -52,12 +54,14 @@ def _summary_modules() -> list:
 
 
 class DynamicsSummary:
-    """Final rates and momentum, the |B| range seen (every single-vehicle run); momentum and energy drift of torque-free runs.
+    """Final rates and momentum, the |B| range seen (every single-vehicle run); the integration's health.
 
-    A run is torque-free when every step's magnetic, gravity-gradient and wheel torque is zero:
-    |H| in ECI and the rotational energy are then constants of the motion and their largest relative
-    change is integration error (``momentum_drift_rel``, ``energy_drift_rel``; null otherwise, where
-    the change is physics).
+    Integration health, always: the largest step angle θ = (|ω| + 2 ω_orbit)·Δt/substeps over the
+    run's steps (``step_angle_max_rad``) against the bounds of :mod:`dynamics.integration_accuracy`
+    (``integration``: ok, or the warning bound it passed). A run is torque-free when every step's
+    magnetic, gravity-gradient and wheel torque is zero: |H| in ECI and the rotational energy are then
+    constants of the motion and their largest relative change is integration error
+    (``momentum_drift_rel``, ``energy_drift_rel``; null otherwise, where the change is physics).
     """
 
     topics = (ODOMETRY, B_BODY, WHEEL_H, WHEEL_HDOT, TORQUE_MAG, TORQUE_GG)
@@ -80,6 +84,9 @@ class DynamicsSummary:
         self.b_min = math.inf
         self.b_max = 0.0
         self.torque_free = True
+        self._substep_s = sc.control_period_s / sc.get('dynamics', 'substeps')
+        self._orbit_rate = accuracy.orbit_rate_max_rad_s(orbit_from_section(sc.values['orbit']))
+        self.max_omega = 0.0
 
     def step(self, _k: int, values: dict[str, Any]) -> None:
         """One step's truth."""
@@ -93,6 +100,7 @@ class DynamicsSummary:
             h_body = iw if wheel is None else (iw[0] + wheel[0], iw[1] + wheel[1], iw[2] + wheel[2])
             h = norm(mv(dcm(odom.orientation), h_body))  # |H| in ECI
             e = 0.5 * dot(omega, iw)
+            self.max_omega = max(self.max_omega, norm(omega))
             if self.h0 is None:
                 self.h0, self.e0 = h, e
             self.max_dh = max(self.max_dh, abs(h - self.h0))
@@ -105,7 +113,12 @@ class DynamicsSummary:
 
     def contribute(self, summary: dict[str, Any]) -> None:
         """Add the dynamics keys."""
+        theta = (self.max_omega + 2.0 * self._orbit_rate) * self._substep_s
         summary.update({
+            'step_angle_max_rad': theta,
+            'integration': ('ok' if theta <= accuracy.STEP_ANGLE_WARN_RAD else
+                            f'WARNING: step angle above {accuracy.STEP_ANGLE_WARN_RAD:g} rad '
+                            f'(raise dynamics.substeps; {accuracy.STUDY})'),
             'torque_free': self.torque_free,
             'momentum_drift_rel': (self.max_dh / self.h0 if self.h0 else 0.0) if self.torque_free else None,
             'energy_drift_rel': (self.max_de / self.e0 if self.e0 else 0.0) if self.torque_free else None,
