@@ -75,7 +75,7 @@ def test_a_killed_worker_loses_no_sample(texts):
                            silence_logs=logging.ERROR)
     killed: list[tuple[int, list]] = []
 
-    def kill_a_busy_worker(_done: int) -> None:
+    def kill_a_busy_worker(_i: int, _summary: dict) -> None:
         if killed:
             return
         busy = [(w, keys) for w, keys in client.processing().items() if keys]
@@ -97,7 +97,7 @@ def test_a_killed_worker_loses_no_sample(texts):
     def stats(summaries):
         samples = [Sampler(load_scenario(BASE), 5).draw(i) for i in range(len(summaries))]
         return dr.percentiles([dr.make_row(s.index, s.scenario.name, s.drawn, s.geometry(), m)
-                               for s, m in zip(samples, summaries, strict=True)])
+                               for s, m in zip(samples, summaries, strict=True)], 5)
     assert stats(got) == stats(reference)
 
 

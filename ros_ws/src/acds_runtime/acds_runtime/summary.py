@@ -26,6 +26,7 @@ import hashlib
 import json
 import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -148,21 +149,22 @@ class RunObserver:
             t_ns, value = codec.decode(data)
             self.feed_value(topic, t_ns // self.dt_ns, value)
 
-    def feed(self, topic: str, k: int, value: Any, data: bytes | None) -> None:
-        """A message as the direct engine produces it: its value and (for truth topics) its bytes."""
-        if data is not None and topic in self._digests:
-            self._digests[topic].update(data)
+    def truth_sink(self, topic: str) -> Callable[[bytes], None] | None:
+        """For the direct engine: what takes each serialized message of ``topic`` (absolute) when it is a truth
+        topic (hashed into the digest, counted), else None: the engine encodes nothing else it does not record."""
+        digest = self._digests.get(topic)
+        if digest is None:
+            return None
+        update = digest.update
+
+        def sink(data: bytes) -> None:
+            update(data)
             self.truth_messages += 1
-        if topic in self.codecs:
-            self.feed_value(topic, k, value)
+        return sink
 
-    def wants(self, topic: str) -> bool:
-        """Whether this observer reads ``topic`` (absolute) at all (the direct engine skips the rest)."""
-        return topic in self.codecs or topic in self._digests
-
-    def hashes(self, topic: str) -> bool:
-        """Whether :meth:`feed` needs the bytes of ``topic`` (a truth topic: hashed into the digest)."""
-        return topic in self._digests
+    def value_sink(self, topic: str) -> Callable[[str, int, Any], None] | None:
+        """For the direct engine: :meth:`feed_value` when the summaries read ``topic``, else None."""
+        return self.feed_value if topic in self.codecs else None
 
     def feed_value(self, topic: str, k: int, value: Any) -> None:
         """A decoded value of step k."""
@@ -228,11 +230,11 @@ def _finite(value: Any, where: str, replaced: list[str]) -> Any:
     return value
 
 
-def summary_json(obj: Any) -> tuple[str, list[str]]:
+def summary_json(obj: Any, indent: int | None = 2) -> tuple[str, list[str]]:
     """Strict JSON text of a summary (or a list of them) with every non-finite number written as ``null``,
-    and the keys that were replaced (e.g. ``passes[0].ripple_pct``)."""
+    and the keys that were replaced (e.g. ``passes[0].ripple_pct``); ``indent=None``: one line."""
     replaced: list[str] = []
-    text = json.dumps(_finite(obj, '', replaced), indent=2, allow_nan=False) + '\n'
+    text = json.dumps(_finite(obj, '', replaced), indent=indent, allow_nan=False) + '\n'
     return text, replaced
 
 
