@@ -207,7 +207,7 @@ def run_journaled(journal: Any, samples: dict[tuple[str, int], Any], args: argpa
                                     on_result=lambda i, summary, keys=keys: journal.record(keys[i], summary))[1]
     except (KeyboardInterrupt, _Stop) as exc:
         why = 'Ctrl-C' if isinstance(exc, KeyboardInterrupt) else str(exc)
-        print(f'\n[{verb}] interrupted ({why}): {len(journal.done)} of {len(samples)} samples kept in '
+        print(f'\n[{verb}] interrupted ({why}): {journal.kept()} of {len(samples)} samples kept in '
               f'{journal.path}; continue with:\n  {journal.study["command"]} --resume {journal.path.parent}',
               file=sys.stderr, flush=True)
         raise SystemExit(130) from None

@@ -115,8 +115,15 @@ class Journal:
         """Append a finished sample (fsynced before returning) and keep it as read back from JSON."""
         case, index = key
         rec = {'index': index, 'case': case, 'scenario_hash': self.hashes[key], 'summary': summary}
+        kept = json.loads(_line(summary))
         self._append(rec)
-        self.done[key] = json.loads(_line(summary))
+        self.done[key] = kept
+
+    def kept(self) -> int:
+        """The samples the journal on disk holds (after an interruption: what a resume will keep)."""
+        data = self.path.read_bytes()
+        lines = data[:data.rfind(b'\n') + 1].decode().splitlines()[1:]
+        return len({(rec['case'], rec['index']) for rec in map(json.loads, lines)})
 
     def close(self) -> None:
         os.close(self._fd)

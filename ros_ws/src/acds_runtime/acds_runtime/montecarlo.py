@@ -76,13 +76,14 @@ def sample_folder() -> Iterator[Path]:
         shutil.rmtree(folder, ignore_errors=True)
 
 
-def clean_zombies() -> tuple[list[str], list[Path]]:
+def clean_zombies(before: set[str] | None = None) -> tuple[list[str], list[Path]]:
     """Remove what graph samples of a study that was killed (its process, or a Dask worker) left: Fast DDS
-    segments and ports in /dev/shm nobody holds (:func:`acds_runtime.shm.clean_run` over every entry, so
-    zombies only) and sample folders whose lock nobody holds. Returns both lists."""
+    segments and ports in /dev/shm nobody holds (:func:`acds_runtime.shm.clean_run`: zombies only, among the
+    entries not in ``before``, default every entry) and sample folders whose lock nobody holds (and not
+    created in the last :data:`acds_runtime.shm.MIN_AGE_S`). Returns both lists."""
     from . import shm
 
-    removed = shm.clean_run(set())
+    removed = shm.clean_run(set() if before is None else before)
     folders = []
     for folder in Path(tempfile.gettempdir()).glob(f'{SAMPLE_DIR_PREFIX}*'):
         lock = folder / _SAMPLE_LOCK
@@ -155,7 +156,7 @@ def run_samples(texts: Sequence[str], *, engine: str = 'direct', steps: int | No
     finally:
         bar.close()
         if before is not None:  # the zombies of runs this study's end interrupted (live or young ones: next start)
-            shm.clean_run(before)
+            clean_zombies(before)
 
 
 def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:

@@ -81,24 +81,29 @@ class DynamicsSummary:
         self.b_min = math.inf
         self.b_max = 0.0
         self.torque_free = True
+        self._last: tuple[Any, Any] | None = None  # (odometry, wheel momentum) of the last step
+
+    def _h_e(self, odom: Any, wheel: Any) -> tuple[float, float]:
+        """|H| in ECI (body + wheels) and the rotational energy of one step's truth (floats, vec3)."""
+        omega = odom.angular
+        iw = mv(self._inertia, omega)
+        h_body = iw if wheel is None else (iw[0] + wheel[0], iw[1] + wheel[1], iw[2] + wheel[2])
+        return norm(mv(dcm(odom.orientation), h_body)), 0.5 * dot(omega, iw)
 
     def step(self, _k: int, values: dict[str, Any]) -> None:
-        """One step's truth."""
+        """One step's truth. The drifts are kept while the run is torque-free only (they are reported only
+        then); the final momentum is computed once, from the last step's truth (:meth:`contribute`)."""
         if self.torque_free and any(v is not None and any(v) for v in (values.get(t) for t in self.topics[3:])):
             self.torque_free = False
         odom = values.get(ODOMETRY)
-        if odom is not None:  # floats (vec3): this runs every step
-            omega = odom.angular
-            iw = mv(self._inertia, omega)
-            wheel = values.get(WHEEL_H)
-            h_body = iw if wheel is None else (iw[0] + wheel[0], iw[1] + wheel[1], iw[2] + wheel[2])
-            h = norm(mv(dcm(odom.orientation), h_body))  # |H| in ECI
-            e = 0.5 * dot(omega, iw)
-            if self.h0 is None:
-                self.h0, self.e0 = h, e
-            self.max_dh = max(self.max_dh, abs(h - self.h0))
-            self.max_de = max(self.max_de, abs(e - self.e0))
-            self.final_rates, self.final_h = odom.angular, h
+        if odom is not None:
+            self._last = (odom, values.get(WHEEL_H))
+            if self.h0 is None or self.torque_free:
+                h, e = self._h_e(*self._last)
+                if self.h0 is None:
+                    self.h0, self.e0 = h, e
+                self.max_dh = max(self.max_dh, abs(h - self.h0))
+                self.max_de = max(self.max_de, abs(e - self.e0))
         b = values.get(B_BODY)
         if b is not None:
             g = tesla_to_gauss(norm(b[0]))
@@ -106,6 +111,8 @@ class DynamicsSummary:
 
     def contribute(self, summary: dict[str, Any]) -> None:
         """Add the dynamics keys."""
+        if self._last is not None:
+            self.final_rates, self.final_h = self._last[0].angular, self._h_e(*self._last)[0]
         summary.update({
             'torque_free': self.torque_free,
             'momentum_drift_rel': (self.max_dh / self.h0 if self.h0 else 0.0) if self.torque_free else None,
