@@ -8,11 +8,18 @@
    around (same QoS, same EventsExecutor) — cycles/s, the ceiling a lockstep could reach;
 3. direct engine: the same scenario's steppers in one process (``--engine direct``);
 4. kernel: the rigid body + environment (``RigidBodyModel.advance`` + ``truth``) alone at
-   the scenario's control period and substeps.
+   the scenario's control period and substeps;
+5. dispersion: a fixed 20-sample study of the same scenario (case 1), samples 0–19 of seed
+   :data:`DISPERSION_SEED` with the default draws, each run to acquisition capture on the direct engine,
+   one after the other in this process (``montecarlo --jobs 1``): samples/s.
+
+The direct engine and the dispersion are also given per second of this process's CPU time: on a machine
+shared with other work, the wall rate measures the load as much as the code.
 
 ``--json`` prints one object with the keys ``graph_steps_per_s``, ``bare_chain_steps_per_s``,
-``ratio``, ``hops``, ``deliveries_per_step``, ``direct_steps_per_s``, ``core_steps_per_s``,
-``cores`` (and ``cpu_ms_per_step``, ``load_average``).
+``ratio``, ``hops``, ``deliveries_per_step``, ``direct_steps_per_s``, ``direct_steps_per_cpu_s``,
+``core_steps_per_s``, ``dispersion_samples_per_s``, ``dispersion_samples_per_cpu_s``, ``cores`` (and
+``cpu_ms_per_step``, ``load_average``).
 """
 
 from __future__ import annotations
@@ -29,6 +36,8 @@ from pathlib import Path
 from typing import Any
 
 SCENARIO = 'heao_b_acquisition'
+#: The dispersion line's study: samples 0…DISPERSION_SAMPLES − 1 of this seed.
+DISPERSION_SEED, DISPERSION_SAMPLES = 1, 20
 
 
 def _cpu_s(pid: int) -> float:
@@ -101,13 +110,31 @@ def bare_chain_rate(hops: int, cycles: int) -> float:
     return float(out.strip().splitlines()[-1])
 
 
-def direct_rate(steps: int) -> float:
-    """Steps/s of the direct engine on the scenario (no recording)."""
+def direct_rate(steps: int) -> tuple[float, float]:
+    """Steps per wall second and per CPU second of the direct engine on the scenario (no recording)."""
     from acds_common.scenario import load_scenario
     from acds_runtime.direct import DirectRun
 
-    result = DirectRun(load_scenario(SCENARIO), steps=steps).run()
-    return result.steps / result.wall_seconds
+    run = DirectRun(load_scenario(SCENARIO), steps=steps)
+    cpu0 = time.process_time()
+    result = run.run()
+    return result.steps / result.wall_seconds, result.steps / (time.process_time() - cpu0)
+
+
+def dispersion_rate() -> tuple[float, float]:
+    """Samples per wall second and per CPU second of the fixed case-1 study (module doc, item 5)."""
+    from acds_common.scenario import load_scenario
+    from acds_runtime.montecarlo import run_samples
+    from acds_runtime.sampling import Sampler
+
+    sampler = Sampler(load_scenario(SCENARIO), DISPERSION_SEED)
+    texts = [sampler.draw(i).text for i in range(DISPERSION_SAMPLES)]
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    summaries, _ = run_samples(texts, progress=False)
+    failed = [s['error'] for s in summaries if 'error' in s]
+    if failed:
+        raise RuntimeError(f'dispersion benchmark: a sample failed: {failed[0]}')
+    return DISPERSION_SAMPLES / (time.perf_counter() - wall0), DISPERSION_SAMPLES / (time.process_time() - cpu0)
 
 
 def core_rate(steps: int) -> float:
@@ -131,12 +158,15 @@ def main(args: argparse.Namespace) -> int:
     """Run the measurements and print them (``--json``: last line one JSON object)."""
     graph = graph_rate(args.steps)
     bare = bare_chain_rate(graph['hops'], args.steps)
-    direct = direct_rate(max(args.steps, 5000))
+    direct, direct_cpu = direct_rate(max(args.steps, 5000))
     core = core_rate(max(args.steps, 5000))
+    dispersion, dispersion_cpu = dispersion_rate()
     result = {'graph_steps_per_s': round(graph['steps_per_s'], 1), 'bare_chain_steps_per_s': round(bare, 1),
               'ratio': round(graph['steps_per_s'] / bare, 3), 'hops': graph['hops'],
               'deliveries_per_step': round(graph['deliveries_per_step'], 2),
-              'direct_steps_per_s': round(direct, 1), 'core_steps_per_s': round(core, 1), 'cores': os.cpu_count(),
+              'direct_steps_per_s': round(direct, 1), 'direct_steps_per_cpu_s': round(direct_cpu, 1),
+              'core_steps_per_s': round(core, 1), 'dispersion_samples_per_s': round(dispersion, 3),
+              'dispersion_samples_per_cpu_s': round(dispersion_cpu, 3), 'cores': os.cpu_count(),
               'cpu_ms_per_step': {k: round(v, 3) for k, v in graph['cpu_ms_per_step'].items()},
               'load_average': [round(x, 2) for x in os.getloadavg()]}
     print(f'six-node graph ({SCENARIO}, recording on):    {graph["steps_per_s"]:10.1f} steps/s')
@@ -145,8 +175,10 @@ def main(args: argparse.Namespace) -> int:
     print(f'deliveries per step:                              {graph["deliveries_per_step"]:10.2f}')
     print(f'bare rclpy ring ({graph["hops"]} processes):                 {bare:10.1f} cycles/s')
     print(f'ratio graph / bare ring:                          {graph["steps_per_s"] / bare:10.3f}')
-    print(f'direct engine (one process, no DDS):              {direct:10.1f} steps/s')
+    print(f'direct engine (one process, no DDS):              {direct:10.1f} steps/s  ({direct_cpu:.1f} per CPU s)')
     print(f'rigid body + environment kernel:                  {core:10.1f} steps/s')
+    print(f'dispersion ({DISPERSION_SAMPLES} case-1 samples to capture, direct): {dispersion:10.3f} samples/s '
+          f'({dispersion_cpu:.3f} per CPU s)')
     print(f'machine: {os.cpu_count()} cores, load average {", ".join(f"{x:.2f}" for x in os.getloadavg())}')
     if args.json:
         print(json.dumps(result))

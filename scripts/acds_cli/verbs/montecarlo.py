@@ -161,17 +161,74 @@ def _execution_text(execution: Any) -> str:
     return f'{execution.where}, {execution.workers} worker(s), {execution.threads} thread(s)'
 
 
-def _run(samples: list[Any], args: argparse.Namespace, steps: int | None) -> tuple[list[dict[str, Any]], Any]:
+def study_folder(prefix: str, name: str, args: argparse.Namespace) -> Path:
+    """The study's output folder: ``--resume DIR``, ``--out DIR`` or a new one under ``runs/``."""
+    if args.resume:
+        if args.out and Path(args.out).resolve() != Path(args.resume).resolve():
+            raise UsageError(f'--out {args.out}: a resumed study writes into its own folder ({args.resume})')
+        return Path(args.resume)
+    out = Path(args.out) if args.out else _default_out(prefix, name, args.seed, args.runs)
+    check_output_dir('--out' if args.out else 'output folder', out)
+    return out
+
+
+def open_journal(out: Path, study: dict[str, Any], samples: dict[tuple[str, int], Any], resume: bool) -> Any:
+    """The study's journal (``acds_runtime.journal``), new or resumed; a mismatch is a UsageError (one line)."""
+    from acds_runtime.journal import Journal, JournalError, samples_hash, text_hash
+
+    hashes = {key: text_hash(s.text) for key, s in samples.items()}
+    study = {**study, 'samples_hash': samples_hash(hashes.values())}
+    try:
+        return Journal(out, study, hashes, resume=resume)
+    except JournalError as exc:
+        raise UsageError(str(exc)) from None
+
+
+class _Stop(BaseException):
+    """SIGTERM / SIGHUP during a study: stop as Ctrl-C does (every finished sample is already kept)."""
+
+
+def run_journaled(journal: Any, samples: dict[tuple[str, int], Any], args: argparse.Namespace, steps_of: Any,
+                  verb: str) -> Any:
+    """Run the samples the journal lacks (one batch per run length, ``steps_of(key)``), appending each as it
+    finishes; the execution, or None when every sample was kept already. Ctrl-C, SIGTERM or SIGHUP:
+    print how many samples are kept and the resume command, exit 130 (:class:`SystemExit`)."""
+    import signal
+
     from acds_runtime.montecarlo import MonteCarloError, run_samples
 
+    todo = [key for key in samples if key not in journal.done]
+    if journal.done:
+        print(f'[{verb}] resuming {journal.path.parent}: {len(journal.done)} of {len(samples)} samples kept, '
+              f'{len(todo)} to run', file=sys.stderr, flush=True)
+
+    def stop(signum: int, _frame: Any) -> None:
+        raise _Stop(signal.Signals(signum).name)
+    previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGHUP)}
+    execution = None
     try:
-        summaries, execution = run_samples([s.text for s in samples], engine=args.engine, steps=steps,
-                                           jobs=args.jobs, scheduler=args.scheduler, progress=not args.quiet)
+        batches: dict[int | None, list[tuple[str, int]]] = {}
+        for key in todo:
+            batches.setdefault(steps_of(key), []).append(key)
+        for steps, keys in batches.items():
+            execution = run_samples([samples[k].text for k in keys], engine=args.engine, steps=steps, jobs=args.jobs,
+                                    scheduler=args.scheduler, progress=not args.quiet,
+                                    on_result=lambda i, summary, keys=keys: journal.record(keys[i], summary))[1]
+    except (KeyboardInterrupt, _Stop) as exc:
+        why = 'Ctrl-C' if isinstance(exc, KeyboardInterrupt) else str(exc)
+        print(f'\n[{verb}] interrupted ({why}): {journal.kept()} of {len(samples)} samples kept in '
+              f'{journal.path}; continue with:\n  {journal.study["command"]} --resume {journal.path.parent}',
+              file=sys.stderr, flush=True)
+        raise SystemExit(130) from None
     except MonteCarloError as exc:
         raise UsageError(str(exc)) from None
-    for note in execution.notes:
-        print(f'[montecarlo] {note}', file=sys.stderr)
-    return summaries, execution
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        journal.close()
+    for note in execution.notes if execution is not None else ():
+        print(f'[{verb}] {note}', file=sys.stderr)
+    return execution
 
 
 def records_of(samples: list[Any], summaries: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -205,32 +262,40 @@ def mark_complete(out: Path, spec: dict[str, Any], complete: bool) -> None:
 
 
 def cmd_montecarlo(args: argparse.Namespace) -> int:
-    """Draw, run, summarise (module doc)."""
+    """Draw, run (appending each sample to the journal), summarise (module doc)."""
     from acds_common.scenario import load_scenario
     from acds_runtime import dispersion_report as dr
 
     base = load_scenario(args.scenario)
-    out = Path(args.out) if args.out else _default_out('montecarlo', base.name, args.seed, args.runs)
-    check_output_dir('--out' if args.out else 'output folder', out)
+    out = study_folder('montecarlo', base.name, args)
     steps = _steps(base, args.until_min)
     rerun = rerun_command(args.scenario, args.seed, '{index}', args.vary, args.until_min)
     sampler, samples = draw_samples(base, args.seed, args.runs, args.vary, rerun)
     variables = [v.text for v in sampler.variables]
     run_length = _run_length(base, steps, samples)
+    command = study_command(['montecarlo', args.scenario], args)
+    journal = open_journal(out, {'verb': 'montecarlo', 'scenario': base.name, 'seed': args.seed, 'runs': args.runs,
+                                 'vary': args.vary, 'engine': args.engine, 'until_min': args.until_min,
+                                 'steps': steps, 'command': command},
+                           {('', s.index): s for s in samples}, bool(args.resume))
     print(f'[montecarlo] {base.name}: {args.runs} samples of seed {args.seed} ({"; ".join(variables)}), '
           f'{run_length}, engine {args.engine}; output {out}', file=sys.stderr, flush=True)
     t0 = time.monotonic()
-    summaries, execution = _run(samples, args, steps)
+    kept = len(journal.done)
+    execution = run_journaled(journal, {('', s.index): s for s in samples}, args, lambda _key: steps, 'montecarlo')
     wall = time.monotonic() - t0
+    summaries = [journal.done[('', s.index)] for s in samples]
     records = records_of(samples, summaries)
     rows = rows_of(records)
-    stats = dr.percentiles(rows)
+    stats = dr.percentiles(rows, args.seed, args.target_width or dr.TARGET_WIDTH_PCT)
     sens = dr.sensitivity(rows, list(dr.flatten(samples[0].drawn)))
-    out.mkdir(parents=True, exist_ok=True)
+    where = _execution_text(execution) if execution is not None else 'nothing left to run'
+    if kept:
+        where += f'; {kept} sample(s) kept from an interrupted session'
     spec = {'scenario': base.name, 'scenario_path': str(base.path), 'seed': args.seed, 'runs': args.runs,
             'vary': variables, 'user_vary': args.vary, 'engine': args.engine, 'until_min': args.until_min,
-            'steps': steps, 'run_length': run_length, 'execution': _execution_text(execution),
-            'wall_seconds': wall, 'command': study_command(['montecarlo', args.scenario], args), 'rerun': rerun}
+            'steps': steps, 'run_length': run_length, 'execution': where,
+            'wall_seconds': wall, 'command': command, 'rerun': rerun}
     mark_complete(out, spec, False)
     dr.write_rows(out, rows, records)
     dr.write_json(out / 'percentiles.json', stats)
@@ -238,7 +303,7 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     report = dr.write_report(out, spec, rows, stats, sens, plots)
     mark_complete(out, spec, True)
     print(f'\n== {base.name}: {args.runs} samples (seed {args.seed}), {run_length}; '
-          f'{_execution_text(execution)}; {wall:.0f} s wall ==')
+          f'{where}; {wall:.0f} s wall ==')
     print(dr.percentile_table(stats))
     top = sens.get('acquisition_time_min', {})
     if top:
@@ -320,6 +385,9 @@ def add_execution_options(p: argparse.ArgumentParser) -> None:
                    help='run on this Dask cluster (tcp://host:8786) instead of a local one')
     p.add_argument('--engine', choices=ENGINES, default='direct',
                    help='direct (default: one process, bit-identical to the graph) or graph (one process per node)')
+    p.add_argument('--resume', metavar='DIR',
+                   help='continue the interrupted study in DIR (same scenario, seed and options): run only the samples '
+                        'its journal (samples.jsonl) lacks')
 
 
 def _seed(text: str) -> int:
@@ -331,6 +399,16 @@ def _seed(text: str) -> int:
         raise argparse.ArgumentTypeError(f'expected a whole number, got {text!r}') from None
     if not 0 <= value <= MAX_SEED:
         raise argparse.ArgumentTypeError(f'must be in [0, {MAX_SEED}], got {text}')
+    return value
+
+
+def _width(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected a number, got {text!r}') from None
+    if not 0.0 < value <= 1000.0:
+        raise argparse.ArgumentTypeError(f'must be in (0, 1000] %, got {text}')
     return value
 
 
@@ -361,6 +439,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--until-min', type=positive_minutes,
                    help='cap every run at this sim time, minutes (a sample not captured by then is censored)')
     p.add_argument('--out', metavar='DIR', help='output folder (default runs/montecarlo_<scenario>_s<seed>_n<N>_<time>)')
+    p.add_argument('--target-width', type=_width, default=None, metavar='PCT',
+                   help='report the samples each percentile needs for a confidence interval this wide, %% of its value '
+                        '(default 10)')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
     p.set_defaults(func=cmd_montecarlo)
 

@@ -10,9 +10,11 @@ ratio to the first scenario (case 1) with a seeded bootstrap 90 % interval
 turned by the smallest rotation that puts I·ω0 on B (``h_parallel_b()``). A ``--vary`` key that a
 case itself sets differently from case 1 (case 11's rates) keeps the case's value for that case.
 
-Without ``--runs``, each scenario runs in its own subprocess (``python -m acds_cli run NAME --quiet
---summary-json FILE``), so every run has its own rclpy contexts and its own ROS domain
-(the launcher leases one per run). ``table-4-7`` stands for the eleven acquisition cases
+Without ``--runs``, each scenario runs in its own subprocess (``python -m acds_cli run NAME --engine E
+--quiet --summary-json FILE``; ``--engine`` direct by default, as for the paired study), so every run has
+its own process and, on the graph, its own rclpy contexts and ROS domain (the launcher leases one per run).
+A paired study appends each finished sample to its journal in ``--out`` (``acds_runtime.journal``) and
+continues an interrupted one with ``--resume DIR``. ``table-4-7`` stands for the eleven acquisition cases
 of Table 4-7. ``--json`` writes the list of summary objects (a failed run appears as
 ``{"scenario": NAME, "error": "..."}``; non-finite numbers as null). Every scenario is
 loaded and pre-flighted, and every option checked, before the first run starts.
@@ -31,8 +33,18 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
-from ..arguments import UsageError, check_output_dir, check_output_file, positive_int, positive_minutes
-from .montecarlo import add_execution_options, add_sample_options, draw_samples, records_of, rows_of, study_command
+from ..arguments import UsageError, check_output_file, positive_int, positive_minutes
+from .montecarlo import (
+    add_execution_options,
+    add_sample_options,
+    draw_samples,
+    open_journal,
+    records_of,
+    rows_of,
+    run_journaled,
+    study_command,
+    study_folder,
+)
 
 #: Shorthands for scenario lists.
 GROUPS = {
@@ -107,7 +119,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
     if args.runs is not None:
         return cmd_paired(args)
-    for flag in ('vary', 'scheduler', 'out'):
+    for flag in ('vary', 'scheduler', 'out', 'resume'):
         if getattr(args, flag):
             raise UsageError(f'--{flag} belongs to a paired study: give --runs N with it')
     names = expand(args.scenarios)
@@ -115,7 +127,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         preflight(load_scenario(name))  # fail fast (exit 2, one line) on a bad scenario before anything runs
     if args.json:
         check_output_file('--json', Path(args.json))
-    extra = ['--until-min', str(args.until_min)] if args.until_min is not None else []
+    extra = ['--engine', args.engine] + (['--until-min', str(args.until_min)] if args.until_min is not None else [])
     t0 = time.monotonic()
     with tempfile.TemporaryDirectory(prefix='acds_sweep_') as tmp:
         print(f'[sweep] {len(names)} scenario(s), {args.jobs} at a time; logs in {tmp} while running',
@@ -178,14 +190,11 @@ def cmd_paired(args: argparse.Namespace) -> int:
     """Every scenario on the same ``--runs`` draws; the paired table (module doc)."""
     from acds_common.scenario import load_scenario
     from acds_runtime import dispersion_report as dr
-    from acds_runtime.montecarlo import MonteCarloError, run_samples
     from acds_runtime.sampling import SamplingError
 
     names = expand(args.scenarios)
     scenarios = [load_scenario(n) for n in names]
-    out = Path(args.out) if args.out else None
-    if out is not None:
-        check_output_dir('--out', out)
+    out = study_folder('sweep', names[0] if len(names) == 1 else f'{len(names)}cases', args)
     if args.json:
         check_output_file('--json', Path(args.json))
     steps_by_case, samples_by_case = [], []
@@ -200,21 +209,17 @@ def cmd_paired(args: argparse.Namespace) -> int:
         samples_by_case.append(samples)
         steps_by_case.append(None if args.until_min is None else max(1, round(args.until_min * 60 /
                                                                                sc.control_period_s)))
-    print(f'[sweep] paired study: {len(names)} case(s) × {args.runs} draws (seed {args.seed}), engine {args.engine}',
-          file=sys.stderr, flush=True)
+    command = study_command(['sweep', *args.scenarios], args)
+    keyed = {(name, s.index): s for name, samples in zip(names, samples_by_case, strict=True) for s in samples}
+    journal = open_journal(out, {'verb': 'sweep', 'scenarios': names, 'seed': args.seed, 'runs': args.runs,
+                                 'vary': args.vary, 'engine': args.engine, 'until_min': args.until_min,
+                                 'command': command}, keyed, bool(args.resume))
+    steps_of = dict(zip(names, steps_by_case, strict=True))
+    print(f'[sweep] paired study: {len(names)} case(s) × {args.runs} draws (seed {args.seed}), engine {args.engine}; '
+          f'output {out}', file=sys.stderr, flush=True)
     t0 = time.monotonic()
-    summaries: list[list[dict[str, Any]]] = []
-    try:  # one batch per run length (every case the same unless control periods differ)
-        for steps in sorted(set(steps_by_case), key=lambda s: -1 if s is None else s):
-            idx = [i for i, s in enumerate(steps_by_case) if s == steps]
-            got, execution = run_samples([s.text for i in idx for s in samples_by_case[i]], engine=args.engine,
-                                         steps=steps, jobs=args.jobs, scheduler=args.scheduler,
-                                         progress=not args.quiet)
-            for n, i in enumerate(idx):
-                summaries.append((i, got[n * args.runs:(n + 1) * args.runs]))
-    except MonteCarloError as exc:
-        raise UsageError(str(exc)) from None
-    by_case = dict(summaries)
+    execution = run_journaled(journal, keyed, args, lambda key: steps_of[key[0]], 'sweep')
+    by_case = [[journal.done[(name, k)] for k in range(args.runs)] for name in names]
     wall = time.monotonic() - t0
     rows_by_case = [rows_of(records_of(samples_by_case[i], by_case[i])) for i in range(len(names))]
     cases = []
@@ -235,32 +240,31 @@ def cmd_paired(args: argparse.Namespace) -> int:
     print(paired_table(cases, args.runs, args.seed))
     print(f'\n[sweep] {len(names)} case(s) × {args.runs} draws in {wall:.0f} s wall ({_execution(execution)})',
           file=sys.stderr)
-    result = {'command': study_command(['sweep', *args.scenarios], args), 'seed': args.seed, 'runs': args.runs,
+    result = {'command': command, 'seed': args.seed, 'runs': args.runs,
               'engine': args.engine, 'until_min': args.until_min, 'wall_seconds': wall,
               'execution': _execution(execution), 'cases': cases}
     if args.json:
         dr.write_json(Path(args.json), result)
-    if out is not None:
-        out.mkdir(parents=True, exist_ok=True)
-        dr.write_json(out / 'sweep.json', result)
-        all_rows = [{'case': name, **row} for name, rows in zip(names, rows_by_case, strict=True) for row in rows]
-        all_records = [{'case': name, **rec} for i, name in enumerate(names)
-                       for rec in records_of(samples_by_case[i], by_case[i])]
-        dr.write_rows(out, all_rows, all_records)
-        (out / 'report.md').write_text(f'# Paired perturbation study\n\n`{result["command"]}`\n\n```\n'
-                                       f'{paired_table(cases, args.runs, args.seed)}\n```\n')
+    dr.write_json(out / 'sweep.json', result)
+    all_rows = [{'case': name, **row} for name, rows in zip(names, rows_by_case, strict=True) for row in rows]
+    all_records = [{'case': name, **rec} for i, name in enumerate(names)
+                   for rec in records_of(samples_by_case[i], by_case[i])]
+    dr.write_rows(out, all_rows, all_records)
+    (out / 'report.md').write_text(f'# Paired perturbation study\n\n`{result["command"]}`\n\n```\n'
+                                   f'{paired_table(cases, args.runs, args.seed)}\n```\n')
     return 0 if all(c['failed'] == 0 for c in cases) else 1
 
 
 def _execution(execution: Any) -> str:
-    return f'{execution.where}, {execution.workers} worker(s)'
+    return 'nothing left to run' if execution is None else f'{execution.where}, {execution.workers} worker(s)'
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``sweep`` verb."""
     p = sub.add_parser('sweep', help='run scenarios in parallel and print one table (table-4-7: the eleven cases)',
-                       description='Run each SCENARIO through the full graph in its own process and ROS domain, '
-                                   f'--jobs at a time, and print one table. Groups: {", ".join(GROUPS)}.')
+                       description='Run each SCENARIO in its own process on --engine (direct by default; graph: '
+                                   'one process per node in its own ROS domain), --jobs at a time, and print one '
+                                   f'table. Groups: {", ".join(GROUPS)}.')
     p.add_argument('scenarios', nargs='+', metavar='SCENARIO', help='scenario names or paths, or a group name')
     p.add_argument('--jobs', '-j', type=positive_int, default=2, help='runs at a time (default 2)')
     p.add_argument('--json', metavar='PATH', help='write the list of summary objects as JSON (non-finite as null)')
@@ -269,6 +273,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help='paired study: run every scenario on the same N drawn open conditions (module doc)')
     add_execution_options(p)
     add_sample_options(p, run=False)
-    p.add_argument('--out', metavar='DIR', help='paired study: write sweep.json, samples.csv/json and report.md here')
+    p.add_argument('--out', metavar='DIR', help='paired study: write its journal (samples.jsonl), sweep.json, '
+                                                 'samples.csv/json and report.md here (default runs/sweep_...)')
     p.add_argument('--quiet', action='store_true', help='paired study: no progress bar')
     p.set_defaults(func=cmd_sweep)
