@@ -12,9 +12,9 @@ import time
 from pathlib import Path
 
 import pytest
-from acds_cli.bag.reader import open_bag, unfinished
-from acds_cli.bag.recover import recover_bag
 from acds_common import topics
+from acds_runtime.bag.reader import open_bag, unfinished
+from acds_runtime.bag.recover import recover_bag
 from acds_runtime.bag.writer import cdr_stamp_ns, stamped
 from acds_runtime.testing import wait_for_messages
 
@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _recorder(run_dir: Path, bag: Path, storage: str, log: Path) -> subprocess.Popen:
-    env = dict(os.environ, PYTHONPATH=str(ROOT / 'scripts'), ROS_LOG_DIR=str(log))
+    env = dict(os.environ, ROS_LOG_DIR=str(log))
     return subprocess.Popen([sys.executable, '-m', 'acds_cli', 'record', str(bag), '--storage', storage,
                              '--run-dir', str(run_dir)], cwd=ROOT, env=env, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)

@@ -30,8 +30,8 @@ from typing import Any
 from acds_common.scenario import Scenario, ScenarioError
 
 from ..arguments import UsageError, check_output_dir, positive_int, positive_minutes
+from ..workspace import new_run_dir
 
-ROOT = Path(__file__).resolve().parents[3]
 #: The quantity and percentile of the baseline rule (README "Choosing the baseline's open conditions").
 BASELINE_QUANTITY, BASELINE_PERCENTILE = 'acquisition_time_min', 90.0
 
@@ -179,7 +179,7 @@ def rows_of(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def _default_out(prefix: str, name: str, seed: int, runs: int) -> Path:
-    return ROOT / 'runs' / f'{prefix}_{name}_s{seed}_n{runs}_{time.strftime("%Y%m%d_%H%M%S")}'
+    return new_run_dir(f'{prefix}_{name}_s{seed}_n{runs}')
 
 
 def cmd_montecarlo(args: argparse.Namespace) -> int:

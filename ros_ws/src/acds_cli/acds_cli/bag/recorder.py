@@ -112,7 +112,7 @@ def gaps(bag_path: Path) -> dict[str, int]:
     Streamed: messages come in stamp order, so each topic needs only its first step, last step and the
     number of distinct steps seen.
     """
-    from .reader import open_bag
+    from acds_runtime.bag.reader import open_bag
     bag = open_bag(bag_path)
     dt = bag.control_period_ns
     if not dt:

@@ -195,7 +195,6 @@ def _scenario_with_sets(name: str, sets: list[str]) -> Any:
 
 def cmd_dump_report(args: argparse.Namespace) -> int:
     """Print the dump report of a bag or of a scenario's direct-engine run; write its JSON and plots."""
-    import time
 
     from acds_common.scenario import ScenarioError
     from acds_runtime.bag.writer import BagError, check_out_dir, check_target
@@ -221,12 +220,13 @@ def cmd_dump_report(args: argparse.Namespace) -> int:
             from acds_runtime.direct import DirectRun
             from acds_runtime.preflight import preflight
 
-            from ..__main__ import ROOT, Progress
+            from ..workspace import new_run_dir
+            from .run import Progress
 
             scenario = _scenario_with_sets(args.source, args.set or [])
             check_workshop(scenario)
             preflight(scenario)
-            out = Path(args.out) if args.out else ROOT / 'runs' / f'{scenario.name}_dump_{time.strftime("%Y%m%d_%H%M%S")}'
+            out = Path(args.out) if args.out else new_run_dir(f'{scenario.name}_dump')
             check_out_dir(out)
             bag_path = out / 'bag'
             check_target(bag_path)

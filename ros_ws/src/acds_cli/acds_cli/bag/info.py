@@ -5,8 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import yaml
-
-from .reader import open_bag
+from acds_runtime.bag.reader import open_bag
 
 
 def bag_info(bag_path: Path | str, *, scenario: bool = True) -> str:
