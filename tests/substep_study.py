@@ -25,8 +25,8 @@ import sys
 from dataclasses import dataclass
 from typing import Any
 
+from acds_common.attitude import quat_mul
 from acds_common.scenario import load_scenario
-from acds_common.vec3 import quat_mul
 from acds_runtime.direct import DirectRun
 from dynamics.configuration import RIGID_BODY_SECTIONS, build_rigid_body
 from dynamics.integration_accuracy import STEP_ANGLE_LIMIT_RAD, STEP_ANGLE_WARN_RAD

@@ -13,9 +13,9 @@ from pathlib import Path
 
 import pytest
 import yaml
-from acds_cli.bag.reader import open_bag, unfinished
-from acds_cli.bag.recover import recover_bag
 from acds_common import topics
+from acds_runtime.bag.reader import open_bag, unfinished
+from acds_runtime.bag.recover import recover_bag
 from acds_runtime.bag.writer import cdr_stamp_ns, stamped
 from acds_runtime.testing import wait_for_messages
 
@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _recorder(run_dir: Path, bag: Path, storage: str, log: Path) -> subprocess.Popen:
-    env = dict(os.environ, PYTHONPATH=str(ROOT / 'scripts'), ROS_LOG_DIR=str(log))
+    env = dict(os.environ, ROS_LOG_DIR=str(log))
     # --allow-gaps: the graph runs free and a loaded machine can leave the joiner 1000 steps behind; these tests are
     # about closing and killing it (the gaps themselves: tests/fault_campaign/test_joined_recording.py).
     return subprocess.Popen([sys.executable, '-m', 'acds_cli', 'record', str(bag), '--storage', storage,

@@ -28,7 +28,7 @@ def _comparable(summary: dict) -> dict:
 
 
 def run_acds(*args: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:
-    env = {'PYTHONPATH': str(ROOT / 'scripts'), 'PATH': os.environ.get('PATH', '/usr/bin:/bin'),
+    env = {'PATH': os.environ.get('PATH', '/usr/bin:/bin'),
            'ROS_LOG_DIR': '/tmp/acds_ros_log', 'HOME': os.environ.get('HOME', '/tmp')}
     return subprocess.run([sys.executable, '-m', 'acds_cli', *args], capture_output=True, text=True, cwd=ROOT,
                           env=env, timeout=timeout, check=False)

@@ -35,7 +35,6 @@ from . import shm
 from .monitor import RunMonitor
 from .summary import RunObserver
 
-ROOT = Path(__file__).resolve().parents[2]
 VENV_BIN = Path(sys.executable).parent
 FASTDDS_PROFILE = Path(__file__).with_name('fastdds_profile.xml')
 DOMAIN_LOCK_DIR = Path(os.environ.get('ACDS_DOMAIN_LOCK_DIR', '/tmp/acds_domains'))

@@ -31,12 +31,13 @@ from pathlib import Path
 from typing import Any
 
 from acds_common import topics
+from acds_common.attitude import dcm
 from acds_common.cdr import Codec
 from acds_common.environment import orbit_from_section
 from acds_common.graph import Graph
 from acds_common.inertia import inertia_tensor
 from acds_common.units import nms_to_ftlbs, tesla_to_gauss
-from acds_common.vec3 import dcm, dot, mat3, mv, norm
+from acds_common.vec3 import dot, mat3, mv, norm
 from dynamics import integration_accuracy as accuracy
 
 #: Per-step topics the common (dynamics) summary reads.

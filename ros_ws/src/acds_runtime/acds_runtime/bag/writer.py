@@ -16,9 +16,9 @@ chunk and flushes the file (sqlite3: commits) on the first message after the
 period elapsed, when a chunk reaches 1 MiB, every :data:`FLUSH_MESSAGES`
 messages, and on :meth:`BagWriter.flush`. A killed recorder therefore loses
 at most the last second of messages; the bag it leaves has no index and no
-``metadata.yaml``: :func:`acds_cli.bag.reader.open_bag` reads it, without
+``metadata.yaml``: :func:`.reader.open_bag` reads it, without
 changing it, up to its last complete chunk, and
-:func:`acds_cli.bag.recover.recover_bag` writes a repaired copy (the
+:func:`.recover.recover_bag` writes a repaired copy (the
 ``ros2 bag reindex`` equivalent). While it is open, the writer holds the bag
 folder's recording lock (:mod:`acds_runtime.bag.recording`).
 """

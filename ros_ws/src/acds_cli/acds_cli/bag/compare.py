@@ -24,12 +24,9 @@ from typing import Any
 import yaml
 from acds_common import topics
 from acds_common.graph import TIME_OWNER
+from acds_runtime.bag.reader import Bag, iter_fields, open_bag
 from acds_runtime.bag.writer import BagError, stamped, typestore
 
-from .reader import Bag, iter_fields, open_bag
-
-#: How many steps the player may run ahead of the node's outputs.
-WINDOW = 100
 DIAGNOSTICS = topics.resolve(topics.DIAGNOSTICS)
 #: Exit codes of ``acds compare``.
 EXIT_SAME, EXIT_DIFFERENT, EXIT_ERROR = 0, 1, 2
@@ -109,14 +106,6 @@ def node_parameters(bag: Bag, node: str, scenario: str | None = None,
     params.pop('real_time_factor', None)
     params.update(sets or {})
     return {k: v for k, v in params.items() if v != []}
-
-
-def outputs_of(bag: Bag, node: str) -> list[str]:
-    """Topics the recorder saw ``node`` publish (from ``acds.publishers``)."""
-    pubs = yaml.safe_load(bag.info.get('publishers', '') or '{}') or {}
-    if not pubs:
-        raise BagError(f'bag {bag.path}: it does not say which node published what (acds.publishers)')
-    return sorted(t for t, names in pubs.items() if node in names and bag.has(t))
 
 
 def _by_step(msgs: list[tuple[int, bytes]], dt_ns: int, keyed: bool) -> dict[int, bytes]:

@@ -8,13 +8,13 @@ messages are streamed from the storage on each iteration, in timestamp order
 
 - A closed bag (``metadata.yaml``) is read with ``rosbags``.
 - A bag being recorded (no ``metadata.yaml``, its writer's recording lock held,
-  :mod:`acds_cli.bag.recording`) is refused with one line: reading it would
+  :mod:`.recording`) is refused with one line: reading it would
   race its writer.
 - An unclosed bag (no ``metadata.yaml``, lock free: the recorder died) is read
-  as far as it is readable (:mod:`acds_cli.bag.salvage`): MCAP up to its last
+  as far as it is readable (:mod:`.salvage`): MCAP up to its last
   complete chunk, sqlite3 up to its last committed transaction; the run data
   comes from the sidecar ``acds_run.yaml``. One line says so;
-  :func:`acds_cli.bag.recover.recover_bag` writes a repaired copy.
+  :func:`.recover.recover_bag` writes a repaired copy.
 - Anything else (random bytes named ``.mcap``, an empty file, a folder without
   storage, a truncated ``metadata.yaml``) is a :class:`BagError` of one line
   naming the path and what is wrong.
@@ -32,11 +32,11 @@ from typing import Any
 
 import yaml
 from acds_common import topics
-from acds_runtime.bag.recording import LOCK_FILE, being_recorded
-from acds_runtime.bag.writer import RUN_INFO_FILE, BagError, typestore
 from rosbags.rosbag2 import Reader
 
+from .recording import LOCK_FILE, being_recorded
 from .salvage import UnclosedMcap, committed_view
+from .writer import RUN_INFO_FILE, BagError
 
 CLOCK = topics.CLOCK
 #: Storage file suffix → rosbag2 storage name.
@@ -133,13 +133,6 @@ class Bag:
             raise
         except Exception as exc:  # noqa: BLE001 (a storage error while streaming: one line naming the bag)
             raise BagError(f'bag {self.path}: reading its messages failed: {_one_line(exc)}') from None
-
-    def decoded(self, topic: str) -> Iterator[tuple[int, Any]]:
-        """(timestamp ns, deserialized message) of ``topic`` (rosbags message objects), streamed."""
-        name = topics.resolve(topic)
-        ts, msgtype = typestore(), self.types.get(name)
-        for _, t, data in self.messages([name]):
-            yield t, ts.deserialize_cdr(data, msgtype)
 
     def ordered(self, selected: Iterable[str] | None = None) -> Iterator[tuple[int, list[tuple[str, bytes]]]]:
         """The messages grouped by timestamp, streamed: (t_ns, [(topic, raw), ...]); in a group /clock first,

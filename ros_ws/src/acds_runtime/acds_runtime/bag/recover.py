@@ -14,9 +14,9 @@ import shutil
 from pathlib import Path
 
 import yaml
-from acds_runtime.bag.writer import BagError, BagWriter, check_target
 
 from .reader import Bag, open_bag
+from .writer import BagError, BagWriter, check_target
 
 #: Sidecar keys that describe a writer's set-up, not the run (not copied as custom data).
 WRITER_KEYS = ('storage', 'compression', 'flush_period_s', 'publishers', 'recovered')

@@ -21,6 +21,7 @@ from typing import Any
 import rclpy
 from acds_common import topics
 from acds_common.lockstep import message_class, release_node
+from acds_runtime.bag.reader import Bag
 from acds_runtime.bag.writer import BagError, offered_qos
 from acds_runtime.launcher import FASTDDS_PROFILE
 from rclpy.context import Context
@@ -28,8 +29,6 @@ from rclpy.duration import Duration
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-
-from .reader import Bag
 
 #: Wait for acknowledgements after this many /clock steps (well inside the history depth of 1000).
 ACK_EVERY_STEPS = 100

@@ -18,9 +18,8 @@ from typing import Any
 import numpy as np
 from acds_common import topics, units
 from acds_common.cdr import Codec
+from acds_runtime.bag.reader import open_bag
 from acds_runtime.bag.writer import BagError, check_out_dir
-
-from .reader import open_bag
 
 DIPOLE, COMMAND, SUN, H_S = (topics.resolve(t) for t in (topics.DIPOLE_AVG, topics.MOMENT_COMMAND, topics.SUN_SENSOR,
                                                           topics.SAMPLED_MOMENTUM))

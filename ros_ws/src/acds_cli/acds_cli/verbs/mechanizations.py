@@ -1,9 +1,8 @@
 """``acds mechanizations [--csv]``: seed 001 Table 1 recomputed from simulated torque histories.
 
 Each of the four spin-mode mechanizations runs in a constant 0.3 G field rotating at 4 rpm in the plane
-of motor action (two whole revolutions, spin-up, coil RL lag included); the columns come from the
-simulated history (:func:`spin_mechanizations.summarise`).  The readable table adds the derived closed
-forms and the seed's Table 1 values beside them.
+of motor action (:func:`ascs_mode_manager.spin_mechanizations.table_rows`).  The readable table adds the
+derived closed forms and the seed's Table 1 values beside them.
 """
 
 from __future__ import annotations
@@ -11,31 +10,20 @@ from __future__ import annotations
 import argparse
 import sys
 
-from acds_common.units import GAUSS_T, nm_to_dyne_cm
-
+from acds_common.units import nm_to_dyne_cm
 from ascs_mode_manager.spin_mechanizations import (
     DESIGN_FIELD_T,
     MECHANIZATIONS,
     closed_form_average_torque_nm,
     closed_form_ripple_pct,
-    simulate_rotating_field,
-    summarise,
+    table_rows,
 )
 
 CSV_HEADER = "mechanization,coils,magnetometers,power_w,peak_moment_am2,avg_torque_dyne_cm,ripple_pct,sweep_deg"
 
 
-def table_rows(field_g: float = DESIGN_FIELD_T / GAUSS_T) -> list[dict]:
-    """Simulated Table 1 rows, one dict per mechanization key (seed 001 Table 1 columns)."""
-    return [{"mechanization": key, **summarise(simulate_rotating_field(mech, field_g))}
-            for key, mech in MECHANIZATIONS.items()]
-
-
-def main(argv: list[str] | None = None) -> int:
+def cmd_mechanizations(args: argparse.Namespace) -> int:
     """Print the mechanization comparison (CSV with ``--csv``, else a readable table)."""
-    parser = argparse.ArgumentParser(prog="acds mechanizations", description=__doc__.splitlines()[0])
-    parser.add_argument("--csv", action="store_true", help="print only the CSV table on stdout")
-    args = parser.parse_args(argv)
     rows = table_rows()
     if args.csv:
         lines = [CSV_HEADER]
@@ -57,5 +45,9 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-if __name__ == "__main__":
-    raise SystemExit(main())
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``mechanizations`` verb."""
+    text = 'the four SSS spin-mode mechanizations in a rotating 0.3 G field (seed 001 Table 1)'
+    p = sub.add_parser("mechanizations", help=text, description=text)
+    p.add_argument("--csv", action="store_true", help="print only the CSV table on stdout")
+    p.set_defaults(func=cmd_mechanizations)

@@ -218,9 +218,9 @@ def cmd_dump_report(args: argparse.Namespace) -> int:
         else:
             from acds_runtime.direct import DirectRun
             from acds_runtime.preflight import preflight
-            from acds_runtime.run_folder import create_run_folder
 
-            from ..__main__ import ROOT, Progress
+            from ..workspace import new_run_dir, workspace
+            from .run import Progress
 
             scenario = _scenario_with_sets(args.source, args.set or [])
             check_workshop(scenario)
@@ -229,8 +229,8 @@ def cmd_dump_report(args: argparse.Namespace) -> int:
                 out = Path(args.out)
                 check_out_dir(out)
             else:
-                check_out_dir(ROOT / 'runs')
-                out = create_run_folder(ROOT / 'runs', f'{scenario.name}_dump')
+                check_out_dir(workspace() / 'runs')
+                out = new_run_dir(f'{scenario.name}_dump')
             bag_path = out / 'bag'
             check_target(bag_path)
             run = DirectRun(scenario, steps=args.steps, record=bag_path, progress=Progress(scenario.control_period_s))

@@ -34,11 +34,11 @@ import numpy as np
 import yaml
 from acds_common import topics, units
 from acds_common.parameters import ConfigError, normalize, section
+from acds_runtime.bag.reader import Bag, open_bag
 from acds_runtime.bag.writer import BagError, check_out_dir, typestore
 from acds_runtime.summaries.heao import transitions
 
 from . import FORMATS, formation_plots
-from .reader import Bag, open_bag
 
 AXES = (('x', 'roll'), ('y', 'pitch'), ('z', 'yaw'))
 #: The sun-angle plot's sections of the time owner's parameters (the rigid body's environment).

@@ -13,8 +13,7 @@ from typing import Any
 
 import numpy as np
 from acds_common import topics
-
-from .reader import Bag
+from acds_runtime.bag.reader import Bag
 
 _SUFFIX = '/' + topics.TRUTH_ODOMETRY
 

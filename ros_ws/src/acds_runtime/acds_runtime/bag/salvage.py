@@ -29,7 +29,8 @@ from types import SimpleNamespace
 from typing import Any, BinaryIO
 
 import yaml
-from acds_runtime.bag.writer import BagError, qos_from_dicts
+
+from .writer import BagError, qos_from_dicts
 
 MCAP_MAGIC = b'\x89MCAP0\r\n'
 JOURNAL_MAGIC = bytes((0xD9, 0xD5, 0x05, 0xF9, 0x20, 0xA1, 0x63, 0xD7))

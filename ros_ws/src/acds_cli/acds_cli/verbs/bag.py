@@ -1,6 +1,6 @@
 """Bag verbs: record, play, compare, plot, info, recover (rosbag2 bags on top of ``rosbags``).
 
-Every verb that reads a bag reads it strictly read-only (:mod:`acds_cli.bag.reader`); bad options and
+Every verb that reads a bag reads it strictly read-only (:mod:`acds_runtime.bag.reader`); bad options and
 paths that are not bags are one line and exit 2 before anything starts.
 """
 
@@ -45,11 +45,11 @@ def check_domain_free(domain: int | None) -> None:
 
 
 def _play(args: argparse.Namespace) -> int:
+    from acds_runtime.bag.reader import open_bag
     from acds_runtime.bag.writer import BagError
 
     from ..bag import stop_on_signals
     from ..bag.player import Player, check_rate, parse_remaps
-    from ..bag.reader import open_bag
 
     stop = stop_on_signals()
     live = None
@@ -149,9 +149,8 @@ def _info(args: argparse.Namespace) -> int:
 
 
 def _recover(args: argparse.Namespace) -> int:
+    from acds_runtime.bag.recover import recover_bag
     from acds_runtime.bag.writer import BagError
-
-    from ..bag.recover import recover_bag
 
     try:
         src, copy = recover_bag(args.src, args.dest, args.compression)

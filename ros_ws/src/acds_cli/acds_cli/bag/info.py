@@ -6,8 +6,7 @@ from pathlib import Path
 
 import yaml
 from acds_runtime.bag.coverage import GAPS_KEY, describe
-
-from .reader import open_bag
+from acds_runtime.bag.reader import open_bag
 
 
 def bag_info(bag_path: Path | str, *, scenario: bool = True) -> str:

@@ -1,4 +1,4 @@
-"""Tests of the GSFC Mark VI torque-meter stand tool (seed 001 "Subsystem testing", Figs. 11–14)."""
+"""The GSFC Mark VI torque-meter stand (seed 001 "Subsystem testing", Figs. 11–14): its core and ``acds torque-meter``."""
 
 from __future__ import annotations
 
@@ -8,15 +8,17 @@ import math
 from pathlib import Path
 
 import pytest
+from acds_cli.__main__ import main
+from acds_cli.verbs.torque_meter import CSV_HEADER
 from acds_common.units import GAUSS_T, nm_to_dyne_cm
 from ascs_mode_manager import torque_meter
 from ascs_mode_manager.spin_mechanizations import ATTITUDE_COIL, SPIN_COIL, AscsError
 
 
 def _csv_rows(capsys: pytest.CaptureFixture[str], argv: list[str]) -> list[dict]:
-    assert torque_meter.main(argv) == 0
+    assert main(["torque-meter", *argv]) == 0
     out = capsys.readouterr().out
-    assert out.splitlines()[0] == torque_meter.CSV_HEADER
+    assert out.splitlines()[0] == CSV_HEADER
     return list(csv.DictReader(io.StringIO(out)))
 
 
@@ -78,7 +80,7 @@ def test_attitude_variant_tilt_geometry(capsys: pytest.CaptureFixture[str]) -> N
 
 
 def test_png_written(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert torque_meter.main(["--field", "0.1", "0.3", "--dwell-s", "20", "--png", str(tmp_path)]) == 0
+    assert main(["torque-meter", "--field", "0.1", "0.3", "--dwell-s", "20", "--png", str(tmp_path)]) == 0
     out = capsys.readouterr()
     assert "Mark VI" in out.out and "turn_on" in out.out
     png = tmp_path / "torque_meter_spin.png"
@@ -90,4 +92,4 @@ def test_bad_arguments() -> None:
         torque_meter.run_torque_meter((math.nan,))
     with pytest.raises(AscsError):
         torque_meter.run_torque_meter((0.3,), dt_s=0.0)
-    assert torque_meter.main(["--field", "-1"]) == 2
+    assert main(["torque-meter", "--field", "-1"]) == 2

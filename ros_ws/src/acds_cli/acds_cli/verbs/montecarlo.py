@@ -30,8 +30,8 @@ from typing import Any
 from acds_common.scenario import Scenario, ScenarioError
 
 from ..arguments import UsageError, check_output_dir, positive_int, positive_minutes
+from ..workspace import new_run_dir, workspace
 
-ROOT = Path(__file__).resolve().parents[3]
 #: The quantity and percentile of the baseline rule (README "Choosing the baseline's open conditions").
 BASELINE_QUANTITY, BASELINE_PERCENTILE = 'acquisition_time_min', 90.0
 
@@ -246,10 +246,8 @@ def rows_of(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 def _default_out(prefix: str, name: str, seed: int, runs: int) -> Path:
     """A new study folder under runs/, created exclusively (a study started in the same second gets its own)."""
-    from acds_runtime.run_folder import create_run_folder
-
-    check_output_dir('output folder', ROOT / 'runs')
-    return create_run_folder(ROOT / 'runs', f'{prefix}_{name}_s{seed}_n{runs}')
+    check_output_dir('output folder', workspace() / 'runs')
+    return new_run_dir(f'{prefix}_{name}_s{seed}_n{runs}')
 
 
 def mark_complete(out: Path, spec: dict[str, Any], complete: bool) -> None:

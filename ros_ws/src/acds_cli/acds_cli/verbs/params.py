@@ -17,8 +17,7 @@ import sys
 from typing import Any
 
 from ..arguments import UsageError, step_count
-
-DEFAULT_SCENARIO = 'heao_b_acquisition'
+from .run import DEFAULT_SCENARIO
 
 
 def waits_for(node: str, params: dict[str, Any]) -> list[str]:
