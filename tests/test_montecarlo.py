@@ -202,7 +202,7 @@ def test_an_interrupted_study_resumes_to_the_clean_result(tmp_path, clean_study,
     import time
 
     out = tmp_path / 'mc'
-    env = {'PYTHONPATH': str(ROOT / 'scripts'), 'PATH': os.environ.get('PATH', '/usr/bin:/bin'),
+    env = {'PATH': os.environ.get('PATH', '/usr/bin:/bin'),
            'ROS_LOG_DIR': '/tmp/acds_ros_log', 'HOME': os.environ.get('HOME', '/tmp')}
     proc = subprocess.Popen([sys.executable, '-m', 'acds_cli', *STUDY, '--out', str(out)], cwd=ROOT, env=env,
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)

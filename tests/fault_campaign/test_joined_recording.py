@@ -15,13 +15,13 @@ from pathlib import Path
 import pytest
 import yaml
 from acds_cli.bag.info import bag_info
-from acds_cli.bag.reader import open_bag
 from acds_cli.bag.recorder import JoinedRecording, report_recording, step_coverage
 from acds_common import topics
 from acds_common.cdr import Codec
 from acds_common.parameters import node_parameters, parameters_yaml
 from acds_common.scenario import load_scenario
 from acds_runtime.bag.coverage import StepCoverage
+from acds_runtime.bag.reader import open_bag
 from acds_runtime.bag.writer import BagWriter
 
 WHEELS = topics.resolve(topics.WHEEL_MOMENTUM)

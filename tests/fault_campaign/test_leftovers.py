@@ -101,7 +101,7 @@ def test_a_sigkilled_local_cluster_study_reports_no_leaked_semaphores(tmp_path: 
     with err.open('w') as fh:
         proc = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'montecarlo', 'heao_b_acquisition_short', '--runs',
                                  '6', '--jobs', '2', '--until-min', '30', '--quiet', '--out', str(tmp_path / 'mc')],
-                                cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT / 'scripts')),
+                                cwd=ROOT, env=dict(os.environ),
                                 stdout=subprocess.DEVNULL, stderr=fh)
     try:
         parent = psutil.Process(proc.pid)

@@ -33,7 +33,7 @@ def _scenario(tmp_path: Path) -> Path:
 
 
 def _run(tmp_path: Path, *args: str) -> subprocess.Popen[str]:
-    env = {'PYTHONPATH': str(ROOT / 'scripts'), 'PATH': f'{VENV_BIN}:/usr/bin:/bin',
+    env = {'PATH': f'{VENV_BIN}:/usr/bin:/bin',
            'ROS_LOG_DIR': str(tmp_path / 'log'), 'CI': 'true'}
     return subprocess.Popen([sys.executable, '-m', 'acds_cli', 'run', str(_scenario(tmp_path)), '--steps', str(STEPS),
                              '--no-record', '--quiet', *args], cwd=ROOT, stdin=subprocess.DEVNULL,

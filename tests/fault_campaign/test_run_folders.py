@@ -50,7 +50,7 @@ def test_two_runs_in_the_same_second_use_two_run_folders(tmp_path: Path, one_sec
                                                          capsys: pytest.CaptureFixture[str]) -> None:
     from acds_cli import __main__ as cli
 
-    monkeypatch.setattr(cli, 'ROOT', tmp_path)
+    monkeypatch.setenv('ACDS_WORKSPACE', str(tmp_path))
     folders = []
     for _ in range(2):
         assert cli.main(['run', 'heao_b_acquisition_short', '--engine', 'direct', '--no-record', '--steps', '3',

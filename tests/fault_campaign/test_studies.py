@@ -31,7 +31,7 @@ SPINNING_UP = ['--vary', 'disturbance.bias_momentum_per_orbit_nms=choice([0,0,0]
 def _env(tmp_path: Path) -> dict[str, str]:
     tmp = tmp_path / 'tmpdir'
     tmp.mkdir(exist_ok=True)
-    return {'PYTHONPATH': str(ROOT / 'scripts'), 'PATH': f'{VENV_BIN}:/usr/bin:/bin', 'TMPDIR': str(tmp),
+    return {'PATH': f'{VENV_BIN}:/usr/bin:/bin', 'TMPDIR': str(tmp),
             'ROS_LOG_DIR': str(tmp_path / 'log'), 'HOME': os.environ.get('HOME', '/tmp'), 'CI': 'true'}
 
 
