@@ -114,7 +114,7 @@ from acds_common import topics
 from acds_common.cdr import Codec
 from acds_runtime.bag.writer import BagWriter
 path, storage, compression = sys.argv[1:]
-codec = Codec(topics.TYPES[topics.WHEEL_MOMENTUM], 'base_link')
+codec = Codec(topics.type_of(topics.WHEEL_MOMENTUM), 'base_link')
 writer = BagWriter(path, storage, {'control_period_s': '0.5'}, flush_period_s=3600.0, compression=compression)
 for k in range(300):  # far below a chunk's 1 MiB and FLUSH_MESSAGES: only flush() makes them durable
     writer.write(topics.resolve(topics.WHEEL_MOMENTUM), codec.encode(k * 500_000_000, (k, -1.0, 2.0)))
@@ -133,5 +133,5 @@ def test_flush_makes_every_written_message_survive_a_sigkill(tmp_path, storage, 
     assert proc.returncode == -9, proc.stderr
     assert not (path / 'metadata.yaml').exists()
     bag = open_bag(path)  # unclosed: read from the storage as it is on disk
-    codec = Codec(topics.TYPES[topics.WHEEL_MOMENTUM], 'base_link')
+    codec = Codec(topics.type_of(topics.WHEEL_MOMENTUM), 'base_link')
     assert [codec.decode(data)[1][0] for _topic, _t, data in bag.messages()] == [float(k) for k in range(300)]

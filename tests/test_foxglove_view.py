@@ -137,7 +137,7 @@ def _rotate(q: tuple[float, ...], v: np.ndarray) -> np.ndarray:
 
 
 def _decode(topic: str, data: bytes) -> Any:
-    return typestore().deserialize_cdr(data, topics.TYPES[topics.relative(topic)])
+    return typestore().deserialize_cdr(data, topics.type_of(topic))
 
 
 def _stamp_ns(msg: Any) -> int:

@@ -33,7 +33,7 @@ def test_shortened_detumble_removes_rate_and_kinetic_energy(tmp_path: Path) -> N
     run = DirectRun(sc, steps=600, record=tmp_path / 'bag').run()
     from acds_runtime.bag.reader import open_bag
 
-    codec = Codec(topics.TYPES[topics.TRUTH_ODOMETRY])
+    codec = Codec(topics.type_of(topics.TRUTH_ODOMETRY))
     omega = np.array([codec.decode(data)[1].angular for topic, _t, data in open_bag(tmp_path / 'bag').messages()
                       if topic == topics.resolve(topics.TRUTH_ODOMETRY)])
     inertia = inertia_tensor(*sc.get('spacecraft', 'inertia'))

@@ -20,7 +20,8 @@ from pathlib import Path
 
 import pytest
 from acds_common import topics
-from acds_common.graph import NODES
+from acds_common.graph import declared_nodes, node_spec
+from acds_common.scenario import SCHEMA
 
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / 'ros_ws' / 'src'
@@ -55,16 +56,25 @@ def _imports(package: str) -> set[str]:
     return found
 
 
+def variant_parameters(node: str) -> list[dict]:
+    """Parameters of ``node`` that reach each of its variants: its sections' defaults, then each choice of each
+    of their string keys in turn (a variant is picked by one key: ``wheels.kind``, ``modes.system``, ...)."""
+    _pkg, decl = declared_nodes()[node]
+    fields = {f.param_name(s, k): f for s in decl.sections for k, f in SCHEMA[s].items()}
+    base = {name: f.default for name, f in fields.items()} | {'formation_vehicles': ['a', 'b']}
+    return [base] + [{**base, name: choice} for name, f in fields.items() if f.kind == 'str' for choice in f.choices]
+
+
 def _node_message_packages(package: str) -> set[str]:
-    """Message packages of every topic the package's nodes publish or read (both mode-manager systems)."""
+    """Message packages of every topic the package's nodes publish or read (every variant)."""
     out: set[str] = set()
-    for make in NODES.values():
-        for params in ({}, {'modes_system': 'sss', 'em_driver_command_source': 'ascs_mode_manager'}):
-            spec = make(params)
-            if spec.package != package:
-                continue
+    for node, (pkg, _decl) in declared_nodes().items():
+        if pkg.name != package:
+            continue
+        for params in variant_parameters(node):
+            spec = node_spec(node, params)
             out.update(_message_package(o.msg_type) for o in spec.outputs)
-            out.update(_message_package(topics.TYPES[i.topic]) for st in spec.stages for i in st.inputs)
+            out.update(_message_package(topics.type_of(i.topic)) for st in spec.stages for i in st.inputs)
             if spec.ground_commands:
                 out.add(_message_package(topics.TYPES[topics.GROUND_COMMAND]))
     return out
@@ -84,9 +94,9 @@ def required_dependencies(package: str) -> set[str]:
             raise AssertionError(f'{package} imports {module}: add its ROS package key to PYTHON_KEYS')
     needed |= _node_message_packages(package)
     if package in EVERY_TOPIC:
-        needed |= {_message_package(t) for t in topics.TYPES.values()}
+        needed |= {_message_package(t) for t in topics.all_types().values()}
     if package in EVERY_NODE:
-        needed |= {make({}).package for make in NODES.values()}
+        needed |= {pkg.name for pkg, _decl in declared_nodes().values()}
     if console_scripts(package):
         needed.add('rclpy')  # a node executable is an rclpy process
     return needed
@@ -105,9 +115,8 @@ def console_scripts(package: str) -> list[str]:
 
 def test_every_package_has_node_executables_as_the_graph_needs():
     executables = {exe: pkg for pkg in PACKAGES for exe in console_scripts(pkg)}
-    for make in NODES.values():
-        spec = make({})
-        assert executables.get(spec.name) == spec.package, f'node {spec.name}: no console script in {spec.package}'
+    for name, (pkg, _decl) in declared_nodes().items():
+        assert executables.get(name) == pkg.name, f'node {name}: no console script in {pkg.name}'
 
 
 @pytest.mark.parametrize('package', PACKAGES)

@@ -58,8 +58,8 @@ class _Intruder:
         self.context = Context()
         rclpy.init(context=self.context, domain_id=domain)
         self.node = Node('intruder', namespace=topics.NAMESPACE, context=self.context)
-        self.codec = Codec(topics.TYPES[topic], 'body')
-        self.pub = self.node.create_publisher(message_class(topics.TYPES[topic]), topic, LOCKSTEP_QOS)
+        self.codec = Codec(topics.type_of(topic), 'body')
+        self.pub = self.node.create_publisher(message_class(topics.type_of(topic)), topic, LOCKSTEP_QOS)
 
     def publish(self, t_ns: int, value) -> None:
         self.pub.publish(self.codec.encode(t_ns, value))

@@ -17,6 +17,7 @@ setup(
     description='Transfer assembly and DPA control laws: B-dot, B×H, wheel laws (spec §7).',
     license='Apache-2.0',
     entry_points={
+        'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
         'console_scripts': [
             'acds_controller = acds_controller.controller_node:main',
             'formation_controller = acds_controller.formation_controller_node:main',

@@ -17,6 +17,7 @@ setup(
     description='Mode manager: HEAO Mode 1A→1B→cruise and SSS perigee automatic turn-on (spec §8).',
     license='Apache-2.0',
     entry_points={
+        'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
         'console_scripts': [
             'ascs_mode_manager = ascs_mode_manager.mode_manager_node:main'
         ],

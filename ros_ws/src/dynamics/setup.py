@@ -17,6 +17,7 @@ setup(
     description='Rigid-body dynamics, environment (orbit, tilted-dipole field, sun) and reaction wheels (spec §3, §4).',
     license='Apache-2.0',
     entry_points={
+        'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
         'console_scripts': [
             'rigid_body = dynamics.rigid_body_node:main',
             'reaction_wheels = dynamics.reaction_wheels_node:main',

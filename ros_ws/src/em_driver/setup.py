@@ -17,6 +17,7 @@ setup(
     description='Electromagnets and bridge-switch drivers with the ±ε hysteresis current band (spec §6).',
     license='Apache-2.0',
     entry_points={
+        'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
         'console_scripts': [
             'em_driver = em_driver.em_driver_node:main'
         ],

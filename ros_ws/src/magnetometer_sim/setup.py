@@ -17,6 +17,7 @@ setup(
     description='Triaxial fluxgate magnetometer (spec §5, study Table 4-5).',
     license='Apache-2.0',
     entry_points={
+        'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
         'console_scripts': [
             'magnetometer_sim = magnetometer_sim.magnetometer_node:main'
         ],

@@ -1,35 +1,39 @@
-"""The ACDS node graph, declared once (spec §2): which node publishes what, who consumes it, with which lag.
+"""The ACDS node graph (spec §2): the declaration types, their discovery, and the graph of one run.
 
-Both engines are built from this declaration and nothing else:
+Each package declares its own nodes (issue 19): a :class:`Package` named in the entry-point group
+``acds.nodes`` of its distribution lists its :class:`Node` s (name, the scenario sections they read,
+their :class:`Ports`: stepper, stages with inputs and lags, outputs), the scenario sections it
+defines and the topics it publishes. This module discovers them (:func:`packages`) and builds the
+graph of a run from them; it names no node of any package. Both engines are built from the
+declarations and nothing else:
 
 * the per-process graph: each node process hosts its node's pure stepper
-  (:mod:`acds_common.lockstep`), subscribing to exactly the inputs declared here and
+  (:mod:`acds_common.lockstep`), subscribing to exactly the inputs declared and
   publishing exactly the outputs; the launcher starts one process per declared node and
   its run monitor records every declared output;
 * the direct engine (``acds_runtime.direct``): the same steppers in one process, fired in
-  an order that respects every lag-0 edge below, values handed over in memory.
+  an order that respects every lag-0 edge, values handed over in memory.
 
-A node's declaration depends on its parameters (the em_driver's command source, the mode
-manager's system), so each node has one function ``params → NodeSpec``. Stages of a node
-fire in declared order, once per step; a stage of step k takes each input of step k − lag
+A node's ports may depend on its parameters (the em_driver's command source; a variant chosen by
+the scenario is its own stepper), so ``ports`` may be a function ``params → Ports``. Stages of a
+node fire in declared order, once per step; a stage of step k takes each input of step k − lag
 from its source node (``None`` when the source is not in the graph or k − lag < 0).
 Outputs are published once per step (``every_step``) unless marked otherwise; the time
 owner's truth outputs of step k + 1 come from its stage of step k (``stamp_offset`` 1).
+The checks (:func:`build_graph`): one publisher per per-step topic, every input read from a node
+that publishes it, exactly one time owner, no lag-0 cycle.
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
+from importlib.metadata import entry_points
 from typing import Any
 
 from acds_common import topics
-from acds_common.frames import BODY, ECI, FORMATION, MAGNETOMETER, vehicle_body
 
-#: The node that owns sim time (publishes ``/clock`` and the truth) of a single-vehicle graph, and every
-#: node that can own it (a formation's is ``formation_dynamics``).
-TIME_OWNER = 'rigid_body'
-TIME_OWNERS = ('rigid_body', 'formation_dynamics')
 #: The launcher's observer (recorder) in the lockstep handshake, and how far the time owner may run ahead of it.
 MONITOR_NAME = 'run_monitor'
 MONITOR_LAG = 50
@@ -39,7 +43,10 @@ MONITOR_ACK_EVERY = 10
 
 @dataclass(frozen=True)
 class Output:
-    """A published topic: ``key`` in the stepper's result, the topic (relative to ``/acds``), type, frames.
+    """A published topic: ``key`` in the stepper's result, the topic (relative to the node's namespace), frames.
+
+    Its message type and unit are those of the :class:`Topic` its package declares (the mechanism's own
+    topics, ``/diagnostics``: :data:`acds_common.topics.TYPES`).
 
     ``stamp_offset``: the value returned at step k is stamped t_(k + offset). ``every_step``: one
     message per step (False: only when the stepper returns one: telemetry, events). ``lockstep``:
@@ -58,7 +65,7 @@ class Output:
 
     @property
     def msg_type(self) -> str:
-        """'package/msg/Type' of the topic (:func:`acds_common.topics.type_of`)."""
+        """'package/msg/Type' of the topic (:func:`acds_common.topics.type_of`: as declared)."""
         return topics.type_of(self.topic)
 
 
@@ -121,193 +128,146 @@ class NodeSpec:
         raise KeyError(f'{self.name} declares no output {key!r}')
 
 
-def _param(params: dict[str, Any], name: str, default: Any) -> Any:
-    return params.get(name, default)
+@dataclass(frozen=True)
+class Topic:
+    """A topic a package's nodes publish: its name (relative to the node's namespace, or absolute), message
+    type ('package/msg/Type'), unit (SI, '' for none) and meaning."""
+
+    name: str
+    type: str
+    unit: str = ''
+    doc: str = ''
 
 
-def _rigid_body(_params: dict[str, Any]) -> NodeSpec:
-    truth = dict(stamp_offset=1)  # step 0 comes from start(), step k + 1 from the stage of step k
-    return NodeSpec(
-        'rigid_body', 'dynamics', 'dynamics.rigid_body_step:RigidBodyStep',
-        (Stage('integrate', (
-            Input('dipole', topics.DIPOLE_AVG, 'em_driver'),
-            Input('wheel_h', topics.WHEEL_MOMENTUM, 'reaction_wheels'),
-            Input('wheel_hdot', topics.WHEEL_TORQUE, 'reaction_wheels'),
-            Input('mode', topics.MODE, 'ascs_mode_manager'),
-        )),),
-        (Output('odometry', topics.TRUTH_ODOMETRY, ECI, BODY, **truth),
-         Output('b_body', topics.TRUTH_B_BODY, BODY, **truth),
-         Output('sun_cosines', topics.TRUTH_SUN_COSINES, BODY, **truth),  # the sun frame's z in body components
-         Output('torque_mag', topics.TRUTH_TORQUE_MAG, BODY, **truth),
-         Output('torque_gg', topics.TRUTH_TORQUE_GG, BODY, **truth),
-         Output('gyro', topics.GYRO, BODY, **truth),
-         Output('sun_sensor', topics.SUN_SENSOR, BODY, **truth),
-         Output('diagnostics', topics.DIAGNOSTICS, every_step=False)),
-        time_owner=True)
+@dataclass(frozen=True)
+class Ports:
+    """What a node runs for given parameters: its stepper ('package.module:Class'), stages and outputs.
 
-
-def _cmg(params: dict[str, Any]) -> bool:
-    """Whether the momentum store is the AAP Workshop's CMGs (``wheels.kind: cmg``) rather than wheels."""
-    return _param(params, 'wheels_kind', 'wheels') == 'cmg'
-
-
-def _reaction_wheels(params: dict[str, Any]) -> NodeSpec:
-    if _cmg(params):  # the Workshop's CMGs: the controller's momentum-rate command (seed 000)
-        stage = Stage('gimbal', (Input('torque', topics.CMG_TORQUE, 'acds_controller'),))
-    elif _param(params, 'wheels_drive', 'volts') == 'torque':  # torque-commanded wheels (a formation vehicle)
-        stage = Stage('drive', (Input('torque', topics.WHEEL_TORQUE_COMMAND, 'formation_controller'),))
-    else:
-        stage = Stage('drive', (Input('volts', topics.WHEEL_VOLTS, 'acds_controller'),))
-    return NodeSpec(
-        'reaction_wheels', 'dynamics', 'dynamics.reaction_wheels_step:ReactionWheelsStep',
-        (stage,),
-        (Output('momentum', topics.WHEEL_MOMENTUM, BODY),
-         Output('torque', topics.WHEEL_TORQUE, BODY),
-         Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
-
-
-def _magnetometer_sim(_params: dict[str, Any]) -> NodeSpec:
-    return NodeSpec(
-        'magnetometer_sim', 'magnetometer_sim', 'magnetometer_sim.magnetometer_step:MagnetometerStep',
-        (Stage('sample', (
-            Input('b_true', topics.TRUTH_B_BODY, 'rigid_body'),
-            Input('dipole', topics.DIPOLE_AVG, 'em_driver', lag=1),
-            Input('mode', topics.MODE, 'ascs_mode_manager', lag=1),
-        )),),
-        (Output('volts', topics.MAG_VOLTS, MAGNETOMETER),
-         Output('bias_volts', topics.MAG_BIAS_VOLTS, MAGNETOMETER),
-         Output('field', topics.MAG_FIELD, MAGNETOMETER),
-         Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
-
-
-def _em_driver(params: dict[str, Any]) -> NodeSpec:
-    source = _param(params, 'em_driver_command_source', 'acds_controller')
-    rods = _param(params, 'em_driver_driver_kind', 'electromagnet') == 'torque_rod'
-    # The torque rods' bus power and duty every step: the CubeSat summary's energy and duty (seed 003).
-    electrical = (Output('power', topics.COIL_POWER, BODY), Output('duty', topics.COIL_DUTY, BODY)) if rods else ()
-    return NodeSpec(
-        'em_driver', 'em_driver', 'em_driver.em_driver_step:EmDriverStep',
-        (Stage('drive', (
-            Input('command', topics.MOMENT_COMMAND, source),
-            Input('mode', topics.MODE, 'ascs_mode_manager'),
-        )),),
-        (Output('dipole_avg', topics.DIPOLE_AVG, BODY),
-         Output('dipole_end', topics.DIPOLE_END, BODY),
-         Output('coil_current', topics.COIL_CURRENT, BODY),
-         Output('e_ft', topics.E_FT, BODY),
-         *electrical,
-         Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
-
-
-def _acds_controller(params: dict[str, Any]) -> NodeSpec:
-    store = ((Output('cmg_torque', topics.CMG_TORQUE, BODY), Output('sampled_momentum', topics.SAMPLED_MOMENTUM, BODY))
-             if _cmg(params) else (Output('volts', topics.WHEEL_VOLTS, BODY),))
-    return NodeSpec(
-        'acds_controller', 'acds_controller', 'acds_controller.controller_step:ControllerStep',
-        (Stage('control', (
-            Input('mag_volts', topics.MAG_VOLTS, 'magnetometer_sim'),
-            Input('mag_bias', topics.MAG_BIAS_VOLTS, 'magnetometer_sim'),
-            Input('gyro', topics.GYRO, 'rigid_body'),
-            Input('sun', topics.SUN_SENSOR, 'rigid_body'),
-            Input('odometry', topics.TRUTH_ODOMETRY, 'rigid_body'),
-            Input('mode', topics.MODE, 'ascs_mode_manager'),
-            Input('wheel_h', topics.WHEEL_MOMENTUM, 'reaction_wheels', lag=1),
-            Input('wheel_hdot', topics.WHEEL_TORQUE, 'reaction_wheels', lag=1),
-            Input('coil_current', topics.COIL_CURRENT, 'em_driver', lag=1),
-        )),),
-        (Output('moment', topics.MOMENT_COMMAND, BODY),
-         *store,
-         Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
-
-
-def _ascs_mode_manager(params: dict[str, Any]) -> NodeSpec:
-    system = _param(params, 'modes_system', 'heao')
-    sss = system == 'sss'
-    if sss:
-        stage = Stage('sss', (Input('volts', topics.MAG_VOLTS, 'magnetometer_sim'),
-                              Input('bias', topics.MAG_BIAS_VOLTS, 'magnetometer_sim')))
-    elif system == 'aap':
-        stage = Stage('aap', ())  # paced by /clock: the Workshop's modes change by ground command only
-    else:
-        stage = Stage('heao', (Input('gyro', topics.GYRO, 'rigid_body'),
-                               Input('sun', topics.SUN_SENSOR, 'rigid_body')))
-    outputs = (Output('mode', topics.MODE),
-               *((Output('moment', topics.MOMENT_COMMAND, BODY),) if sss else ()),
-               Output('events', topics.EVENTS, every_step=False, many=True),
-               Output('diagnostics', topics.DIAGNOSTICS, every_step=False),
-               Output('ack', topics.GROUND_ACK, every_step=False, lockstep=False, many=True))
-    return NodeSpec('ascs_mode_manager', 'ascs_mode_manager', 'ascs_mode_manager.mode_manager_step:ModeManagerStep',
-                    (stage,), outputs, ground_commands=True)
-
-
-def _formation_dynamics(params: dict[str, Any]) -> NodeSpec:
-    """The formation's time owner: every vehicle's translation and attitude (spec §10; seed 004).
-
-    Step k takes each vehicle's achieved dipole and wheel momentum/rate of step k (from that vehicle's
-    em_driver and reaction_wheels, in its namespace) and returns each vehicle's truth of step k + 1
-    under ``/acds/<vehicle>/``: the single-vehicle topic names, so each vehicle's nodes read them as a
-    single vehicle's nodes would.
+    ``ground_commands``: the node takes the ground commands (``ground/command``, handed to the stepper's
+    ``receive_command``).
     """
-    truth = dict(stamp_offset=1)
-    inputs: list[Input] = []
-    outputs: list[Output] = []
-    for v in _param(params, 'formation_vehicles', []):
-        inputs += [Input(f'{v}/dipole', f'{v}/{topics.DIPOLE_AVG}', f'{v}/em_driver'),
-                   Input(f'{v}/wheel_h', f'{v}/{topics.WHEEL_MOMENTUM}', f'{v}/reaction_wheels'),
-                   Input(f'{v}/wheel_hdot', f'{v}/{topics.WHEEL_TORQUE}', f'{v}/reaction_wheels')]
-        body = vehicle_body(v)
-        outputs += [Output(f'{v}/odometry', f'{v}/{topics.TRUTH_ODOMETRY}', FORMATION, body, **truth),
-                    Output(f'{v}/gyro', f'{v}/{topics.GYRO}', body, **truth),
-                    Output(f'{v}/b_body', f'{v}/{topics.TRUTH_B_BODY}', body, **truth),
-                    Output(f'{v}/wrench', f'{v}/{topics.TRUTH_WRENCH}', body, **truth)]
-    return NodeSpec('formation_dynamics', 'dynamics', 'dynamics.formation_step:FormationDynamicsStep',
-                    (Stage('integrate', tuple(inputs)),), tuple(outputs), time_owner=True)
+
+    stepper: str
+    stages: tuple[Stage, ...]
+    outputs: tuple[Output, ...]
+    ground_commands: bool = False
 
 
-def _formation_controller(params: dict[str, Any]) -> NodeSpec:
-    """One vehicle's formation controller: every vehicle's truth of step k and wheel momentum of step k − 1
-    (the RF link of seed 004 slide 70); it returns its own vehicle's dipole and wheel torque commands."""
-    inputs: list[Input] = []
-    for w in _param(params, 'formation_vehicles', []):
-        ns = f'{topics.NAMESPACE}/{w}'
-        inputs += [Input(f'{w}/odometry', f'{ns}/{topics.TRUTH_ODOMETRY}', 'formation_dynamics'),
-                   Input(f'{w}/gyro', f'{ns}/{topics.GYRO}', 'formation_dynamics'),
-                   Input(f'{w}/b_body', f'{ns}/{topics.TRUTH_B_BODY}', 'formation_dynamics'),
-                   Input(f'{w}/wheel_h', f'{ns}/{topics.WHEEL_MOMENTUM}', f'{w}/reaction_wheels', lag=1),
-                   Input(f'{w}/wheel_hdot', f'{ns}/{topics.WHEEL_TORQUE}', f'{w}/reaction_wheels', lag=1)]
-    return NodeSpec('formation_controller', 'acds_controller',
-                    'acds_controller.formation_controller_step:FormationControllerStep',
-                    (Stage('control', tuple(inputs)),),
-                    (Output('moment', topics.MOMENT_COMMAND, BODY),
-                     Output('wheel_torque', topics.WHEEL_TORQUE_COMMAND, BODY),
-                     Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
+@dataclass(frozen=True)
+class Node:
+    """A node as its package declares it (README "Adding a node").
+
+    ``name``: the ROS node name, its console script, its key in a scenario's ``nodes``. ``sections``:
+    the scenario sections it reads (each key becomes its parameter ``<section>_<key>_<si unit>``).
+    ``ports``: its :class:`Ports`, or a function of its normalized parameters that returns them (the
+    scenario picks the variant: each variant its own stepper). ``time_owner``: it owns sim time (a
+    graph has one). ``in_graph`` / ``in_vehicle``: it may be listed in a scenario's ``nodes`` / in a
+    formation vehicle's ``nodes`` (then it runs in the vehicle's namespace). ``every_vehicle``: a
+    formation-wide node, which also reads these sections of every vehicle (``<vehicle>.<parameter>``).
+    """
+
+    name: str
+    sections: tuple[str, ...]
+    ports: Ports | Callable[[dict[str, Any]], Ports]
+    time_owner: bool = False
+    in_graph: bool = True
+    in_vehicle: bool = False
+    every_vehicle: tuple[str, ...] = ()
 
 
-#: Every node the graph knows, by name: params → its declaration.
-NODES: dict[str, Callable[[dict[str, Any]], NodeSpec]] = {
-    'rigid_body': _rigid_body,
-    'reaction_wheels': _reaction_wheels,
-    'magnetometer_sim': _magnetometer_sim,
-    'em_driver': _em_driver,
-    'acds_controller': _acds_controller,
-    'ascs_mode_manager': _ascs_mode_manager,
-    'formation_dynamics': _formation_dynamics,
-    'formation_controller': _formation_controller,
-}
+@dataclass(frozen=True)
+class Package:
+    """One package's declarations, named by its entry point in the group :data:`ENTRY_POINT_GROUP`.
+
+    ``sections``: the scenario sections it defines, ``{section: {key: acds_common.schema.Field}}``
+    (any node may read any section). ``vehicle_sections``: those of them each formation vehicle has
+    of its own. ``topics``: the topics its nodes publish. ``checks``: functions of a loaded
+    :class:`~acds_common.scenario.Scenario` returning '' or what is wrong across its keys (one line).
+    """
+
+    name: str
+    nodes: tuple[Node, ...] = ()
+    sections: dict[str, dict[str, Any]] = field(default_factory=dict)
+    vehicle_sections: tuple[str, ...] = ()
+    topics: tuple[Topic, ...] = ()
+    checks: tuple[Callable[[Any], str], ...] = ()
+
+
+#: The entry-point group a distribution names its :class:`Package` in (setup.py ``entry_points``).
+ENTRY_POINT_GROUP = 'acds.nodes'
+
+
+class DeclarationError(ValueError):
+    """Two packages declare the same node, section or topic, or an entry point is not a :class:`Package`."""
+
+
+@functools.cache
+def packages() -> tuple[Package, ...]:
+    """Every installed package's declarations, by entry-point name (discovered once per process)."""
+    found: list[Package] = []
+    for ep in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
+        pkg = ep.load()
+        if not isinstance(pkg, Package):
+            raise DeclarationError(f'entry point {ep.name} = {ep.value} ({ENTRY_POINT_GROUP}) is not an '
+                                   'acds_common.graph.Package')
+        found.append(pkg)
+    for what, names in (('node', lambda p: [n.name for n in p.nodes]), ('section', lambda p: list(p.sections)),
+                        ('topic', lambda p: [t.name for t in p.topics])):
+        owner: dict[str, str] = {}
+        for pkg in found:
+            for name in names(pkg):
+                if name in owner:
+                    raise DeclarationError(f'{what} {name!r} is declared by both {owner[name]} and {pkg.name}')
+                owner[name] = pkg.name
+    return tuple(found)
+
+
+@functools.cache
+def declared_nodes() -> dict[str, tuple[Package, Node]]:
+    """Every declared node by name, with its package."""
+    return {n.name: (pkg, n) for pkg in packages() for n in pkg.nodes}
+
+
+def declared_node(name: str) -> tuple[Package, Node]:
+    """The package and declaration of node ``name`` (KeyError naming the known ones)."""
+    try:
+        return declared_nodes()[name]
+    except KeyError:
+        raise KeyError(f'unknown node {name!r} (known: {", ".join(declared_nodes())})') from None
+
+
+def declared_sections() -> dict[str, dict[str, Any]]:
+    """Every package's scenario sections, ``{section: {key: Field}}``, packages in entry-point order."""
+    return {name: keys for pkg in packages() for name, keys in pkg.sections.items()}
+
+
+@functools.cache
+def declared_topics() -> dict[str, Topic]:
+    """Every declared topic by name."""
+    return {t.name: t for pkg in packages() for t in pkg.topics}
+
+
+def time_owner_name(formation: bool) -> str:
+    """The node that owns sim time in a single-vehicle graph (``formation`` False) or in a formation's."""
+    owners = [n.name for _pkg, n in declared_nodes().values() if n.time_owner and bool(n.every_vehicle) == formation]
+    if len(owners) != 1:
+        raise DeclarationError(f'{"a formation" if formation else "a single-vehicle graph"} needs exactly one declared '
+                               f'time owner, found {owners or "none"}')
+    return owners[0]
 
 
 def node_spec(name: str, params: dict[str, Any]) -> NodeSpec:
-    """The declaration of node ``name`` for its parameters.
+    """The declaration of node ``name`` for its parameters (its package's :class:`Node`, ports resolved).
 
     A node of one vehicle of a formation (parameter ``vehicle``) gets the single-vehicle ports under
     the vehicle's namespace; its inputs from the vehicle's own nodes (those of ``graph_nodes`` named
     ``<vehicle>/<node>``) are qualified with the vehicle, inputs from nodes of the whole graph (the
     formation's time owner, the run monitor) stay as they are.
     """
-    try:
-        spec = NODES[name](params)
-    except KeyError:
-        raise KeyError(f'unknown node {name!r} (known: {", ".join(NODES)})') from None
+    pkg, node = declared_node(name)
+    ports = node.ports(params) if callable(node.ports) else node.ports
+    spec = NodeSpec(name, pkg.name, ports.stepper, ports.stages, ports.outputs, ports.ground_commands,
+                    node.time_owner)
     vehicle = params.get('vehicle', '')
     if not vehicle:
         return spec

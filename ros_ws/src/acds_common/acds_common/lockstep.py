@@ -49,14 +49,14 @@ from acds_common import topics
 from acds_common.cdr import Codec, stamp_ns
 from acds_common.graph import MONITOR_LAG, MONITOR_NAME, Input, NodeSpec, Output, instance_name, node_spec
 from acds_common.parameters import (
-    FORMATION_NODES,
     FORMATION_VEHICLES,
     ConfigError,
     ParamSpec,
+    formation_wide,
     node_param_specs,
     normalize,
 )
-from acds_common.stepper import StepError, Stepper
+from acds_common.stepper import StepError, load_stepper
 
 #: QoS of every lockstep data topic: nothing is dropped between matched endpoints, late joiners
 #: get the history, and the history is deep enough for an observer (recorder) that runs up to
@@ -163,16 +163,16 @@ class _InputTopic:
 class LockstepNode(Node):
     """Hosts one node's stepper in the lockstep: parameters, ports, stages, readiness, watchdog."""
 
-    def __init__(self, stepper_cls: type[Stepper]) -> None:
-        name = stepper_cls.node
+    def __init__(self, name: str) -> None:
         super().__init__(name, namespace=topics.NAMESPACE)
         vehicles: list[str] = []
-        if name in FORMATION_NODES:  # the formation's vehicles decide which parameters there are
+        wide = formation_wide(name)
+        if wide:  # the formation's vehicles decide which parameters there are
             vehicles = list(self.declare_parameter(FORMATION_VEHICLES.name, Parameter.Type.STRING_ARRAY,
                                                    descriptor(FORMATION_VEHICLES)).value or [])
         self.params = normalize(name, self._declare_parameters(
             [s for s in node_param_specs(name, vehicles) if s.name != FORMATION_VEHICLES.name],
-            {FORMATION_VEHICLES.name: vehicles} if name in FORMATION_NODES else {}))
+            {FORMATION_VEHICLES.name: vehicles} if wide else {}))
         self.spec: NodeSpec = node_spec(name, self.params)
         if self.get_namespace() != self.spec.namespace:
             raise ConfigError(f'{name}: runs in namespace {self.get_namespace()} but its parameter vehicle='
@@ -182,7 +182,7 @@ class LockstepNode(Node):
         self.dt_ns = round(self.params['control_period_s'] * 1e9)
         self.graph_nodes: list[str] = self.params['graph_nodes']
         self.input_timeout_s: float = self.params['input_timeout_s']
-        self.stepper = stepper_cls(self.params, log=self._log)
+        self.stepper = load_stepper(self.spec.stepper)(self.params, log=self._log)
         self.failure: str | None = None
         self.done = False
         #: The step whose stage found the stepper finished (the run's last step), once done.
@@ -606,15 +606,15 @@ def _die_with_launcher() -> bool:
     return os.getppid() == launcher
 
 
-def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
-    """Entry-point body of every node: init, spin, report, shut down cleanly, end the process.
+def run_node(name: str, args: list[str] | None = None) -> int:
+    """Entry-point body of every node (``name``, as its package declares it): init, spin, report, shut down
+    cleanly, end the process. The stepper is the one the node's declaration names for its parameters.
 
     The exit code (returned before ROS is up, the process's own once it is): 0 on completion or
     SIGINT/SIGTERM/SIGHUP, 2 on a configuration error, 3 on a lockstep failure, 4 when the launcher that
     started it had died before the node came up (once up, the kernel kills it with its launcher).
     Errors are one line on stderr, prefixed by the node name, without a traceback.
     """
-    name = stepper_cls.node
     if not _die_with_launcher():
         print(f'[{name}] STOPPED: the launcher that started it (pid {os.environ[LAUNCHER_PID_ENV]}) has died',
               file=sys.stderr, flush=True)
@@ -636,7 +636,7 @@ def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
     executor: Any = None
     code = EXIT_OK
     try:
-        node = LockstepNode(stepper_cls)
+        node = LockstepNode(name)
         from rclpy.experimental import EventsExecutor
         executor = EventsExecutor()
         executor.add_node(node)

@@ -1,8 +1,8 @@
 """Node parameters: one declaration per parameter (type, default, range, unit, meaning), no rclpy.
 
 Every node's parameters are the lockstep ones (:data:`LOCKSTEP`, plus :data:`TIME_OWNER_ONLY`
-for ``rigid_body``) and the fields of its scenario sections
-(:data:`acds_common.scenario.NODE_SECTIONS`, named ``<section>_<field>_<si unit>``). The ROS
+for the time owner) and the fields of the scenario sections its package declares it reads
+(:attr:`acds_common.graph.Node.sections`, named ``<section>_<field>_<si unit>``). The ROS
 host declares each as a typed, described, range-checked, read-only ROS parameter; the direct
 engine passes the same values; both go through :func:`normalize`, so a node core sees the same
 Python values in either engine.
@@ -17,8 +17,8 @@ from typing import Any
 import yaml
 
 from acds_common import topics
-from acds_common.graph import MONITOR_NAME, TIME_OWNERS
-from acds_common.scenario import FORMATION_VEHICLE_SECTIONS, MAX_STEPS, NODE_SECTIONS, REQUIRED, SCHEMA, Scenario
+from acds_common.graph import MONITOR_NAME, declared_node
+from acds_common.scenario import MAX_STEPS, REQUIRED, SCHEMA, Scenario
 
 
 class ConfigError(ValueError):
@@ -66,8 +66,6 @@ TIME_OWNER_ONLY: tuple[ParamSpec, ...] = (
 )
 
 
-#: Nodes that act on the whole formation and so take every vehicle's sections (``<vehicle>.<parameter>``).
-FORMATION_NODES = ('formation_dynamics', 'formation_controller')
 #: The parameter naming a formation's vehicles (declared first: it decides the rest).
 FORMATION_VEHICLES = ParamSpec('formation_vehicles', 'strs', REQUIRED, 'names of the formation\'s vehicles, in '
                                'order (each one\'s sections are the parameters <vehicle>.<name>)')
@@ -86,16 +84,22 @@ def _section_specs(section: str, prefix: str = '') -> list[ParamSpec]:
 
 def node_param_specs(node: str, vehicles: list[str] | tuple[str, ...] = ()) -> list[ParamSpec]:
     """Every parameter of ``node``: lockstep ones, then its scenario sections' fields; a formation-wide
-    node (:data:`FORMATION_NODES`) also has ``formation_vehicles`` and each vehicle's sections."""
-    specs = list(LOCKSTEP) + (list(TIME_OWNER_ONLY) if node in TIME_OWNERS else [])
-    for section in NODE_SECTIONS[node]:
+    node (:func:`formation_wide`) also has ``formation_vehicles`` and each vehicle's sections."""
+    _pkg, decl = declared_node(node)
+    specs = list(LOCKSTEP) + (list(TIME_OWNER_ONLY) if decl.time_owner else [])
+    for section in decl.sections:
         specs.extend(_section_specs(section))
-    if node in FORMATION_NODES:
+    if decl.every_vehicle:
         specs.append(FORMATION_VEHICLES)
         for v in vehicles:
-            for section in FORMATION_VEHICLE_SECTIONS:
+            for section in decl.every_vehicle:
                 specs.extend(_section_specs(section, f'{v}.'))
     return specs
+
+
+def formation_wide(node: str) -> bool:
+    """Whether ``node`` acts on the whole formation (it takes every vehicle's sections as ``<vehicle>.<parameter>``)."""
+    return bool(declared_node(node)[1].every_vehicle)
 
 
 def _check(spec: ParamSpec, node: str, value: Any) -> Any:
@@ -190,9 +194,10 @@ def node_parameters(scenario: Scenario, steps: int, rtf: float = 0.0,
         params = {**common, **scenario.node_parameters(node, vehicle)}
         if vehicle:
             params['vehicle'] = vehicle
-        if node in FORMATION_NODES:
+        _pkg, decl = declared_node(node)
+        if decl.every_vehicle:
             params['formation_vehicles'] = vehicles
-        if node in TIME_OWNERS:
+        if decl.time_owner:
             params.update(total_steps=steps, real_time_factor=rtf)
         params.update((overrides or {}).get(inst, {}))
         out[inst] = {k: v for k, v in params.items() if v != []}  # rcl cannot type an empty list: node default

@@ -17,15 +17,18 @@ one mapping (at any level) is refused; exponent floats without a dot
 (``2.25e2``, ``1e5``, ``-3E-2``) are numbers, as in YAML 1.2; every number has
 a physical range; ``name`` becomes a folder name, so it is limited to letters,
 digits, ``_ - .`` (not starting with ``.``); quaternions must be normalisable;
-``nodes`` must hold the time owner ``rigid_body`` and no node twice; a run has
-at most :data:`MAX_STEPS` steps. A model's own checks (inertia positive
+``nodes`` must hold the declared time owner and no node twice; a run has
+at most :data:`MAX_STEPS` steps; the packages' own checks across keys
+(:attr:`acds_common.graph.Package.checks`) hold. A model's own checks (inertia positive
 definite, apogee above perigee, ...) are the cores' and run in the launcher
 before any process starts (:mod:`acds_runtime.preflight`).
 
 The schema is the single source of truth: node parameter names
 (``<section>_<field>_<si unit>``), types, defaults, ranges and descriptions
-all come from :data:`SCHEMA`; nodes declare their parameters from it, and the
-launcher passes each node exactly the sections it owns (:data:`NODE_SECTIONS`).
+all come from :data:`SCHEMA`: the world's sections (:data:`WORLD`) and every
+installed package's (:func:`acds_common.graph.declared_sections`); nodes declare
+their parameters from it, and the launcher passes each node exactly the sections
+its package declares it reads (:attr:`acds_common.graph.Node.sections`).
 """
 
 from __future__ import annotations
@@ -34,7 +37,7 @@ import datetime
 import math
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from importlib.metadata import entry_points
 from importlib.resources import files
 from pathlib import Path
@@ -44,15 +47,14 @@ import yaml
 
 from acds_common import units as u
 from acds_common.environment import IGRF_LAST_YEAR, decimal_year_datetime
-from acds_common.graph import TIME_OWNER
+from acds_common.graph import declared_node, declared_nodes, declared_sections, packages, time_owner_name
+from acds_common.schema import ANGLE, DEG, INERTIA, LENGTH, RADIUS, RATE, REQUIRED, TIME, Field, quantity
 
 
 class ScenarioError(ValueError):
     """A scenario file is malformed: the message names the file and the key."""
 
 
-REQUIRED = object()
-_DEG = math.pi / 180.0
 #: Most control steps one run may have (the time owner's ``total_steps`` bound).
 MAX_STEPS = 10**9
 #: A scenario file larger than this is not a scenario (guards against reading a device or a data file).
@@ -63,377 +65,74 @@ MIN_QUATERNION_NORM = 1e-6
 SAFE_NAME = re.compile(r'[A-Za-z0-9_-][A-Za-z0-9_.-]{0,99}')
 
 
-@dataclass(frozen=True)
-class Field:
-    """One scenario key: type, SI unit suffix, accepted units → SI factor, default, range, meaning."""
-
-    kind: str  # 'float' | 'int' | 'bool' | 'str' | 'floats' | 'strs'
-    doc: str
-    default: Any = REQUIRED
-    si: str = ''
-    units: dict[str, float] = field(default_factory=dict)
-    lo: float | None = None
-    hi: float | None = None
-    choices: tuple[str, ...] = ()
-    length: int | None = None
-    pattern: re.Pattern[str] | None = None  # 'str': the whole value must match
-    unique: bool = False  # 'strs': no entry twice
-    quaternion: bool = False  # 'floats' (x, y, z, w): must be normalisable
-    path: bool = False  # 'str': a file name, resolved relative to the scenario file that gives it ('' = none)
-
-    def param_name(self, section: str, name: str) -> str:
-        """The ROS parameter name this key becomes."""
-        base = f'{section}_{name}' if section else name
-        return f'{base}_{self.si}' if self.si else base
-
-
-def _q(doc: str, default: Any, si: str, units: dict[str, float], **kw: Any) -> Field:
-    kind = 'floats' if isinstance(default, list) or kw.get('length') else 'float'
-    return Field(kind, doc, default, si, units, **kw)
-
-
-ANGLE = {'deg': _DEG, 'rad': 1.0}
-RATE = {'deg_s': _DEG, 'rad_s': 1.0, 'rpm': 2 * math.pi / 60}
-LENGTH = {'nmi': u.NMI_M, 'km': 1e3, 'm': 1.0}
-RADIUS = {**LENGTH, 'earth_radii': u.EARTH_RADIUS_M}
-INERTIA = {'slug_ft2': u.SLUG_FT2_KG_M2, 'kg_m2': 1.0}
-MOMENTUM = {'ft_lb_s': u.FT_LB_S_NMS, 'nms': 1.0}
-FIELD = {'gauss': u.GAUSS_T, 't': 1.0}
-COUPLING = {'g_per_am2': u.GAUSS_T, 't_per_am2': 1.0}
-TIME = {'s': 1.0, 'min': 60.0}
-MOMENT_OF_INERTIA = {**INERTIA, 'g_mm2': u.G_MM2_KG_M2}
-TORQUE = {'ft_lb': u.FT_LB_NM, 'nm': 1.0}
-#: The seed-000 dump gain k: amp-turn-m² per (ft-lb-sec · Wb/m²), or SI A·m²/(N·m·s·T) = 1/(s·T²).
-DUMP_GAIN = {'am2_per_ftlbs_t': u.dump_gain_seed_to_si(1.0), 'per_s_t2': 1.0}
-
-#: Every key a scenario may hold, by section ('' is the top level).
-SCHEMA: dict[str, dict[str, Field]] = {
+#: The world's sections (the top level '' and the spacecraft, its orbit, the Earth, the sun), which the
+#: scenario itself reads (the run length in orbits, the IGRF epoch); every other section is declared by
+#: the package whose nodes read it (:class:`acds_common.graph.Package`).
+WORLD: dict[str, dict[str, Field]] = {
     '': {
         'name': Field('str', 'scenario name (the file stem; names the run folder)', pattern=SAFE_NAME),
         'description': Field('str', 'one line: what this scenario shows'),
         'seed': Field('int', 'random seed for every noise stream', 1, lo=0, hi=2**31 - 1),
-        'control_period': _q('lockstep control period Δt (the DPA cycle)', 0.5, 's', TIME, lo=1e-3, hi=60.0),
-        'duration': _q('run length (or duration_orbits)', REQUIRED, 's',
+        'control_period': quantity('lockstep control period Δt (the DPA cycle)', 0.5, 's', TIME, lo=1e-3, hi=60.0),
+        'duration': quantity('run length (or duration_orbits)', REQUIRED, 's',
                        {**TIME, 'orbits': float('nan')}, lo=0.0, hi=30 * 86400.0),
         'nodes': Field('strs', 'nodes of the graph (a formation: its time owner formation_dynamics; each '
                        "vehicle's nodes are listed under vehicles)", ['rigid_body', 'reaction_wheels'],
-                       choices=('rigid_body', 'reaction_wheels', 'magnetometer_sim', 'em_driver',
-                                'acds_controller', 'ascs_mode_manager', 'formation_dynamics'), unique=True),
-        'input_timeout': _q('wall time a node may wait for an input', 30.0, 's', TIME, lo=0.5, hi=3600.0),
+                       choices=tuple(n for n, (_pkg, node) in declared_nodes().items() if node.in_graph),
+                       unique=True),
+        'input_timeout': quantity('wall time a node may wait for an input', 30.0, 's', TIME, lo=0.5, hi=3600.0),
     },
     'spacecraft': {
-        'inertia': _q('inertia [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (Table 4-1; products Ixy = ∫xy dm, '
+        'inertia': quantity('inertia [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (Table 4-1; products Ixy = ∫xy dm, '
                       'tensor I = [[Ixx,−Ixy,−Ixz],…]; |each| ≤ 1e9 kg·m², the ISS is ~1e8)', REQUIRED, 'kg_m2',
                       INERTIA, length=6, lo=-1e9, hi=1e9),
         'inertia_scale': Field('float', 'multiplies the whole tensor (Table 4-7 case 3: 2/3)', 1.0,
                                lo=0.01, hi=100.0),
-        'initial_rates': _q('initial body rates ω0 (x, y, z)', [0.0, 0.0, 0.0], 'rad_s', RATE, length=3,
+        'initial_rates': quantity('initial body rates ω0 (x, y, z)', [0.0, 0.0, 0.0], 'rad_s', RATE, length=3,
                             lo=-1.0, hi=1.0),
         'initial_quaternion_xyzw': Field('floats', 'initial attitude q body→ECI, scalar last',
                                          [0.0, 0.0, 0.0, 1.0], length=4, lo=-1.0, hi=1.0, quaternion=True),
     },
     'orbit': {
         'kind': Field('str', 'circular or elliptical (Kepler)', 'circular', choices=('circular', 'elliptical')),
-        'altitude': _q('circular orbit altitude', 225 * u.NMI_M, 'm', LENGTH, lo=100e3, hi=1e8),
-        'perigee_altitude': _q('elliptical: perigee altitude', 120 * u.NMI_M, 'm', LENGTH, lo=100e3, hi=1e8),
-        'apogee_radius': _q('elliptical: apogee radius, geocentric', 5.2 * u.EARTH_RADIUS_M, 'm', RADIUS,
+        'altitude': quantity('circular orbit altitude', 225 * u.NMI_M, 'm', LENGTH, lo=100e3, hi=1e8),
+        'perigee_altitude': quantity('elliptical: perigee altitude', 120 * u.NMI_M, 'm', LENGTH, lo=100e3, hi=1e8),
+        'apogee_radius': quantity('elliptical: apogee radius, geocentric', 5.2 * u.EARTH_RADIUS_M, 'm', RADIUS,
                             lo=6.4e6, hi=1e9),
-        'inclination': _q('orbit inclination', 22.5 * _DEG, 'rad', ANGLE, lo=0.0, hi=math.pi),
-        'raan': _q('right ascension of the ascending node', 0.0, 'rad', ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
-        'arg_latitude0': _q('circular: argument of latitude at t0', 0.0, 'rad', ANGLE,
+        'inclination': quantity('orbit inclination', 22.5 * DEG, 'rad', ANGLE, lo=0.0, hi=math.pi),
+        'raan': quantity('right ascension of the ascending node', 0.0, 'rad', ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
+        'arg_latitude0': quantity('circular: argument of latitude at t0', 0.0, 'rad', ANGLE,
                             lo=-2 * math.pi, hi=2 * math.pi),
-        'arg_perigee': _q('elliptical: argument of perigee', 0.0, 'rad', ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
-        'mean_anomaly0': _q('elliptical: mean anomaly at t0', 0.0, 'rad', ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
+        'arg_perigee': quantity('elliptical: argument of perigee', 0.0, 'rad', ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
+        'mean_anomaly0': quantity('elliptical: mean anomaly at t0', 0.0, 'rad', ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
     },
     'earth': {
         'model': Field('str', 'Earth field: dipole (the study\'s tilted dipole, default) or igrf (IGRF-14 to degree 13, '
                        'ppigrf, at the epoch date; the dipole_* keys are then unused)', 'dipole',
                        choices=('dipole', 'igrf')),
-        'epoch': _q('igrf: date at t0, decimal year (2025.5 = 2 July 2025; IGRF-14 spans 1900–2030)', 2025.0, 'year',
+        'epoch': quantity('igrf: date at t0, decimal year (2025.5 = 2 July 2025; IGRF-14 spans 1900–2030)', 2025.0, 'year',
                     {'year': 1.0}, lo=1900.0, hi=2030.0),
-        'greenwich_angle0': _q('Greenwich meridian from the vernal equinox at t0', 0.0, 'rad', ANGLE,
+        'greenwich_angle0': quantity('Greenwich meridian from the vernal equinox at t0', 0.0, 'rad', ANGLE,
                                lo=-2 * math.pi, hi=2 * math.pi),
-        'dipole_tilt': _q('dipole axis tilt from the spin axis (study: 11°)', 11 * _DEG, 'rad', ANGLE,
+        'dipole_tilt': quantity('dipole axis tilt from the spin axis (study: 11°)', 11 * DEG, 'rad', ANGLE,
                           lo=0.0, hi=math.pi),
-        'dipole_longitude': _q('dipole axis longitude offset from Greenwich (study: 20°)', 20 * _DEG, 'rad',
+        'dipole_longitude': quantity('dipole axis longitude offset from Greenwich (study: 20°)', 20 * DEG, 'rad',
                                ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
-        'dipole_moment': _q('Earth dipole moment', 7.94e22, 'am2', {'am2': 1.0}, lo=1e20, hi=1e24),
+        'dipole_moment': quantity('Earth dipole moment', 7.94e22, 'am2', {'am2': 1.0}, lo=1e20, hi=1e24),
     },
     'sun': {
-        'right_ascension': _q('sun right ascension (ECI)', 0.0, 'rad', ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
-        'declination': _q('sun declination (ECI)', 0.0, 'rad', ANGLE, lo=-math.pi / 2, hi=math.pi / 2),
+        'right_ascension': quantity('sun right ascension (ECI)', 0.0, 'rad', ANGLE, lo=-2 * math.pi, hi=2 * math.pi),
+        'declination': quantity('sun declination (ECI)', 0.0, 'rad', ANGLE, lo=-math.pi / 2, hi=math.pi / 2),
         'eclipse': Field('bool', 'model the Earth shadow (cylindrical)', False),
     },
-    'dynamics': {
-        'gravity_gradient': Field('bool', 'apply the gravity-gradient torque', True),
-        'substeps': Field('int', 'RK4 substeps per control period. Default 1, from the accuracy study '
-                          '(tests/substep_study.py, HEAO-B at 0.5 s, against 100 substeps): after one orbit of '
-                          'the 1 deg/s tumble the attitude is off by 6.7e-7 deg and the rates by 3.0e-9 deg/s '
-                          '(torque-free and with gravity gradient; 2 substeps: 4.0e-8 deg, 5: 1.2e-9 deg, '
-                          '10 and more: rounding, 3e-10 deg); Basilisk 2.12.1 at the same 0.5 s step differs '
-                          'from 1 substep by 1e-7 deg and from its own 0.05 s run by 5.8e-7 deg. Closed loop '
-                          '(heao_b_acquisition_fast_geometry, direct engine), 1, 2, 5, 10, 20 and 100 substeps '
-                          'reach Mode 1B '
-                          '(56.59 min) and capture (86.32 min) at the same step, final wheel momentum within '
-                          '9e-6 ft-lb-s. Raise it for faster bodies or longer control periods', 1, lo=1, hi=10000),
-    },
-    'wheels': {
-        'kind': Field('str', 'momentum store: wheels (square-law reaction wheels, spec §4) or cmg (ideal control '
-                      'moment gyros, seed 000: the momentum rate the attitude loop asks, spherical capacity)',
-                      'wheels', choices=('wheels', 'cmg')),
-        'drive': Field('str', 'kind wheels: volts, square-law drive from the controller\'s volts (HEAO, spec §4); '
-                       'torque, torque-commanded wheels (EMFFORCE, seed 004 slide 74) along torque_axes', 'volts',
-                       choices=('volts', 'torque')),
-        'layout': Field('str', 'volts drive: three_orthogonal or four_cant20 (spec §4)', 'three_orthogonal',
-                        choices=('three_orthogonal', 'four_cant20')),
-        'torque_axes': Field('floats', 'torque drive: unit wheel axes, body axes, one (x, y, z) triple per wheel '
-                             '(EMFFORCE: one wheel about z)', [0.0, 0.0, 1.0], lo=-1.0, hi=1.0),
-        'max_torque': _q('torque drive: torque limit of each wheel (EMFFORCE: 0.1 N·m)', 0.1, 'nm', {'nm': 1.0},
-                         lo=1e-6, hi=1e4),
-        'capacity': _q('torque drive: momentum capacity of each wheel (0: not given, unlimited)', 0.0, 'nms',
-                       MOMENTUM, lo=0.0, hi=1e6),
-        'failed_wheel': Field('int', 'index of a failed wheel of the 4-wheel cluster, −1 for none', -1,
-                              lo=-1, hi=3),
-        'initial_momentum': _q('initial wheel (or CMG) momentum, body axes', [0.0, 0.0, 0.0], 'nms', MOMENTUM,
-                               length=3, lo=-1e5, hi=1e5),
-        'cmg_capacity': _q('kind cmg: |h| capacity of the CMG momentum envelope (seed 000 §5: nearly 12,000 '
-                           'ft-lb-sec)', 12000.0 * u.FT_LB_S_NMS, 'nms', MOMENTUM, lo=1.0, hi=1e6),
-    },
-    'disturbance': {
-        'bias_momentum_per_orbit': _q('body-fixed disturbance: the bias momentum it delivers per orbit (a constant '
-                                      'torque = this / orbit period), body axes; the gravity gradient is the '
-                                      "rigid body's own (dynamics.gravity_gradient)", [0.0, 0.0, 0.0], 'nms',
-                                      MOMENTUM, length=3, lo=-1e6, hi=1e6),
-        'once_per_orbit_cos': _q('body-fixed cyclic torque, once per orbit: the cos u part (u = argument of '
-                                 'latitude)', [0.0, 0.0, 0.0], 'nm', TORQUE, length=3, lo=-1e3, hi=1e3),
-        'once_per_orbit_sin': _q('body-fixed cyclic torque, once per orbit: the sin u part', [0.0, 0.0, 0.0], 'nm',
-                                 TORQUE, length=3, lo=-1e3, hi=1e3),
-        'twice_per_orbit_cos': _q('body-fixed cyclic torque, twice per orbit: the cos 2u part', [0.0, 0.0, 0.0],
-                                  'nm', TORQUE, length=3, lo=-1e3, hi=1e3),
-        'twice_per_orbit_sin': _q('body-fixed cyclic torque, twice per orbit: the sin 2u part', [0.0, 0.0, 0.0],
-                                  'nm', TORQUE, length=3, lo=-1e3, hi=1e3),
-    },
-    # ---- magnetics hardware (spec §5, §6) -------------------------------------------------------
-    'magnetometer': {
-        'active_unit': Field('str', 'active magnetometer assembly', 'A', choices=('A', 'B')),
-        'residual_field': _q('residual body-fixed field seen by the sensor (study: 1 % of max Earth field)',
-                             [0.0, 0.0, 0.0], 't', FIELD, length=3, lo=-1e-4, hi=1e-4),
-        'coupling_preset': Field('str', 'coupling Δ from the electromagnets: none, cruise (8.75e-6 G/(A·m²) '
-                                 'per axis), acquisition (5 % of max field at 2000 A·m² on the other axes), '
-                                 'custom (coupling matrix)', 'none',
-                                 choices=('none', 'cruise', 'acquisition', 'custom')),
-        'coupling': _q('custom coupling Δ, row-major 3×3 (sensor axis i, magnet j)', [0.0] * 9, 't_per_am2',
-                       COUPLING, length=9, lo=-1e-6, hi=1e-6),
-        'coupling_signs': Field('floats', 'acquisition preset: sign pattern, row-major 3×3 (±1)',
-                                [1.0] * 9, length=9, lo=-1.0, hi=1.0),
-        'noise_std': _q('seeded white noise per axis (0: off)', 0.0, 't', FIELD, lo=0.0, hi=1e-5),
-        'accuracy_error': Field('bool', 'apply a seeded ±0.1 %-of-full-scale unit error', False),
-        'fault': Field('str', 'fault injected at fault_time: none, bias_shift, stuck_axis, dead_unit', 'none',
-                       choices=('none', 'bias_shift', 'stuck_axis', 'dead_unit')),
-        'fault_unit': Field('str', 'assembly the fault hits', 'A', choices=('A', 'B')),
-        'fault_axis': Field('int', 'axis for stuck_axis/bias_shift (−1: all)', -1, lo=-1, hi=2),
-        'fault_value_v': Field('float', 'bias_shift size, V', 0.0, lo=-5.0, hi=5.0),
-        'fault_time': _q('when the fault appears', 0.0, 's', TIME, lo=0.0, hi=1e7),
-        'telemetry_every': Field('int', 'diagnostics telemetry every N steps (and at every event)', 10,
-                                 lo=1, hi=10**6),
-    },
-    'em_driver': {
-        'command_source': Field('str', 'node whose moment commands drive the coils', 'acds_controller',
-                                choices=('acds_controller', 'ascs_mode_manager', 'formation_controller')),
-        'driver_kind': Field('str', 'coil hardware: electromagnet (HEAO/SSS coils, drive_types and coil_* keys) '
-                             'or torque_rod (CubeSat rods of seed 003 from torque_rod_design, PWM from supply_v)',
-                             'electromagnet', choices=('electromagnet', 'torque_rod')),
-        'torque_rod_design': Field('str', 'torque_rod: the rod of every axis, a `acds design-torque-rod --json` '
-                                   'file (relative to the scenario file that names it)', '', path=True),
-        'drive_types': Field('strs', 'electromagnet: per-axis drive, bridge_switch (HEAO) or constant_level (SSS), '
-                             'or none (no coil on that axis)',
-                             ['bridge_switch'] * 3, choices=('bridge_switch', 'constant_level', 'none'), length=3),
-        'coil_resistance_ohm': Field('floats', 'per-axis winding resistance (Table 4-3: 30.3 Ω)', [30.3] * 3,
-                                     length=3, lo=1e-3, hi=1e4),
-        'coil_inductance_h': Field('floats', 'per-axis winding inductance (Table 4-3: 20.3 H)', [20.3] * 3,
-                                   length=3, lo=1e-6, hi=1e3),
-        'coil_moment_per_amp_am2': Field('floats', 'per-axis dipole per ampere (Table 4-3: 2062/0.727)',
-                                         [2062 / 0.727] * 3, length=3, lo=1e-3, hi=1e5),
-        'coil_max_moment_am2': Field('floats', 'per-axis saturation of the commanded dipole', [2062.0] * 3,
-                                     length=3, lo=1e-3, hi=1e6),
-        'supply_v': Field('float', 'power bus, V', 28.0, lo=1.0, hi=100.0),
-        'epsilon': Field('float', 'hysteresis half-band ε (fraction of I_c)', 0.01, lo=1e-4, hi=0.5),
-        'band_floor_a': Field('float', 'absolute floor of the band half-width (comparator offset), A', 4e-4,
-                              lo=0.0, hi=0.1),
-        'auto_switch_to_standby': Field('bool', 'switch an alarmed axis to its standby driver/winding', False),
-        'mismatch_tolerance_frac': Field('float', 'e_ft vs command mismatch alarm, fraction of full scale',
-                                         0.1, lo=0.001, hi=1.0),
-        'failure': Field('str', 'failure injected at failure_time', 'none',
-                         choices=('none', 'open_winding', 'stuck_on_bridge', 'dead_driver')),
-        'failure_axis': Field('int', 'axis of the injected failure', 0, lo=0, hi=2),
-        'failure_unit': Field('str', 'unit of the injected failure', 'A', choices=('A', 'B')),
-        'failure_time': _q('when the failure appears', 0.0, 's', TIME, lo=0.0, hi=1e7),
-        'mismatch_settle': _q('how long the mismatch must persist before the alarm', 3.0, 's', TIME,
-                              lo=0.0, hi=1e4),
-        'bench_command': _q('fixed moment command applied when the command source is not in the graph',
-                            [0.0, 0.0, 0.0], 'am2', {'am2': 1.0}, length=3, lo=-1e5, hi=1e5),
-        'telemetry_every': Field('int', 'diagnostics telemetry every N steps (and at every event)', 10,
-                                 lo=1, hi=10**6),
-    },
-    # ---- flight laws and modes (spec §7, §8) ----------------------------------------------------
-    'controller': {
-        'acquisition_law': Field('str', 'Mode 1A magnetic law (b_cross_omega: the CubeSat detumble law '
-                                 'M = −(k_ω/|B|)(B̂ × ω) of seed 003)', 'bxh', choices=('bxh', 'bdot', 'b_cross_omega')),
-        'unloading_law': Field('str', 'Mode 1B/cruise unloading law (b_cross_h: seed 003 dumping form '
-                               'M = −(k_h/|B|)(B̂ × h))', 'bxh', choices=('bxh', 'lead', 'none', 'b_cross_h')),
-        'acquisition_gain_per_s_g2': Field('float', 'B×H acquisition gain G, (s·G²)⁻¹', 0.05, lo=0.0, hi=10.0),
-        'bdot_gain_ft_lb_s_per_g2': Field('float', 'B-dot gain K_D, ft-lb-s/G²', 1.0, lo=0.0, hi=1e4),
-        'unloading_gain_mode_1b_per_s_g2': Field('float', 'unloading gain in Mode 1B', 0.05, lo=0.0, hi=10.0),
-        'unloading_gain_scan_per_s_g2': Field('float', 'unloading gain, celestial scan', 0.01, lo=0.0, hi=10.0),
-        'unloading_gain_point_per_s_g2': Field('float', 'unloading gain, celestial point', 0.02, lo=0.0, hi=10.0),
-        'max_moment_am2': Field('float', 'per-axis moment command saturation', 2000.0, lo=1e-3, hi=1e6),
-        # seed 003 gain design, k_ω = (4π/T_orb)(sin ξ + 1) J_min: the on-board design values (defaults: the seed's)
-        'detumble_orbit_period': _q('b_cross_omega gain: orbit period T_orb (seed 003: ISS, 5560.8 s)', 5560.8, 's',
-                                    TIME, lo=1e3, hi=1e6),
-        'magnetic_inclination': _q('ξ, inclination of the orbit to the geomagnetic equator, for the b_cross_omega '
-                                   'and b_cross_h gains (seed 003: 0.90129 rad, the ISS inclination)', 0.90129,
-                                   'rad', ANGLE, lo=1e-3, hi=math.pi / 2),
-        'detumble_j_min': _q('b_cross_omega gain: smallest principal moment of inertia J_min (seed 003: '
-                             '5,094,047.43 g·mm²)', 5094047.43 * u.G_MM2_KG_M2, 'kg_m2', MOMENT_OF_INERTIA,
-                             lo=1e-6, hi=1e9),
-        'dump_time': _q('b_cross_h gain: dump the slowest momentum mode to dump_residual_fraction within this time '
-                        '(seed 003: "say, 1 orbit of 90 minutes")', 5400.0, 's', TIME, lo=1.0, hi=1e7),
-        'dump_residual_fraction': Field('float', 'b_cross_h gain: momentum left of the slowest mode after dump_time',
-                                        0.1, lo=1e-6, hi=0.999),
-        'coupling_compensation': Field('bool', 'subtract the known Δ·M from the sensed field', False),
-        'wheel_gains': Field('str', 'acquisition wheel-law gains (Table 4-2)', 'heao_b',
-                             choices=('heao_a', 'heao_b', 'heao_b_preliminary')),
-        'scan_rate': _q('celestial scan rate about z', 0.03 * 2 * math.pi / 60, 'rad_s', RATE, lo=0.0, hi=0.1),
-        'target_quaternion_xyzw': Field('floats', 'cruise target attitude q body→ECI', [0.0, 0.0, 0.0, 1.0],
-                                        length=4, lo=-1.0, hi=1.0, quaternion=True),
-        'lead_time_s': Field('float', 'lead law: wheel command → momentum lead time, s', 500.0, lo=0.0, hi=1e5),
-        'adc_bits': Field('int', 'transfer assembly ADC width, bits', 10, lo=8, hi=24),
-        'telemetry_every': Field('int', 'DPA/TA telemetry on diagnostics every N steps (and at every event)',
-                                 20, lo=1, hi=10**6),
-        # ---- AAP Workshop CMG momentum dump (seed 000), with wheels.kind cmg
-        'dump_law': Field('str', 'Workshop dump law: khb (M = k H_s × B), khb_shifted (k (H_s − H_0) × B), '
-                          'min_energy (eq. 3 on the predicted field), none (CMG hold only)', 'khb',
-                          choices=('khb', 'khb_shifted', 'min_energy', 'none')),
-        'dump_gain': _q('dump gain k (seed 000 §5: 4e6 amp-turn-m² per ft-lb-sec per Wb/m²)',
-                        u.dump_gain_seed_to_si(4e6), 'per_s_t2', DUMP_GAIN, lo=0.0, hi=1e12),
-        'dump_h_0': _q('khb_shifted: the shift H_0 of the region H_s settles in (§3)', [0.0, 0.0, 0.0], 'nms',
-                       MOMENTUM, length=3, lo=-1e5, hi=1e5),
-        'dump_bias_momentum': _q('bias momentum H_b per orbit known on board (§3): what min_energy dumps and the '
-                                 '§5 initialisation uses', [0.0, 0.0, 0.0], 'nms', MOMENTUM, length=3,
-                                 lo=-1e6, hi=1e6),
-        'dump_h_s_init': Field('str', 'first H_s sample: measured (the CMG momentum as it is) or min_energy '
-                               '(§5: k H_s of the first orbit set to eq. 3\'s bracket, kept as an offset)',
-                               'measured', choices=('measured', 'min_energy')),
-        'cmg_hold_bandwidth': _q('CMG attitude-hold closed-loop bandwidth ω_n (not in the seed)', 0.05, 'rad_s',
-                                 RATE, lo=1e-6, hi=10.0),
-        'cmg_hold_damping': Field('float', 'CMG attitude-hold damping ratio ζ (not in the seed)', 0.7,
-                                  lo=0.0, hi=10.0),
-    },
-    'modes': {
-        'system': Field('str', 'which mode logic runs: heao, sss or aap (the AAP Workshop CMG hold and magnetic '
-                        'dump, seed 000)', 'heao', choices=('heao', 'sss', 'aap')),
-        'initial_mode': Field('str', 'mode at separation (aap: cmg_hold or cmg_dump)', 'mode_1a',
-                              choices=('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point',
-                                       'cmg_hold', 'cmg_dump')),
-        'rate_thresholds': _q('Mode 1A→1B body-rate thresholds |ω_x|, |ω_y|, |ω_z|',
-                              [0.573 * _DEG, 0.115 * _DEG, 0.115 * _DEG], 'rad_s', RATE, length=3, lo=0.0, hi=1.0),
-        'capture_cone': _q('acquisition capture: z within this angle of the sun', 10 * _DEG, 'rad', ANGLE,
-                           lo=0.0, hi=math.pi),
-        'capture_rate': _q('acquisition capture: every rate below this ("nulled")', 0.01 * _DEG, 'rad_s', RATE,
-                           lo=0.0, hi=0.1),
-        'cruise_target': Field('str', 'cruise mode after capture', 'celestial_point',
-                               choices=('celestial_scan', 'celestial_point')),
-        'auto_cruise': Field('bool', 'enter cruise automatically at capture (else by ground command)', False),
-        'stop_at_capture': Field('bool', 'end the run at acquisition capture', False),
-        'ground_commands': Field('strs', 'scheduled ground commands, "T_S: command"', []),
-    },
-    'sss': {
-        'polarity_level': _q('polarity-sensing level of the spin-plane magnetometer channel', 0.075 * u.GAUSS_T,
-                             't', FIELD, lo=0.0, hi=1e-4),
-        'hold_time_constant_s': Field('float', 'attitude/pass hold circuit RC time constant, s', 30.0,
-                                      lo=0.1, hi=1e4),
-        'mechanization': Field('str', 'spin-mode mechanization', 'one_channel_constant',
-                               choices=('two_channel_sine', 'two_channel_constant', 'one_channel_sine',
-                                        'one_channel_constant')),
-        'hold_release_fraction': Field('float', 'hold circuit releases when its capacitor voltage falls below '
-                                       'this fraction (hold time = RC·ln(1/fraction))', 0.5, lo=0.01, hi=0.99),
-        'magnetometer_scale_v_per_g': Field('float', 'scale of the spin-plane magnetometer channel (body y) '
-                                            'read against its bias reference, V/G (Table 4-5: 2.5)', 2.5,
-                                            lo=0.01, hi=100.0),
-        'bus_v': Field('float', 'main bus feeding the coils (seed 001: 28 V); sets the commanded dipoles',
-                       28.0, lo=1.0, hi=100.0),
-    },
-    # ---- electromagnetic formation flight (spec §10; seed 004) ----------------------------------
-    'formation': {
-        'frame': Field('str', 'planar: the EMFFORCE air-bearing testbed (x, y, yaw); free_space: 3-D, no field; '
-                       'hill: relative motion about a circular LEO orbit (Clohessy–Wiltshire)', 'planar',
-                       choices=('planar', 'free_space', 'hill')),
-        'em_model': Field('str', 'inter-vehicle wrench: far_field (exact dipole–dipole) or near_field (Biot–Savart '
-                          'of the coils)', 'far_field', choices=('far_field', 'near_field')),
-        'segments': Field('int', 'near field: straight segments per coil loop', 64, lo=3, hi=4096),
-        'earth_field': Field('bool', 'hill: the Earth field\'s torque and force on every dipole (orbit, earth '
-                             'sections)', True),
-        'law': Field('str', 'hold: keep the second vehicle at relative_position from the first; spin_up: spin '
-                     'the pair about the frame z axis', 'hold', choices=('hold', 'spin_up')),
-        'relative_position': _q('hold: the second vehicle\'s position relative to the first, formation frame',
-                                [2.5, 0.0, 0.0], 'm', LENGTH, length=3, lo=-1e5, hi=1e5),
-        'hold_natural_frequency': _q('hold: PD natural frequency', 0.1, 'rad_s', {'rad_s': 1.0}, lo=1e-4, hi=10.0),
-        'hold_damping_ratio': Field('float', 'hold: PD damping ratio', 0.9, lo=0.05, hi=5.0),
-        'spin_rate': _q('spin_up: commanded rate of the array about the frame z axis', 0.05, 'rad_s', RATE,
-                        lo=-1.0, hi=1.0),
-        'spin_ramp': _q('spin_up: rate reference ramp', 1e-3, 'rad_s2', {'rad_s2': 1.0, 'deg_s2': _DEG},
-                        lo=1e-7, hi=1.0),
-        'spin_separation': _q('spin_up: separation held while spinning', 2.5, 'm', LENGTH, lo=0.01, hi=1e5),
-        'spin_start': _q('spin_up: when the rate reference starts', 0.0, 's', TIME, lo=0.0, hi=1e7),
-        'radial_natural_frequency': _q('spin_up: radial PD natural frequency', 0.2, 'rad_s', {'rad_s': 1.0},
-                                       lo=1e-4, hi=10.0),
-        'radial_damping_ratio': Field('float', 'spin_up: radial PD damping ratio', 0.9, lo=0.05, hi=5.0),
-        'rate_gain_per_s': Field('float', 'spin_up: rate loop gain, 1/s', 0.2, lo=0.0, hi=100.0),
-        'attitude_natural_frequency': _q('attitude hold by the wheels: PD natural frequency', 0.5, 'rad_s',
-                                         {'rad_s': 1.0}, lo=1e-4, hi=100.0),
-        'attitude_damping_ratio': Field('float', 'attitude hold: PD damping ratio', 0.8, lo=0.05, hi=5.0),
-        'max_force': _q('limit of the commanded relative force', 0.5, 'n', {'n': 1.0}, lo=0.0, hi=1e4),
-        'dump': Field('bool', 'hill with the Earth field: Earth as a momentum dump (slides 31–33)', False),
-        'dump_start': _q('dump: start dumping the vehicle whose wheels hold more than this', 0.5, 'nms', MOMENTUM,
-                         lo=0.0, hi=1e6),
-        'dump_done': _q('dump: stop (and pick again) below this', 0.05, 'nms', MOMENTUM, lo=0.0, hi=1e6),
-    },
-    'vehicle': {
-        'mass': _q('vehicle mass', REQUIRED, 'kg', {'kg': 1.0, 'lb': u.LB_KG}, lo=1e-3, hi=1e7),
-        'initial_position': _q('initial position, formation frame (hill: relative to the reference orbit)',
-                               [0.0, 0.0, 0.0], 'm', LENGTH, length=3, lo=-1e7, hi=1e7),
-        'initial_velocity': _q('initial velocity, formation frame', [0.0, 0.0, 0.0], 'm_s', {'m_s': 1.0},
-                               length=3, lo=-1e4, hi=1e4),
-        'coil_axes': Field('floats', 'unit axes of the coils in body axes, one (x, y, z) triple per coil, '
-                           'orthonormal (EMFFORCE: two vertical coils along x and y)', [1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
-                           lo=-1.0, hi=1.0),
-        'coil_radii': _q('coil radii (EMFFORCE: 0.375 m outer, 0.345 m inner)', [0.375, 0.345], 'm', LENGTH,
-                         lo=1e-3, hi=100.0),
-        'coil_turns': Field('floats', 'turns of each coil (EMFFORCE: 100 wraps)', [100.0, 100.0], lo=1.0, hi=1e6),
-        'coil_max_current': _q('current limit of each coil (EMFFORCE: ~100 A)', [100.0, 100.0], 'a', {'a': 1.0},
-                               lo=1e-6, hi=1e5),
-    },
 }
-
-#: Which scenario sections each node receives as parameters.
-NODE_SECTIONS: dict[str, tuple[str, ...]] = {
-    'rigid_body': ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics', 'em_driver', 'wheels', 'disturbance'),
-    'reaction_wheels': ('wheels',),
-    'magnetometer_sim': ('magnetometer',),
-    'em_driver': ('em_driver',),
-    'acds_controller': ('spacecraft', 'controller', 'magnetometer', 'wheels', 'orbit', 'earth'),
-    'ascs_mode_manager': ('modes', 'sss'),
-    'formation_dynamics': ('orbit', 'earth', 'sun', 'dynamics', 'formation'),
-    'formation_controller': ('orbit', 'formation'),
-}
+#: Every key a scenario may hold, by section ('' is the top level): the world's and every package's.
+SCHEMA: dict[str, dict[str, Field]] = {**WORLD, **declared_sections()}
 #: Sections every vehicle of a formation has of its own (given under ``vehicles:``; a top-level
 #: section of the same name gives the defaults all vehicles share).
-VEHICLE_SECTIONS = ('spacecraft', 'vehicle', 'em_driver', 'wheels')
-#: Per-vehicle sections the formation-wide nodes (time owner, controllers) receive for *every* vehicle,
-#: named ``<vehicle>.<parameter>``.
-FORMATION_VEHICLE_SECTIONS = ('spacecraft', 'vehicle', 'em_driver')
+VEHICLE_SECTIONS = ('spacecraft', *(name for pkg in packages() for name in pkg.vehicle_sections))
 #: Nodes a vehicle of a formation may run (each in its namespace /acds/<vehicle>).
-VEHICLE_NODES = ('em_driver', 'reaction_wheels', 'formation_controller')
+VEHICLE_NODES = tuple(n for n, (_pkg, node) in declared_nodes().items() if node.in_vehicle)
 
 #: Entry-point group naming the packages that ship scenarios, each in its ``scenarios`` package-data folder.
 SCENARIO_ENTRY_POINTS = 'acds.scenarios'
@@ -506,18 +205,19 @@ class Scenario:
     def node_parameters(self, node: str, vehicle: str = '') -> dict[str, Any]:
         """ROS parameters (SI, unit in the name) for ``node`` from its sections (a vehicle's node: its own).
 
-        The formation-wide nodes (:data:`FORMATION_VEHICLE_SECTIONS`) also get every vehicle's sections,
-        named ``<vehicle>.<parameter>``.
+        A formation-wide node (:attr:`acds_common.graph.Node.every_vehicle`) also gets those sections of every
+        vehicle, named ``<vehicle>.<parameter>``.
         """
         own = self.vehicle(vehicle) if vehicle else {}
         params: dict[str, Any] = {}
-        for section in NODE_SECTIONS[node]:
+        _pkg, decl = declared_node(node)
+        for section in decl.sections:
             values = own.get(section, self.values.get(section))
             for name, f in SCHEMA[section].items():
                 params[f.param_name(section, name)] = values[name]
-        if node in ('formation_dynamics', 'formation_controller'):
+        if decl.every_vehicle:
             for v in self.values['vehicles']:
-                for section in FORMATION_VEHICLE_SECTIONS:
+                for section in decl.every_vehicle:
                     for name, f in SCHEMA[section].items():
                         params[f'{v["name"]}.{f.param_name(section, name)}'] = v[section][name]
         return params
@@ -779,17 +479,21 @@ def _validate_section(path: Path, section: str, given: dict[str, Any], label: st
 
 def _check_graph(path: Path, sc: Scenario) -> None:
     """Checks across keys: the node list can run, and the run has a bounded number of steps."""
-    owner = 'formation_dynamics' if sc.formation else TIME_OWNER
+    owner = time_owner_name(sc.formation)
     if owner not in sc.get('', 'nodes'):
         what = 'a formation\'s time owner' if sc.formation else 'it owns sim time; every graph has it'
         raise ScenarioError(f'{path}: nodes: {owner} is missing ({what})')
     if sc.formation and set(sc.get('', 'nodes')) != {owner}:
-        raise ScenarioError(f'{path}: nodes: a formation lists only formation_dynamics at the top level; each '
+        raise ScenarioError(f'{path}: nodes: a formation lists only {owner} at the top level; each '
                             'vehicle lists its own nodes (vehicles[].nodes)')
-    if not sc.formation and 'formation_dynamics' in sc.get('', 'nodes'):
-        raise ScenarioError(f'{path}: nodes: formation_dynamics needs a vehicles list')
-    if not sc.formation:
-        _check_workshop(path, sc)
+    formation_owner = time_owner_name(True)
+    if not sc.formation and formation_owner in sc.get('', 'nodes'):
+        raise ScenarioError(f'{path}: nodes: {formation_owner} needs a vehicles list')
+    for pkg in packages():
+        for check in pkg.checks:
+            problem = check(sc)
+            if problem:
+                raise ScenarioError(f'{path}: {problem}')
     if sc.get('earth', 'model') == 'igrf':
         end = decimal_year_datetime(sc.get('earth', 'epoch')) + datetime.timedelta(seconds=sc.duration_s())
         if end > decimal_year_datetime(IGRF_LAST_YEAR):
@@ -842,21 +546,6 @@ def _validate_vehicles(path: Path, data: dict[str, Any]) -> list[dict[str, Any]]
                                                  label=f'vehicles.{name}.{section}')
         out.append(vehicle)
     return out
-
-#: Mode names of the AAP Workshop (``modes.system: aap``, seed 000).
-WORKSHOP_MODES = ('cmg_hold', 'cmg_dump')
-
-
-def _check_workshop(path: Path, sc: Scenario) -> None:
-    """The Workshop mode logic drives CMGs, and only it does; its modes are its own."""
-    system, initial, kind = sc.get('modes', 'system'), sc.get('modes', 'initial_mode'), sc.get('wheels', 'kind')
-    if (system == 'aap') != (initial in WORKSHOP_MODES):
-        raise ScenarioError(f'{path}: modes.initial_mode: {initial!r} with modes.system {system!r} (the Workshop '
-                            f'modes {", ".join(WORKSHOP_MODES)} belong to system aap, and only they)')
-    if 'ascs_mode_manager' in sc.get('', 'nodes') and (system == 'aap') != (kind == 'cmg'):
-        raise ScenarioError(f'{path}: wheels.kind: {kind!r} with modes.system {system!r} (the aap mode logic holds '
-                            'the attitude with CMGs, wheels.kind cmg; the heao and sss logic drive wheels)')
-
 
 def load_scenario(name_or_path: str) -> Scenario:
     """Read, merge (``extends``), validate and convert a scenario; raise ScenarioError on any problem.

@@ -18,6 +18,7 @@ setting :attr:`finished`; a failure the run cannot survive raises :class:`StepEr
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable
 from typing import Any, ClassVar
 
@@ -77,3 +78,9 @@ class Stepper:
     def receive_command(self, text: str) -> None:
         """A live ground command (nodes that declare ``ground_commands`` override this)."""
         raise NotImplementedError(f'{self.node} takes no ground commands')
+
+
+def load_stepper(path: str) -> type[Stepper]:
+    """'package.module:Class' (a declaration's :attr:`~acds_common.graph.Ports.stepper`) → the stepper class."""
+    module, _, name = path.partition(':')
+    return getattr(importlib.import_module(module), name)

@@ -1,4 +1,10 @@
-"""Topic names of the ACDS graph (spec §2), under the ``/acds`` namespace.
+"""Topic names of the ACDS graph (spec §2), under the ``/acds`` namespace: the names packages share.
+
+The names below are the interface between the shipped packages (a consumer names the topic it reads
+from another package's node). Each topic's message type, unit and meaning are declared by the
+package that publishes it (:class:`acds_common.graph.Topic`); a new node's own topics are declared
+in its package alone (README "Adding a node"). The mechanism's own topics and their types are
+:data:`TYPES`.
 
 Every node runs in namespace ``/acds`` (a formation vehicle's nodes in ``/acds/<vehicle>``); names
 here are relative so they resolve in the node's namespace, except the lockstep handshake topics,
@@ -59,41 +65,16 @@ EVENTS = 'events'                               #: std_msgs/String: mode transit
 DIAGNOSTICS = '/diagnostics'                    #: diagnostic_msgs/DiagnosticArray: health and telemetry of every node
 MONITOR_ACK = '/acds/lockstep/monitor_ack'      #: rosgraph_msgs/Clock: the run monitor has received /clock step k
 
-#: Message type of every topic, as 'package/msg/Type' (used by the monitor, recorder and player).
+#: Message type of the mechanism's own topics (lockstep handshake, ground commands, diagnostics); every
+#: other topic's type is declared by the package that publishes it (:class:`acds_common.graph.Topic`).
 TYPES: dict[str, str] = {
     CLOCK: 'rosgraph_msgs/msg/Clock',
     READY: 'std_msgs/msg/String',
-    TRUTH_ODOMETRY: 'nav_msgs/msg/Odometry',
-    TRUTH_B_BODY: 'sensor_msgs/msg/MagneticField',
-    TRUTH_SUN_COSINES: 'geometry_msgs/msg/Vector3Stamped',
-    TRUTH_TORQUE_MAG: 'geometry_msgs/msg/Vector3Stamped',
-    TRUTH_TORQUE_GG: 'geometry_msgs/msg/Vector3Stamped',
-    GYRO: 'sensor_msgs/msg/Imu',
-    TRUTH_WRENCH: 'geometry_msgs/msg/WrenchStamped',
-    SUN_SENSOR: 'geometry_msgs/msg/Vector3Stamped',
-    WHEEL_MOMENTUM: 'geometry_msgs/msg/Vector3Stamped',
-    WHEEL_TORQUE: 'geometry_msgs/msg/Vector3Stamped',
-    MAG_FIELD: 'sensor_msgs/msg/MagneticField',
-    MAG_VOLTS: 'geometry_msgs/msg/Vector3Stamped',
-    MAG_BIAS_VOLTS: 'geometry_msgs/msg/Vector3Stamped',
-    MOMENT_COMMAND: 'geometry_msgs/msg/Vector3Stamped',
-    WHEEL_VOLTS: 'geometry_msgs/msg/Vector3Stamped',
-    WHEEL_TORQUE_COMMAND: 'geometry_msgs/msg/Vector3Stamped',
-    CMG_TORQUE: 'geometry_msgs/msg/Vector3Stamped',
-    SAMPLED_MOMENTUM: 'geometry_msgs/msg/Vector3Stamped',
-    DIPOLE_AVG: 'geometry_msgs/msg/Vector3Stamped',
-    DIPOLE_END: 'geometry_msgs/msg/Vector3Stamped',
-    COIL_CURRENT: 'geometry_msgs/msg/Vector3Stamped',
-    E_FT: 'geometry_msgs/msg/Vector3Stamped',
-    COIL_POWER: 'geometry_msgs/msg/Vector3Stamped',
-    COIL_DUTY: 'geometry_msgs/msg/Vector3Stamped',
-    MODE: 'diagnostic_msgs/msg/DiagnosticArray',
     GROUND_COMMAND: 'std_msgs/msg/String',
-    GROUND_ACK: 'std_msgs/msg/String',
-    EVENTS: 'std_msgs/msg/String',
     DIAGNOSTICS: 'diagnostic_msgs/msg/DiagnosticArray',
     MONITOR_ACK: 'rosgraph_msgs/msg/Clock',
 }
+
 
 def resolve(topic: str) -> str:
     """Absolute topic name (``/acds/...``, or ``/clock``)."""
@@ -101,7 +82,7 @@ def resolve(topic: str) -> str:
 
 
 def relative(name: str) -> str:
-    """The key of :data:`TYPES` for an absolute or relative topic name (inverse of :func:`resolve`)."""
+    """The relative name of an absolute or relative topic name (inverse of :func:`resolve`)."""
     prefix = f'{NAMESPACE}/'
     return name[len(prefix):] if name.startswith(prefix) else name
 
@@ -112,12 +93,19 @@ def type_of(name: str) -> str:
     A formation's per-vehicle topics are the single-vehicle names under the vehicle's namespace
     (``/acds/<vehicle>/truth/odometry``, or relative to ``/acds``: ``<vehicle>/truth/odometry``).
     """
-    if name in TYPES:  # an absolute name of its own (/clock, the lockstep handshake)
-        return TYPES[name]
+    types = all_types()
+    if name in types:  # an absolute name of its own (/clock, the lockstep handshake)
+        return types[name]
     key = relative(name)
-    if key in TYPES:
-        return TYPES[key]
+    if key in types:
+        return types[key]
     head, sep, rest = key.partition('/')
-    if sep and rest in TYPES:
-        return TYPES[rest]
+    if sep and rest in types:
+        return types[rest]
     raise KeyError(f'topic {name!r} is not a topic of the ACDS graph')
+
+
+def all_types() -> dict[str, str]:
+    """Message type of every topic: the mechanism's (:data:`TYPES`) and every package's declared ones."""
+    from acds_common.graph import declared_topics  # the graph module imports this one
+    return {**TYPES, **{name: t.type for name, t in declared_topics().items()}}

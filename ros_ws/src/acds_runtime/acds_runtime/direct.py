@@ -13,7 +13,6 @@ feeds, given values instead of bytes (and the bytes of the truth topics, for the
 
 from __future__ import annotations
 
-import importlib
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -24,16 +23,10 @@ from acds_common.cdr import Codec
 from acds_common.graph import Graph, build_graph
 from acds_common.parameters import node_parameters, normalize
 from acds_common.scenario import Scenario
-from acds_common.stepper import StepError, Stepper
+from acds_common.stepper import StepError, Stepper, load_stepper
 
 from .launcher import LaunchError, RunResult
 from .summary import RunObserver
-
-
-def stepper_class(path: str) -> type[Stepper]:
-    """'package.module:Class' → the stepper class."""
-    module, _, name = path.partition(':')
-    return getattr(importlib.import_module(module), name)
 
 
 def build_steppers(graph: Graph, params: dict[str, dict[str, Any]],
@@ -42,7 +35,7 @@ def build_steppers(graph: Graph, params: dict[str, dict[str, Any]],
     out = {}
     for inst, spec in graph.nodes.items():
         node_log = None if log is None else (lambda level, text, n=inst: log(n, level, text))
-        out[inst] = stepper_class(spec.stepper)(normalize(spec.name, params[inst]), log=node_log)
+        out[inst] = load_stepper(spec.stepper)(normalize(spec.name, params[inst]), log=node_log)
     return out
 
 

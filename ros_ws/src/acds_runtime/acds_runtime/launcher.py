@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import fcntl
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -203,6 +204,15 @@ class GraphRun:
         os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
         params = node_parameters(self.scenario, self.steps, self.rtf, self.overrides)
         self.graph = build_graph(params)
+        # Each node's console script: this environment's, else the first on PATH (a node package installed elsewhere).
+        search = os.pathsep.join([str(VENV_BIN), env.get('PATH', '')])
+        executables = {name: shutil.which(spec.name, path=search) for name, spec in self.graph.nodes.items()}
+        missing = sorted(f'{name} (package {self.graph.nodes[name].package})' for name, exe in executables.items() if not exe)
+        if missing:
+            self.lease.close()
+            self.lease = None
+            raise LaunchError(f'no executable for node(s) {", ".join(missing)} in {VENV_BIN} or on PATH: is the package '
+                              'installed?')
         self.observer = RunObserver(self.scenario, self.graph)
         params_file = self.run_dir / 'params.yaml'
         params_file.write_text(parameters_yaml(params))
@@ -236,7 +246,7 @@ class GraphRun:
                                   sink=self.live_sink)
         self._t0 = time.monotonic()
         for name, spec in self.graph.nodes.items():
-            exe = VENV_BIN / spec.name
+            exe = executables[name]
             namespace = [] if spec.namespace == topics.NAMESPACE else ['-r', f'__ns:={spec.namespace}']
             popen = subprocess.Popen(
                 [str(exe), '--ros-args', *namespace, '--params-file', str(params_file)],

@@ -15,12 +15,11 @@ from __future__ import annotations
 from acds_common.graph import build_graph
 from acds_common.parameters import node_parameters, normalize
 from acds_common.scenario import Scenario, ScenarioError
+from acds_common.stepper import load_stepper
 
 
 def preflight(scenario: Scenario) -> None:
     """Raise ScenarioError naming the scenario section or key a node's stepper (its core model) rejects."""
-    from .direct import stepper_class
-
     params = node_parameters(scenario, scenario.total_steps())
     try:
         graph = build_graph(params)
@@ -28,6 +27,6 @@ def preflight(scenario: Scenario) -> None:
         raise ScenarioError(f'{scenario.path}: nodes: {exc}') from None
     for name, spec in graph.nodes.items():  # the scenario's order: the rigid body (inertia) first
         try:
-            stepper_class(spec.stepper)(normalize(spec.name, params[name]), log=lambda _level, _text: None)
+            load_stepper(spec.stepper)(normalize(spec.name, params[name]), log=lambda _level, _text: None)
         except ValueError as exc:  # every package's exception is a ValueError with a message naming the key
             raise ScenarioError(f'{scenario.path}: {exc} (the {name} model refuses it)') from None

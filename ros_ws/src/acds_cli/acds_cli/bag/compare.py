@@ -23,7 +23,6 @@ from typing import Any
 
 import yaml
 from acds_common import topics
-from acds_common.graph import TIME_OWNER
 from acds_runtime.bag.reader import Bag, iter_fields, open_bag
 from acds_runtime.bag.writer import BagError, stamped, typestore
 
@@ -193,12 +192,10 @@ def run_compare(bag_path: Path | str, node: str, *, tolerance: float = 0.0, scen
     from acds_common.cdr import Codec
     from acds_common.graph import node_spec
     from acds_common.parameters import ConfigError, normalize
-    from acds_runtime.direct import stepper_class
+    from acds_common.stepper import load_stepper
 
     check_tolerance(tolerance)
     log = log or (lambda text: print(text, file=sys.stderr, flush=True))
-    if node == TIME_OWNER:
-        raise BagError(f'{node} is the time owner: compare replays the truth into a non-owner node')
     bag = open_bag(bag_path)
     dt_ns = bag.control_period_ns
     if not dt_ns or not bag.has(topics.CLOCK):
@@ -206,9 +203,11 @@ def run_compare(bag_path: Path | str, node: str, *, tolerance: float = 0.0, scen
     try:
         params = normalize(node, node_parameters(bag, node, scenario, sets))
         spec = node_spec(node, params)
-        stepper = stepper_class(spec.stepper)(params, log=lambda level, text: log(f'[{node}] [{level}] {text}'))
+        stepper = load_stepper(spec.stepper)(params, log=lambda level, text: log(f'[{node}] [{level}] {text}'))
     except (ConfigError, KeyError, ValueError) as exc:
         raise BagError(f'node {node}: {exc}') from None
+    if spec.time_owner:
+        raise BagError(f'{node} is the time owner: compare replays the truth into a non-owner node')
     ports = {topics.resolve(o.topic): o for o in spec.outputs}
     outputs = sorted(t for t in ports if bag.has(t))
     if not [t for t in outputs if t != DIAGNOSTICS]:

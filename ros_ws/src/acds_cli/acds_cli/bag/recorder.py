@@ -118,10 +118,10 @@ def record(path: Path | str, *, storage: str = 'mcap', compression: str | None =
     coverage = step_coverage(run_dir)
     if domain_id is None:
         raise BagError('record: which graph? give --domain N or --run-dir RUN_FOLDER')
-    wanted = [topics.resolve(t) for t in select] if select else [topics.resolve(t) for t in topics.TYPES]
+    wanted = [topics.resolve(t) for t in select] if select else [topics.resolve(t) for t in topics.all_types()]
     unknown = [t for t in wanted if not _known(t)]
     if unknown:
-        raise BagError(f'record: unknown topic {", ".join(unknown)} (known: {", ".join(sorted(topics.TYPES))}, '
+        raise BagError(f'record: unknown topic {", ".join(unknown)} (known: {", ".join(sorted(topics.all_types()))}, '
                        'or one of them under a formation vehicle\'s namespace)')
     stop = stop or threading.Event()
     ros_env(domain_id)

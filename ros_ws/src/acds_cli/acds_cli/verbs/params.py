@@ -23,22 +23,24 @@ from .run import DEFAULT_SCENARIO
 def waits_for(node: str, params: dict[str, Any]) -> list[str]:
     """What ``node`` (with these parameters) waits for before its first step, one line each."""
     from acds_common import topics
-    from acds_common.graph import MONITOR_NAME, TIME_OWNER, node_spec
+    from acds_common.graph import MONITOR_NAME, declared_node, node_spec
 
     spec = node_spec(node, params)
+    owner = next((n for n in params['graph_nodes'] if n != MONITOR_NAME and declared_node(n.rpartition('/')[2])[1].time_owner),
+                 '')
     present = set(params['graph_nodes'])
     lines = [f'a publisher on {topics.resolve(i.topic)} (from {i.source})'
              for st in spec.stages for i in st.inputs if i.source in present]
     lines = list(dict.fromkeys(lines))
-    if node == TIME_OWNER:
-        others = sorted(present - {TIME_OWNER})
+    if spec.time_owner:
+        others = sorted(present - {spec.instance})
         if others:
             lines.append(f'a {topics.resolve(topics.READY)} message from each of {", ".join(others)}')
         if MONITOR_NAME in present:
             lines.append(f'then, every step, {topics.resolve(topics.MONITOR_ACK)} from {MONITOR_NAME} '
                          f'(the recorder; remove it from graph_nodes to run without one)')
     elif any(not any(i.lag == 0 and i.source in present for i in st.inputs) for st in spec.stages):
-        lines.append(f'then {topics.CLOCK} from {TIME_OWNER}, step by step')
+        lines.append(f'then {topics.CLOCK} from {owner}, step by step')
     return lines
 
 

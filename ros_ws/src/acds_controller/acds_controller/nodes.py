@@ -1,0 +1,133 @@
+"""The controller nodes, as the acds_controller package declares them to the graph (spec §7, §10; issue 19).
+
+``acds_controller``: the HEAO transfer assembly and DPA (spec §7), or the AAP Workshop computer
+(seed 000) with the CMGs; ``formation_controller``: one formation vehicle's controller (seed 004).
+Named in the entry-point group ``acds.nodes`` (setup.py).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from acds_common import topics
+from acds_common import units as u
+from acds_common.frames import BODY
+from acds_common.graph import Input, Node, Output, Package, Ports, Stage, Topic
+from acds_common.schema import ANGLE, DUMP_GAIN, MOMENT_OF_INERTIA, MOMENTUM, RATE, TIME, Field, quantity
+
+VECTOR3 = 'geometry_msgs/msg/Vector3Stamped'
+#: The scenario section this package defines.
+SECTIONS: dict[str, dict[str, Field]] = {
+    'controller': {
+        'acquisition_law': Field('str', 'Mode 1A magnetic law (b_cross_omega: the CubeSat detumble law '
+                                 'M = −(k_ω/|B|)(B̂ × ω) of seed 003)', 'bxh', choices=('bxh', 'bdot', 'b_cross_omega')),
+        'unloading_law': Field('str', 'Mode 1B/cruise unloading law (b_cross_h: seed 003 dumping form '
+                               'M = −(k_h/|B|)(B̂ × h))', 'bxh', choices=('bxh', 'lead', 'none', 'b_cross_h')),
+        'acquisition_gain_per_s_g2': Field('float', 'B×H acquisition gain G, (s·G²)⁻¹', 0.05, lo=0.0, hi=10.0),
+        'bdot_gain_ft_lb_s_per_g2': Field('float', 'B-dot gain K_D, ft-lb-s/G²', 1.0, lo=0.0, hi=1e4),
+        'unloading_gain_mode_1b_per_s_g2': Field('float', 'unloading gain in Mode 1B', 0.05, lo=0.0, hi=10.0),
+        'unloading_gain_scan_per_s_g2': Field('float', 'unloading gain, celestial scan', 0.01, lo=0.0, hi=10.0),
+        'unloading_gain_point_per_s_g2': Field('float', 'unloading gain, celestial point', 0.02, lo=0.0, hi=10.0),
+        'max_moment_am2': Field('float', 'per-axis moment command saturation', 2000.0, lo=1e-3, hi=1e6),
+        # seed 003 gain design, k_ω = (4π/T_orb)(sin ξ + 1) J_min: the on-board design values (defaults: the seed's)
+        'detumble_orbit_period': quantity('b_cross_omega gain: orbit period T_orb (seed 003: ISS, 5560.8 s)', 5560.8, 's',
+                                    TIME, lo=1e3, hi=1e6),
+        'magnetic_inclination': quantity('ξ, inclination of the orbit to the geomagnetic equator, for the b_cross_omega '
+                                   'and b_cross_h gains (seed 003: 0.90129 rad, the ISS inclination)', 0.90129,
+                                   'rad', ANGLE, lo=1e-3, hi=math.pi / 2),
+        'detumble_j_min': quantity('b_cross_omega gain: smallest principal moment of inertia J_min (seed 003: '
+                             '5,094,047.43 g·mm²)', 5094047.43 * u.G_MM2_KG_M2, 'kg_m2', MOMENT_OF_INERTIA,
+                             lo=1e-6, hi=1e9),
+        'dump_time': quantity('b_cross_h gain: dump the slowest momentum mode to dump_residual_fraction within this time '
+                        '(seed 003: "say, 1 orbit of 90 minutes")', 5400.0, 's', TIME, lo=1.0, hi=1e7),
+        'dump_residual_fraction': Field('float', 'b_cross_h gain: momentum left of the slowest mode after dump_time',
+                                        0.1, lo=1e-6, hi=0.999),
+        'coupling_compensation': Field('bool', 'subtract the known Δ·M from the sensed field', False),
+        'wheel_gains': Field('str', 'acquisition wheel-law gains (Table 4-2)', 'heao_b',
+                             choices=('heao_a', 'heao_b', 'heao_b_preliminary')),
+        'scan_rate': quantity('celestial scan rate about z', 0.03 * 2 * math.pi / 60, 'rad_s', RATE, lo=0.0, hi=0.1),
+        'target_quaternion_xyzw': Field('floats', 'cruise target attitude q body→ECI', [0.0, 0.0, 0.0, 1.0],
+                                        length=4, lo=-1.0, hi=1.0, quaternion=True),
+        'lead_time_s': Field('float', 'lead law: wheel command → momentum lead time, s', 500.0, lo=0.0, hi=1e5),
+        'adc_bits': Field('int', 'transfer assembly ADC width, bits', 10, lo=8, hi=24),
+        'telemetry_every': Field('int', 'DPA/TA telemetry on diagnostics every N steps (and at every event)',
+                                 20, lo=1, hi=10**6),
+        'dump_law': Field('str', 'Workshop dump law: khb (M = k H_s × B), khb_shifted (k (H_s − H_0) × B), '
+                          'min_energy (eq. 3 on the predicted field), none (CMG hold only)', 'khb',
+                          choices=('khb', 'khb_shifted', 'min_energy', 'none')),
+        'dump_gain': quantity('dump gain k (seed 000 §5: 4e6 amp-turn-m² per ft-lb-sec per Wb/m²)',
+                        u.dump_gain_seed_to_si(4e6), 'per_s_t2', DUMP_GAIN, lo=0.0, hi=1e12),
+        'dump_h_0': quantity('khb_shifted: the shift H_0 of the region H_s settles in (§3)', [0.0, 0.0, 0.0], 'nms',
+                       MOMENTUM, length=3, lo=-1e5, hi=1e5),
+        'dump_bias_momentum': quantity('bias momentum H_b per orbit known on board (§3): what min_energy dumps and the '
+                                 '§5 initialisation uses', [0.0, 0.0, 0.0], 'nms', MOMENTUM, length=3,
+                                 lo=-1e6, hi=1e6),
+        'dump_h_s_init': Field('str', 'first H_s sample: measured (the CMG momentum as it is) or min_energy '
+                               '(§5: k H_s of the first orbit set to eq. 3\'s bracket, kept as an offset)',
+                               'measured', choices=('measured', 'min_energy')),
+        'cmg_hold_bandwidth': quantity('CMG attitude-hold closed-loop bandwidth ω_n (not in the seed)', 0.05, 'rad_s',
+                                 RATE, lo=1e-6, hi=10.0),
+        'cmg_hold_damping': Field('float', 'CMG attitude-hold damping ratio ζ (not in the seed)', 0.7,
+                                  lo=0.0, hi=10.0),
+    },
+}
+
+
+def _acds_controller(params: dict[str, Any]) -> Ports:
+    store = ((Output('cmg_torque', topics.CMG_TORQUE, BODY), Output('sampled_momentum', topics.SAMPLED_MOMENTUM, BODY))
+             if params['wheels_kind'] == 'cmg' else (Output('volts', topics.WHEEL_VOLTS, BODY),))
+    return Ports(
+        'acds_controller.controller_step:ControllerStep',
+        (Stage('control', (
+            Input('mag_volts', topics.MAG_VOLTS, 'magnetometer_sim'),
+            Input('mag_bias', topics.MAG_BIAS_VOLTS, 'magnetometer_sim'),
+            Input('gyro', topics.GYRO, 'rigid_body'),
+            Input('sun', topics.SUN_SENSOR, 'rigid_body'),
+            Input('odometry', topics.TRUTH_ODOMETRY, 'rigid_body'),
+            Input('mode', topics.MODE, 'ascs_mode_manager'),
+            Input('wheel_h', topics.WHEEL_MOMENTUM, 'reaction_wheels', lag=1),
+            Input('wheel_hdot', topics.WHEEL_TORQUE, 'reaction_wheels', lag=1),
+            Input('coil_current', topics.COIL_CURRENT, 'em_driver', lag=1),
+        )),),
+        (Output('moment', topics.MOMENT_COMMAND, BODY),
+         *store,
+         Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
+
+
+def _formation_controller(params: dict[str, Any]) -> Ports:
+    """One vehicle's formation controller: every vehicle's truth of step k and wheel momentum of step k − 1
+    (the RF link of seed 004 slide 70); it returns its own vehicle's dipole and wheel torque commands."""
+    inputs: list[Input] = []
+    for w in params['formation_vehicles']:
+        ns = f'{topics.NAMESPACE}/{w}'
+        inputs += [Input(f'{w}/odometry', f'{ns}/{topics.TRUTH_ODOMETRY}', 'formation_dynamics'),
+                   Input(f'{w}/gyro', f'{ns}/{topics.GYRO}', 'formation_dynamics'),
+                   Input(f'{w}/b_body', f'{ns}/{topics.TRUTH_B_BODY}', 'formation_dynamics'),
+                   Input(f'{w}/wheel_h', f'{ns}/{topics.WHEEL_MOMENTUM}', f'{w}/reaction_wheels', lag=1),
+                   Input(f'{w}/wheel_hdot', f'{ns}/{topics.WHEEL_TORQUE}', f'{w}/reaction_wheels', lag=1)]
+    return Ports('acds_controller.formation_controller_step:FormationControllerStep',
+                 (Stage('control', tuple(inputs)),),
+                 (Output('moment', topics.MOMENT_COMMAND, BODY),
+                  Output('wheel_torque', topics.WHEEL_TORQUE_COMMAND, BODY),
+                  Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
+
+
+#: What the acds_controller package adds to the graph.
+PACKAGE = Package(
+    'acds_controller',
+    nodes=(
+        Node('acds_controller', ('spacecraft', 'controller', 'magnetometer', 'wheels', 'orbit', 'earth'),
+             _acds_controller),
+        Node('formation_controller', ('orbit', 'formation'), _formation_controller, in_graph=False, in_vehicle=True,
+             every_vehicle=('spacecraft', 'vehicle', 'em_driver')),
+    ),
+    sections=SECTIONS,
+    topics=(
+        Topic(topics.MOMENT_COMMAND, VECTOR3, 'A·m²', 'commanded dipole, body'),
+        Topic(topics.WHEEL_VOLTS, VECTOR3, 'V', 'wheel drive volts per body axis'),
+        Topic(topics.WHEEL_TORQUE_COMMAND, VECTOR3, 'N·m', 'wanted ḣ of torque-driven wheels, body'),
+        Topic(topics.CMG_TORQUE, VECTOR3, 'N·m', 'commanded CMG momentum rate ḣ, body'),
+        Topic(topics.SAMPLED_MOMENTUM, VECTOR3, 'N·m·s', 'H_s the dump law uses (step k), body'),
+    ),
+)

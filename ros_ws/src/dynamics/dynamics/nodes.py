@@ -1,0 +1,218 @@
+"""The nodes of the dynamics package, as it declares them to the graph (spec §2, §3, §4, §10; issue 19).
+
+``rigid_body`` owns sim time of a single-vehicle graph (rigid body, orbit, environment);
+``reaction_wheels`` is the momentum store (square-law wheels, torque-driven wheels, or the AAP
+Workshop's CMGs); ``formation_dynamics`` owns sim time of a formation (every vehicle's translation
+and attitude, seed 004). Named in the entry-point group ``acds.nodes`` (setup.py).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from acds_common import topics
+from acds_common import units as u
+from acds_common.frames import BODY, ECI, FORMATION, vehicle_body
+from acds_common.graph import Input, Node, Output, Package, Ports, Stage, Topic
+from acds_common.schema import (
+    DEG,
+    LENGTH,
+    MOMENTUM,
+    RATE,
+    REQUIRED,
+    TIME,
+    TORQUE,
+    Field,
+    quantity,
+)
+
+VECTOR3 = 'geometry_msgs/msg/Vector3Stamped'
+#: The scenario sections this package defines.
+SECTIONS: dict[str, dict[str, Field]] = {
+    'dynamics': {
+        'gravity_gradient': Field('bool', 'apply the gravity-gradient torque', True),
+        'substeps': Field('int', 'RK4 substeps per control period. Default 1, from the accuracy study '
+                          '(tests/substep_study.py, HEAO-B at 0.5 s, against 100 substeps): after one orbit of '
+                          'the 1 deg/s tumble the attitude is off by 6.7e-7 deg and the rates by 3.0e-9 deg/s '
+                          '(torque-free and with gravity gradient; 2 substeps: 4.0e-8 deg, 5: 1.2e-9 deg, '
+                          '10 and more: rounding, 3e-10 deg); Basilisk 2.12.1 at the same 0.5 s step differs '
+                          'from 1 substep by 1e-7 deg and from its own 0.05 s run by 5.8e-7 deg. Closed loop '
+                          '(heao_b_acquisition_fast_geometry, direct engine), 1, 2, 5, 10, 20 and 100 substeps '
+                          'reach Mode 1B '
+                          '(56.59 min) and capture (86.32 min) at the same step, final wheel momentum within '
+                          '9e-6 ft-lb-s. Raise it for faster bodies or longer control periods', 1, lo=1, hi=10000),
+    },
+    'wheels': {
+        'kind': Field('str', 'momentum store: wheels (square-law reaction wheels, spec §4) or cmg (ideal control '
+                      'moment gyros, seed 000: the momentum rate the attitude loop asks, spherical capacity)',
+                      'wheels', choices=('wheels', 'cmg')),
+        'drive': Field('str', 'kind wheels: volts, square-law drive from the controller\'s volts (HEAO, spec §4); '
+                       'torque, torque-commanded wheels (EMFFORCE, seed 004 slide 74) along torque_axes', 'volts',
+                       choices=('volts', 'torque')),
+        'layout': Field('str', 'volts drive: three_orthogonal or four_cant20 (spec §4)', 'three_orthogonal',
+                        choices=('three_orthogonal', 'four_cant20')),
+        'torque_axes': Field('floats', 'torque drive: unit wheel axes, body axes, one (x, y, z) triple per wheel '
+                             '(EMFFORCE: one wheel about z)', [0.0, 0.0, 1.0], lo=-1.0, hi=1.0),
+        'max_torque': quantity('torque drive: torque limit of each wheel (EMFFORCE: 0.1 N·m)', 0.1, 'nm', {'nm': 1.0},
+                         lo=1e-6, hi=1e4),
+        'capacity': quantity('torque drive: momentum capacity of each wheel (0: not given, unlimited)', 0.0, 'nms',
+                       MOMENTUM, lo=0.0, hi=1e6),
+        'failed_wheel': Field('int', 'index of a failed wheel of the 4-wheel cluster, −1 for none', -1,
+                              lo=-1, hi=3),
+        'initial_momentum': quantity('initial wheel (or CMG) momentum, body axes', [0.0, 0.0, 0.0], 'nms', MOMENTUM,
+                               length=3, lo=-1e5, hi=1e5),
+        'cmg_capacity': quantity('kind cmg: |h| capacity of the CMG momentum envelope (seed 000 §5: nearly 12,000 '
+                           'ft-lb-sec)', 12000.0 * u.FT_LB_S_NMS, 'nms', MOMENTUM, lo=1.0, hi=1e6),
+    },
+    'disturbance': {
+        'bias_momentum_per_orbit': quantity('body-fixed disturbance: the bias momentum it delivers per orbit (a constant '
+                                      'torque = this / orbit period), body axes; the gravity gradient is the '
+                                      "rigid body's own (dynamics.gravity_gradient)", [0.0, 0.0, 0.0], 'nms',
+                                      MOMENTUM, length=3, lo=-1e6, hi=1e6),
+        'once_per_orbit_cos': quantity('body-fixed cyclic torque, once per orbit: the cos u part (u = argument of '
+                                 'latitude)', [0.0, 0.0, 0.0], 'nm', TORQUE, length=3, lo=-1e3, hi=1e3),
+        'once_per_orbit_sin': quantity('body-fixed cyclic torque, once per orbit: the sin u part', [0.0, 0.0, 0.0], 'nm',
+                                 TORQUE, length=3, lo=-1e3, hi=1e3),
+        'twice_per_orbit_cos': quantity('body-fixed cyclic torque, twice per orbit: the cos 2u part', [0.0, 0.0, 0.0],
+                                  'nm', TORQUE, length=3, lo=-1e3, hi=1e3),
+        'twice_per_orbit_sin': quantity('body-fixed cyclic torque, twice per orbit: the sin 2u part', [0.0, 0.0, 0.0],
+                                  'nm', TORQUE, length=3, lo=-1e3, hi=1e3),
+    },
+    'formation': {
+        'frame': Field('str', 'planar: the EMFFORCE air-bearing testbed (x, y, yaw); free_space: 3-D, no field; '
+                       'hill: relative motion about a circular LEO orbit (Clohessy–Wiltshire)', 'planar',
+                       choices=('planar', 'free_space', 'hill')),
+        'em_model': Field('str', 'inter-vehicle wrench: far_field (exact dipole–dipole) or near_field (Biot–Savart '
+                          'of the coils)', 'far_field', choices=('far_field', 'near_field')),
+        'segments': Field('int', 'near field: straight segments per coil loop', 64, lo=3, hi=4096),
+        'earth_field': Field('bool', 'hill: the Earth field\'s torque and force on every dipole (orbit, earth '
+                             'sections)', True),
+        'law': Field('str', 'hold: keep the second vehicle at relative_position from the first; spin_up: spin '
+                     'the pair about the frame z axis', 'hold', choices=('hold', 'spin_up')),
+        'relative_position': quantity('hold: the second vehicle\'s position relative to the first, formation frame',
+                                [2.5, 0.0, 0.0], 'm', LENGTH, length=3, lo=-1e5, hi=1e5),
+        'hold_natural_frequency': quantity('hold: PD natural frequency', 0.1, 'rad_s', {'rad_s': 1.0}, lo=1e-4, hi=10.0),
+        'hold_damping_ratio': Field('float', 'hold: PD damping ratio', 0.9, lo=0.05, hi=5.0),
+        'spin_rate': quantity('spin_up: commanded rate of the array about the frame z axis', 0.05, 'rad_s', RATE,
+                        lo=-1.0, hi=1.0),
+        'spin_ramp': quantity('spin_up: rate reference ramp', 1e-3, 'rad_s2', {'rad_s2': 1.0, 'deg_s2': DEG},
+                        lo=1e-7, hi=1.0),
+        'spin_separation': quantity('spin_up: separation held while spinning', 2.5, 'm', LENGTH, lo=0.01, hi=1e5),
+        'spin_start': quantity('spin_up: when the rate reference starts', 0.0, 's', TIME, lo=0.0, hi=1e7),
+        'radial_natural_frequency': quantity('spin_up: radial PD natural frequency', 0.2, 'rad_s', {'rad_s': 1.0},
+                                       lo=1e-4, hi=10.0),
+        'radial_damping_ratio': Field('float', 'spin_up: radial PD damping ratio', 0.9, lo=0.05, hi=5.0),
+        'rate_gain_per_s': Field('float', 'spin_up: rate loop gain, 1/s', 0.2, lo=0.0, hi=100.0),
+        'attitude_natural_frequency': quantity('attitude hold by the wheels: PD natural frequency', 0.5, 'rad_s',
+                                         {'rad_s': 1.0}, lo=1e-4, hi=100.0),
+        'attitude_damping_ratio': Field('float', 'attitude hold: PD damping ratio', 0.8, lo=0.05, hi=5.0),
+        'max_force': quantity('limit of the commanded relative force', 0.5, 'n', {'n': 1.0}, lo=0.0, hi=1e4),
+        'dump': Field('bool', 'hill with the Earth field: Earth as a momentum dump (slides 31–33)', False),
+        'dump_start': quantity('dump: start dumping the vehicle whose wheels hold more than this', 0.5, 'nms', MOMENTUM,
+                         lo=0.0, hi=1e6),
+        'dump_done': quantity('dump: stop (and pick again) below this', 0.05, 'nms', MOMENTUM, lo=0.0, hi=1e6),
+    },
+    'vehicle': {
+        'mass': quantity('vehicle mass', REQUIRED, 'kg', {'kg': 1.0, 'lb': u.LB_KG}, lo=1e-3, hi=1e7),
+        'initial_position': quantity('initial position, formation frame (hill: relative to the reference orbit)',
+                               [0.0, 0.0, 0.0], 'm', LENGTH, length=3, lo=-1e7, hi=1e7),
+        'initial_velocity': quantity('initial velocity, formation frame', [0.0, 0.0, 0.0], 'm_s', {'m_s': 1.0},
+                               length=3, lo=-1e4, hi=1e4),
+        'coil_axes': Field('floats', 'unit axes of the coils in body axes, one (x, y, z) triple per coil, '
+                           'orthonormal (EMFFORCE: two vertical coils along x and y)', [1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                           lo=-1.0, hi=1.0),
+        'coil_radii': quantity('coil radii (EMFFORCE: 0.375 m outer, 0.345 m inner)', [0.375, 0.345], 'm', LENGTH,
+                         lo=1e-3, hi=100.0),
+        'coil_turns': Field('floats', 'turns of each coil (EMFFORCE: 100 wraps)', [100.0, 100.0], lo=1.0, hi=1e6),
+        'coil_max_current': quantity('current limit of each coil (EMFFORCE: ~100 A)', [100.0, 100.0], 'a', {'a': 1.0},
+                               lo=1e-6, hi=1e5),
+    },
+}
+
+TOPICS = (
+    Topic(topics.TRUTH_ODOMETRY, 'nav_msgs/msg/Odometry', 'm, m/s, rad/s',
+          'ECI position/velocity, q body→ECI, ω body (a formation vehicle: formation frame)'),
+    Topic(topics.TRUTH_B_BODY, 'sensor_msgs/msg/MagneticField', 'T', 'Earth field at the spacecraft, body axes'),
+    Topic(topics.TRUTH_SUN_COSINES, VECTOR3, '', '(B13, B23, B33): the sun frame\'s z in body components'),
+    Topic(topics.TRUTH_TORQUE_MAG, VECTOR3, 'N·m', 'M × B_true over the step, body'),
+    Topic(topics.TRUTH_TORQUE_GG, VECTOR3, 'N·m', 'gravity-gradient torque, body'),
+    Topic(topics.GYRO, 'sensor_msgs/msg/Imu', 'rad/s', 'ideal rate gyros (angular_velocity, body; covariance 0)'),
+    Topic(topics.TRUTH_WRENCH, 'geometry_msgs/msg/WrenchStamped', 'N, N·m', 'formation: external force + torque, body'),
+    Topic(topics.SUN_SENSOR, VECTOR3, '', 'unit sun vector in body; zero vector = sun absent'),
+    Topic(topics.WHEEL_MOMENTUM, VECTOR3, 'N·m·s', 'total wheel (or CMG) momentum h(t_k), body'),
+    Topic(topics.WHEEL_TORQUE, VECTOR3, 'N·m', 'ḣ over [t_k, t_k+1], body'),
+)
+
+
+def _rigid_body(_params: dict[str, Any]) -> Ports:
+    truth = dict(stamp_offset=1)  # step 0 comes from start(), step k + 1 from the stage of step k
+    return Ports(
+        'dynamics.rigid_body_step:RigidBodyStep',
+        (Stage('integrate', (
+            Input('dipole', topics.DIPOLE_AVG, 'em_driver'),
+            Input('wheel_h', topics.WHEEL_MOMENTUM, 'reaction_wheels'),
+            Input('wheel_hdot', topics.WHEEL_TORQUE, 'reaction_wheels'),
+            Input('mode', topics.MODE, 'ascs_mode_manager'),
+        )),),
+        (Output('odometry', topics.TRUTH_ODOMETRY, ECI, BODY, **truth),
+         Output('b_body', topics.TRUTH_B_BODY, BODY, **truth),
+         Output('sun_cosines', topics.TRUTH_SUN_COSINES, BODY, **truth),  # the sun frame's z in body components
+         Output('torque_mag', topics.TRUTH_TORQUE_MAG, BODY, **truth),
+         Output('torque_gg', topics.TRUTH_TORQUE_GG, BODY, **truth),
+         Output('gyro', topics.GYRO, BODY, **truth),
+         Output('sun_sensor', topics.SUN_SENSOR, BODY, **truth),
+         Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
+
+
+def _reaction_wheels(params: dict[str, Any]) -> Ports:
+    if params['wheels_kind'] == 'cmg':  # the Workshop's CMGs: the controller's momentum-rate command (seed 000)
+        stage = Stage('gimbal', (Input('torque', topics.CMG_TORQUE, 'acds_controller'),))
+    elif params['wheels_drive'] == 'torque':  # torque-commanded wheels (a formation vehicle)
+        stage = Stage('drive', (Input('torque', topics.WHEEL_TORQUE_COMMAND, 'formation_controller'),))
+    else:
+        stage = Stage('drive', (Input('volts', topics.WHEEL_VOLTS, 'acds_controller'),))
+    return Ports(
+        'dynamics.reaction_wheels_step:ReactionWheelsStep',
+        (stage,),
+        (Output('momentum', topics.WHEEL_MOMENTUM, BODY),
+         Output('torque', topics.WHEEL_TORQUE, BODY),
+         Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
+
+
+def _formation_dynamics(params: dict[str, Any]) -> Ports:
+    """The formation's time owner: every vehicle's translation and attitude (spec §10; seed 004).
+
+    Step k takes each vehicle's achieved dipole and wheel momentum/rate of step k (from that vehicle's
+    em_driver and reaction_wheels, in its namespace) and returns each vehicle's truth of step k + 1
+    under ``/acds/<vehicle>/``: the single-vehicle topic names, so each vehicle's nodes read them as a
+    single vehicle's nodes would.
+    """
+    truth = dict(stamp_offset=1)
+    inputs: list[Input] = []
+    outputs: list[Output] = []
+    for v in params['formation_vehicles']:
+        inputs += [Input(f'{v}/dipole', f'{v}/{topics.DIPOLE_AVG}', f'{v}/em_driver'),
+                   Input(f'{v}/wheel_h', f'{v}/{topics.WHEEL_MOMENTUM}', f'{v}/reaction_wheels'),
+                   Input(f'{v}/wheel_hdot', f'{v}/{topics.WHEEL_TORQUE}', f'{v}/reaction_wheels')]
+        body = vehicle_body(v)
+        outputs += [Output(f'{v}/odometry', f'{v}/{topics.TRUTH_ODOMETRY}', FORMATION, body, **truth),
+                    Output(f'{v}/gyro', f'{v}/{topics.GYRO}', body, **truth),
+                    Output(f'{v}/b_body', f'{v}/{topics.TRUTH_B_BODY}', body, **truth),
+                    Output(f'{v}/wrench', f'{v}/{topics.TRUTH_WRENCH}', body, **truth)]
+    return Ports('dynamics.formation_step:FormationDynamicsStep', (Stage('integrate', tuple(inputs)),), tuple(outputs))
+
+
+#: What the dynamics package adds to the graph.
+PACKAGE = Package(
+    'dynamics',
+    nodes=(
+        Node('rigid_body', ('spacecraft', 'orbit', 'earth', 'sun', 'dynamics', 'em_driver', 'wheels', 'disturbance'),
+             _rigid_body, time_owner=True),
+        Node('reaction_wheels', ('wheels',), _reaction_wheels, in_vehicle=True),
+        Node('formation_dynamics', ('orbit', 'earth', 'sun', 'dynamics', 'formation'), _formation_dynamics,
+             time_owner=True, every_vehicle=('spacecraft', 'vehicle', 'em_driver')),
+    ),
+    sections=SECTIONS,
+    vehicle_sections=('vehicle', 'wheels'),
+    topics=TOPICS,
+)
