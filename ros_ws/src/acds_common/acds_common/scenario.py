@@ -45,6 +45,7 @@ import yaml
 from acds_common import units as u
 from acds_common.environment import IGRF_LAST_YEAR, decimal_year_datetime
 from acds_common.graph import TIME_OWNER
+from acds_common.modes import HEAO_CRUISE_MODES, INITIAL_MODES, WORKSHOP_INITIAL_MODES
 
 
 class ScenarioError(ValueError):
@@ -333,16 +334,14 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'system': Field('str', 'which mode logic runs: heao, sss or aap (the AAP Workshop CMG hold and magnetic '
                         'dump, seed 000)', 'heao', choices=('heao', 'sss', 'aap')),
         'initial_mode': Field('str', 'mode at separation (aap: cmg_hold or cmg_dump)', 'mode_1a',
-                              choices=('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point',
-                                       'cmg_hold', 'cmg_dump')),
+                              choices=INITIAL_MODES),
         'rate_thresholds': _q('Mode 1A→1B body-rate thresholds |ω_x|, |ω_y|, |ω_z|',
                               [0.573 * _DEG, 0.115 * _DEG, 0.115 * _DEG], 'rad_s', RATE, length=3, lo=0.0, hi=1.0),
         'capture_cone': _q('acquisition capture: z within this angle of the sun', 10 * _DEG, 'rad', ANGLE,
                            lo=0.0, hi=math.pi),
         'capture_rate': _q('acquisition capture: every rate below this ("nulled")', 0.01 * _DEG, 'rad_s', RATE,
                            lo=0.0, hi=0.1),
-        'cruise_target': Field('str', 'cruise mode after capture', 'celestial_point',
-                               choices=('celestial_scan', 'celestial_point')),
+        'cruise_target': Field('str', 'cruise mode after capture', 'celestial_point', choices=HEAO_CRUISE_MODES),
         'auto_cruise': Field('bool', 'enter cruise automatically at capture (else by ground command)', False),
         'stop_at_capture': Field('bool', 'end the run at acquisition capture', False),
         'ground_commands': Field('strs', 'scheduled ground commands, "T_S: command"', []),
@@ -843,16 +842,12 @@ def _validate_vehicles(path: Path, data: dict[str, Any]) -> list[dict[str, Any]]
         out.append(vehicle)
     return out
 
-#: Mode names of the AAP Workshop (``modes.system: aap``, seed 000).
-WORKSHOP_MODES = ('cmg_hold', 'cmg_dump')
-
-
 def _check_workshop(path: Path, sc: Scenario) -> None:
     """The Workshop mode logic drives CMGs, and only it does; its modes are its own."""
     system, initial, kind = sc.get('modes', 'system'), sc.get('modes', 'initial_mode'), sc.get('wheels', 'kind')
-    if (system == 'aap') != (initial in WORKSHOP_MODES):
-        raise ScenarioError(f'{path}: modes.initial_mode: {initial!r} with modes.system {system!r} (the Workshop '
-                            f'modes {", ".join(WORKSHOP_MODES)} belong to system aap, and only they)')
+    if (system == 'aap') != (initial in WORKSHOP_INITIAL_MODES):
+        raise ScenarioError(f'{path}: modes.initial_mode: {initial!r} with modes.system {system!r} (a run of system '
+                            f'aap starts in a Workshop mode, {" or ".join(WORKSHOP_INITIAL_MODES)}, and only it does)')
     if 'ascs_mode_manager' in sc.get('', 'nodes') and (system == 'aap') != (kind == 'cmg'):
         raise ScenarioError(f'{path}: wheels.kind: {kind!r} with modes.system {system!r} (the aap mode logic holds '
                             'the attitude with CMGs, wheels.kind cmg; the heao and sss logic drive wheels)')
