@@ -157,7 +157,7 @@ def test_more_than_1e9_steps_is_refused_before_the_run(capsys, tmp_path):
 @pytest.mark.parametrize('name', ['../../escaped', '.hidden', 'a/b', 'x' * 101])
 def test_the_scenario_name_cannot_leave_the_runs_folder(capsys, tmp_path, monkeypatch, name):
     repo = tmp_path / 'a' / 'repo'
-    monkeypatch.setattr(acds_main, 'ROOT', repo)  # the default run folder is ROOT/runs/<name>_<time>
+    monkeypatch.setenv('ACDS_WORKSPACE', str(repo))  # the default run folder is <workspace>/runs/<name>_<time>
     path = scenario(tmp_path, FREE_TUMBLE.replace('name: free_tumble_heao_b', f'name: "{name}"'))
     code, lines = acds(capsys, 'run', path, '--steps', '3', '--no-record')
     assert_one_line(code, lines, 2, f'name: {repr(name)[:30]}', 'is not a safe folder name')

@@ -49,6 +49,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog='acds', description='ACDS emulator: HEAO wheels+magnetics, SSS magnetic control.')
     sub = parser.add_subparsers(dest='verb', metavar='VERB', required=True)
 
+    for module in _verb_modules():
+        module.register(sub)
     p = sub.add_parser('scenarios', help='list the shipped scenarios', description='List the shipped scenarios.')
     p.set_defaults(func=cmd_scenarios)
 
@@ -68,8 +70,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--json', action='store_true', help='last line: one JSON object')
     p.add_argument('--steps', type=step_count, default=2000, help='steps per measurement (default 2000)')
     p.set_defaults(func=cmd_bench)
-    for module in _verb_modules():
-        module.register(sub)
     return parser
 
 
@@ -79,8 +79,8 @@ def _verb_modules() -> list:
     import pkgutil
 
     from . import verbs
-    return [importlib.import_module(f'{verbs.__name__}.{m.name}') for m in sorted(pkgutil.iter_modules(verbs.__path__),
-                                                                                  key=lambda m: m.name)]
+    ordered = sorted(pkgutil.iter_modules(verbs.__path__), key=lambda m: (m.name != 'run', m.name))  # run first
+    return [importlib.import_module(f'{verbs.__name__}.{m.name}') for m in ordered]
 
 
 class Stopped(KeyboardInterrupt):

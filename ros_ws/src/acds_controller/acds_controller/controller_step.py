@@ -34,13 +34,13 @@ from typing import Any
 
 import numpy as np
 from acds_common.messages import WARN, diagnostic, mode_status, vec, vector3, xyz
+from acds_common.modes import HEAO_MODES, WORKSHOP_MODES
 from acds_common.stepper import Stepper
 from acds_common.validation import all_finite
 
 from acds_controller.configuration import build_dpa, build_workshop
-from acds_controller.dpa import MODES, Dpa
+from acds_controller.dpa import Dpa
 from acds_controller.magnetic_laws import ControllerError
-from acds_controller.workshop import WORKSHOP_MODES
 
 #: Excess-coil-current alarm: |I| above this multiple of the current of the maximum moment.
 EXCESS_CURRENT_FACTOR = 1.1
@@ -103,7 +103,7 @@ class ControllerStep(Stepper):
                 self.log('info', f'step {k}: {apply_command(self.dpa, text)}')
             except ControllerError as exc:
                 warnings.append((f'command refused: {text!r}: {exc}', {'command': text, 'reason': str(exc)}))
-        mode = _resolve_mode(mode, 'mode_1a', MODES, warnings, f'unknown mode {mode!r} from the mode manager')
+        mode = _resolve_mode(mode, 'mode_1a', HEAO_MODES, warnings, f'unknown mode {mode!r} from the mode manager')
         try:
             result = self._dpa_step(k, mode, inp)
         except ControllerError as exc:

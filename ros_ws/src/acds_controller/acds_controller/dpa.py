@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from acds_common.attitude import conj, to_body
 from acds_common.dpa_commands import AXES, GAIN_TABLE, LAW_CHOICES, SCALAR_GAINS
+from acds_common.modes import HEAO_MODES
 from acds_common.units import FT_LB_NM, deg, nms_to_ftlbs, rad_s_to_rpm, rpm_to_rad_s, tesla_to_gauss
 from acds_common.vec3 import ZERO, Vec3, clip, mat3, mv, norm
 
@@ -70,8 +71,6 @@ from acds_controller.wheel_laws import (
     wheel_volts_xyz,
 )
 
-#: DPA modes, exactly as the mode manager names them.
-MODES = ('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point')
 #: Wheel torque gain k for ḣ = k·V|V|, N·m/V²: 0.117 ft-lb (Table 4-2 design torque) at V_sat.
 WHEEL_TORQUE_GAIN_NM_PER_V2 = 0.117 * FT_LB_NM / V_SAT_V**2
 #: Lead-law time constant, s: ≈ 1/(G_unld·B²) for G = 0.02 (s·G²)⁻¹ and |B| ≈ 0.3 G.
@@ -262,8 +261,8 @@ class Dpa:
         ``dt_s``: control period (s), the B-dot difference interval. Vectors as arrays or
         float sequences.
         """
-        if mode not in MODES:
-            raise ControllerError(f'unknown mode {mode!r}; choose one of {MODES}')
+        if mode not in HEAO_MODES:
+            raise ControllerError(f'unknown mode {mode!r}; choose one of {HEAO_MODES}')
         c = self._config
         b_sensed = as_xyz(b_sensed_t, 'b_sensed_t')
         omega = as_xyz(omega_rad_s, 'omega_rad_s')

@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from acds_common.environment import Orbit, TiltedDipoleField, gravity_gradient_torque_nm
+from acds_common.modes import WORKSHOP_MODES
 from acds_common.units import deg, nms_to_ftlbs, tesla_to_gauss
 
 from acds_controller.cmg_dump import (
@@ -52,8 +53,6 @@ from acds_controller.cmg_hold import HoldGains, cmg_hold_rate
 from acds_controller.magnetic_laws import ControllerError, as_matrix3, as_vector3
 from acds_controller.wheel_laws import as_unit_quaternion, inertial_hold_error, rotate_to_body
 
-#: Modes of the Workshop computer, exactly as the mode manager (``modes.system: aap``) names them.
-WORKSHOP_MODES = ('standby', 'cmg_hold', 'cmg_dump')
 #: H_s initialisations (module docstring, step 1).
 H_S_INITS = ('measured', 'min_energy')
 

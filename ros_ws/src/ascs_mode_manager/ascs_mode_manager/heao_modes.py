@@ -38,15 +38,14 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
+from acds_common.modes import HEAO_CRUISE_MODES, HEAO_MODES
 from acds_common.units import deg, rad
 from acds_common.validation import finite_xyz
 
 from ascs_mode_manager.spin_mechanizations import AscsError  # the package's one exception type
 
 #: All HEAO ACDS modes.
-MODES = ('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point')
 #: Cruise (normal) modes.
-CRUISE_MODES = ('celestial_scan', 'celestial_point')
 #: Baseline Mode 1A → 1B rate thresholds |ω_x|, |ω_y|, |ω_z|, deg/s (seed 002 §4.3.1).
 BASELINE_RATE_THRESHOLDS_DEG_S = (0.573, 0.115, 0.115)
 #: Table 4-7 case 5 thresholds ("higher rates for wheel transition"), deg/s.
@@ -102,8 +101,8 @@ class HeaoModeConfig:
             raise AscsError(f'capture_rate_rad_s = {self.capture_rate_rad_s!r} must be > 0')
         if not 0.0 <= self.capture_dwell_s < math.inf:
             raise AscsError(f'capture_dwell_s = {self.capture_dwell_s!r} must be ≥ 0')
-        if self.cruise_target not in CRUISE_MODES:
-            raise AscsError(f'cruise_target {self.cruise_target!r} must be one of {CRUISE_MODES}')
+        if self.cruise_target not in HEAO_CRUISE_MODES:
+            raise AscsError(f'cruise_target {self.cruise_target!r} must be one of {HEAO_CRUISE_MODES}')
         if self.initial_mode not in ('mode_1a', 'standby'):
             raise AscsError(f"initial_mode {self.initial_mode!r} must be 'mode_1a' or 'standby'")
         if self.wheels_on_from_separation and self.initial_mode != 'mode_1a':
@@ -248,10 +247,10 @@ class HeaoModeManager:
 
     def _cmd_mode(self, args: list[str], t_s: float) -> CommandResult:
         if len(args) != 1:
-            return _refuse(f'usage: mode <{"|".join(MODES)}>')
+            return _refuse(f'usage: mode <{"|".join(HEAO_MODES)}>')
         target = args[0].lower()
-        if target not in MODES:
-            return _refuse(f"unknown mode '{args[0]}'; modes: {', '.join(MODES)}")
+        if target not in HEAO_MODES:
+            return _refuse(f"unknown mode '{args[0]}'; modes: {', '.join(HEAO_MODES)}")
         current = self._effective_mode()
         captured = self.captured and not self._pending
         if target == current:
@@ -259,7 +258,7 @@ class HeaoModeManager:
         if target == 'mode_1b' and current == 'mode_1a':
             return _refuse('wrong mode: mode_1a → mode_1b is the on-board transfer '
                            '(all rates below thresholds and sun present)')
-        if target in CRUISE_MODES and current not in CRUISE_MODES:
+        if target in HEAO_CRUISE_MODES and current not in HEAO_CRUISE_MODES:
             if current != 'mode_1b':
                 return _refuse(f'wrong mode: {current}; cruise is entered from mode_1b after acquisition capture')
             if not captured:

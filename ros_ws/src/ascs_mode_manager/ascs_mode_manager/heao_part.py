@@ -30,9 +30,10 @@ from typing import Any
 from acds_common.cdr import Status
 from acds_common.dpa_commands import GAIN_LIMITS, LAW_CHOICES
 from acds_common.messages import MODE_STATUS, OK, WARN, diagnostic, xyz
+from acds_common.modes import HEAO_CRUISE_MODES
 from acds_common.validation import all_finite, scenario_key
 
-from ascs_mode_manager.heao_modes import CRUISE_MODES, HeaoModeConfig, HeaoModeManager, Transition
+from ascs_mode_manager.heao_modes import HeaoModeConfig, HeaoModeManager, Transition
 from ascs_mode_manager.spin_mechanizations import AscsError
 
 
@@ -58,7 +59,7 @@ def build_core(m: dict[str, Any]) -> HeaoModeManager:
         wheels_on_from_separation=initial == 'mode_1b',
         initial_mode='standby' if initial == 'standby' else 'mode_1a',
         gain_limits=GAIN_LIMITS, law_choices=LAW_CHOICES))
-    if initial in CRUISE_MODES:
+    if initial in HEAO_CRUISE_MODES:
         core.mode = initial
         core.captured = True
     return core

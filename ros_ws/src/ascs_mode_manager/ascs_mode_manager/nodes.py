@@ -16,9 +16,8 @@ from acds_common import topics
 from acds_common import units as u
 from acds_common.frames import BODY
 from acds_common.graph import Input, Node, Output, Package, Ports, Stage, Topic
+from acds_common.modes import HEAO_CRUISE_MODES, INITIAL_MODES, WORKSHOP_INITIAL_MODES
 from acds_common.schema import ANGLE, DEG, FIELD, RATE, Field, quantity
-
-from ascs_mode_manager.workshop_modes import INITIAL_MODES
 
 #: The scenario sections this package defines.
 SECTIONS: dict[str, dict[str, Field]] = {
@@ -26,16 +25,14 @@ SECTIONS: dict[str, dict[str, Field]] = {
         'system': Field('str', 'which mode logic runs: heao, sss or aap (the AAP Workshop CMG hold and magnetic '
                         'dump, seed 000)', 'heao', choices=('heao', 'sss', 'aap')),
         'initial_mode': Field('str', 'mode at separation (aap: cmg_hold or cmg_dump)', 'mode_1a',
-                              choices=('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point',
-                                       'cmg_hold', 'cmg_dump')),
+                              choices=INITIAL_MODES),
         'rate_thresholds': quantity('Mode 1A→1B body-rate thresholds |ω_x|, |ω_y|, |ω_z|',
                               [0.573 * DEG, 0.115 * DEG, 0.115 * DEG], 'rad_s', RATE, length=3, lo=0.0, hi=1.0),
         'capture_cone': quantity('acquisition capture: z within this angle of the sun', 10 * DEG, 'rad', ANGLE,
                            lo=0.0, hi=math.pi),
         'capture_rate': quantity('acquisition capture: every rate below this ("nulled")', 0.01 * DEG, 'rad_s', RATE,
                            lo=0.0, hi=0.1),
-        'cruise_target': Field('str', 'cruise mode after capture', 'celestial_point',
-                               choices=('celestial_scan', 'celestial_point')),
+        'cruise_target': Field('str', 'cruise mode after capture', 'celestial_point', choices=HEAO_CRUISE_MODES),
         'auto_cruise': Field('bool', 'enter cruise automatically at capture (else by ground command)', False),
         'stop_at_capture': Field('bool', 'end the run at acquisition capture', False),
         'ground_commands': Field('strs', 'scheduled ground commands, "T_S: command"', []),
@@ -83,9 +80,9 @@ def check_workshop(sc: Any) -> str:
     if sc.formation:
         return ''
     system, initial, kind = sc.get('modes', 'system'), sc.get('modes', 'initial_mode'), sc.get('wheels', 'kind')
-    if (system == 'aap') != (initial in INITIAL_MODES):
-        return (f'modes.initial_mode: {initial!r} with modes.system {system!r} (the Workshop '
-                f'modes {", ".join(INITIAL_MODES)} belong to system aap, and only they)')
+    if (system == 'aap') != (initial in WORKSHOP_INITIAL_MODES):
+        return (f'modes.initial_mode: {initial!r} with modes.system {system!r} (a run of system aap starts in a '
+                f'Workshop mode, {" or ".join(WORKSHOP_INITIAL_MODES)}, and only it does)')
     if 'ascs_mode_manager' in sc.get('', 'nodes') and (system == 'aap') != (kind == 'cmg'):
         return (f'wheels.kind: {kind!r} with modes.system {system!r} (the aap mode logic holds '
                 'the attitude with CMGs, wheels.kind cmg; the heao and sss logic drive wheels)')

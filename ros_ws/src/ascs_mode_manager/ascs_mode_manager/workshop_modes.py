@@ -16,21 +16,19 @@ next step; anything else is refused with the reason.
 
 from __future__ import annotations
 
+from acds_common.modes import WORKSHOP_INITIAL_MODES, WORKSHOP_MODES
+
 from ascs_mode_manager.heao_modes import CommandResult, Transition
 from ascs_mode_manager.spin_mechanizations import AscsError
-
-#: Workshop modes (module docstring); the first two may start a run (``modes.initial_mode``).
-MODES = ('cmg_dump', 'cmg_hold', 'standby')
-INITIAL_MODES = ('cmg_dump', 'cmg_hold')
 
 
 class WorkshopModeManager:
     """The Workshop's mode and its ground commands."""
 
     def __init__(self, initial_mode: str) -> None:
-        if initial_mode not in INITIAL_MODES:
+        if initial_mode not in WORKSHOP_INITIAL_MODES:
             raise AscsError(f'initial_mode {initial_mode!r} is not a Workshop mode to start in; choose one of '
-                            f'{INITIAL_MODES}')
+                            f'{WORKSHOP_INITIAL_MODES}')
         self.mode = initial_mode
         self._pending: list[tuple[str, float]] = []
 
@@ -38,10 +36,10 @@ class WorkshopModeManager:
         """Validate a ground command received at sim time ``t_s`` (s); grammar in the module docstring."""
         words = str(text).split()
         if len(words) != 2 or words[0].lower() != 'mode':
-            return CommandResult(False, f'the Workshop mode logic takes only "mode <{"|".join(MODES)}>"')
+            return CommandResult(False, f'the Workshop mode logic takes only "mode <{"|".join(WORKSHOP_MODES)}>"')
         target = words[1].lower()
-        if target not in MODES:
-            return CommandResult(False, f"unknown mode '{words[1]}'; Workshop modes: {', '.join(MODES)}")
+        if target not in WORKSHOP_MODES:
+            return CommandResult(False, f"unknown mode '{words[1]}'; Workshop modes: {', '.join(WORKSHOP_MODES)}")
         current = self._pending[-1][0] if self._pending else self.mode
         if target == current:
             return CommandResult(False, f'wrong mode: already in {current}')

@@ -1,0 +1,20 @@
+"""The mode sets, one definition each: the mode manager commands them, the controller obeys them, the
+scenario starts in one of them (spec §8; seed 002 §4.3 for HEAO, seed 000 for the AAP Workshop).
+
+The mode names travel as text in the ``mode`` status (:mod:`acds_common.messages`); these tuples are the
+vocabulary both ends check against.
+"""
+
+from __future__ import annotations
+
+#: HEAO DPA modes (seed 002 §4.3): acquisition Mode 1A (magnetics only), Mode 1B (wheels + magnetics), cruise.
+HEAO_MODES = ('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point')
+#: The HEAO cruise modes (after acquisition capture).
+HEAO_CRUISE_MODES = ('celestial_scan', 'celestial_point')
+#: AAP Workshop computer modes (seed 000): CMG attitude hold, hold with the magnetic momentum dump, standby.
+WORKSHOP_MODES = ('standby', 'cmg_hold', 'cmg_dump')
+#: The Workshop modes a run may start in (``modes.initial_mode`` of ``modes.system: aap``): standby is a
+#: mode the ground commands, not one the Workshop is launched into (and the HEAO logic starts in it too).
+WORKSHOP_INITIAL_MODES = ('cmg_hold', 'cmg_dump')
+#: Every ``modes.initial_mode`` a scenario may give.
+INITIAL_MODES = (*HEAO_MODES, *WORKSHOP_INITIAL_MODES)
