@@ -61,10 +61,12 @@ def test_the_seed_k_prints_one_warning_and_the_json_says_the_loop_cannot_converg
     assert report['loop_converges'] is True and 0.0 < report['loop_gain_min'] < report['loop_gain_max'] < 2.0
 
 
+@pytest.mark.slow
 def test_k_sweep_and_mm_sweep_tables(tmp_path, capsys) -> None:
-    """The §5 k study and a §12 sweep on one orbit each: a row per value, the table, the plot and the JSON."""
+    """The §5 k study and a §12 sweep on one orbit each (6 short direct runs): a row per value, the table, the plot
+    and the JSON."""
     out = tmp_path / 'k.json'
-    assert main(['dump-report', 'aap_workshop_pop_test', '--steps', str(STEPS), '--out', str(tmp_path / 'k'),
+    assert main(['dump-report', 'aap_workshop_pop_test', '--steps', '290', '--out', str(tmp_path / 'k'),
                  '--k-sweep', '2e5:4e6:2', '--json', str(out)]) == 0
     rows = json.loads(out.read_text())['rows']
     assert [r['k_seed'] for r in rows] == [2e5, 4e6]
@@ -72,7 +74,7 @@ def test_k_sweep_and_mm_sweep_tables(tmp_path, capsys) -> None:
     assert rows[1]['orbits_to_converge_from_zero'] is None and rows[1]['loop_gain_min'] > 2.0
     assert (tmp_path / 'k' / 'k_sweep.png').is_file() and 'k study' in capsys.readouterr().out
     out = tmp_path / 'mm.json'
-    assert main(['dump-report', 'aap_workshop_pop_test', '--steps', str(STEPS), '--out', str(tmp_path / 'mm'),
+    assert main(['dump-report', 'aap_workshop_pop_test', '--steps', '290', '--out', str(tmp_path / 'mm'),
                  '--mm-sweep', 'hb:100:300:2', '--json', str(out)]) == 0
     result = json.loads(out.read_text())
     assert [r['H_b_ftlbs'] for r in result['rows']] == pytest.approx([100.0, 300.0])

@@ -174,8 +174,10 @@ def cmd_size_magnet(args: argparse.Namespace) -> int:
 DUMP_REPORT_DOC = """The dump report (seed 000 §5, Tables 1 and 2) of an AAP Workshop run: per orbit M_n, M_d, M_o (rms |M|
 over orbital night, day, the whole orbit), M_m (max |M|), H_s as sampled, |ΔH_s|, the bias the CMGs took,
 the sampled loop's gains (eigenvalues of k·W) and the minimum-energy M_o on the orbit's own field; then the
-largest of each over the orbits. From a bag it reads the bag (read-only); from a scenario it first runs it
-with the direct engine, recording a bag into --out. Plots: |M|(t) and H_s per orbit (PNG, in --out)."""
+largest of each over the orbits, and one warning line when some orbit's loop gain leaves (0, 2) (the loop
+cannot converge). From a bag it reads the bag (read-only); from a scenario it first runs it with the direct
+engine, recording a bag into --out. Plots: |M|(t) and H_s per orbit (PNG, in --out). --k-sweep (§5's k
+study) and --mm-sweep (§12's M_m estimation) run a scenario many times instead (no bag)."""
 
 
 def cmd_dump_report(args: argparse.Namespace) -> int:
@@ -250,7 +252,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description=DUMP_REPORT_DOC)
     p.add_argument('source', metavar='BAG|SCENARIO', help='a recorded bag (folder or .mcap/.db3) or a scenario')
     p.add_argument('--json', metavar='PATH', help='write the report (JSON keys M_n_am2, M_d_am2, M_o_am2, M_m_am2, '
-                   'delta_H_s_ftlbs, min_energy_M_o_am2: the largest over the orbits; per_orbit)')
+                   'delta_H_s_ftlbs, min_energy_M_o_am2: the largest over the orbits; loop_gain_min, loop_gain_max, '
+                   'loop_converges; per_orbit)')
     p.add_argument('--out', metavar='DIR', help='folder for the plots (and, from a scenario, the bag); default '
                    'runs/<scenario>_dump_<time> (a bag: plots/ beside it)')
     p.add_argument('--steps', type=step_count, help='scenario only: number of control steps (default: its duration)')

@@ -176,8 +176,9 @@ def bias_sweep_sets(scenario: Scenario, sweep: str, value: float) -> tuple[list[
     else:
         inertia[0] = inertia[2] - value
         h_b = disturbance + np.array([0.0, 0.0, gravity_gradient_bias_ftlbs(scenario, inertia[1] - inertia[0])])
-    if np.any(np.sign(inertia[:3]) <= 0):
-        raise ScenarioError(f'sweep {sweep} = {value:g}: a principal moment of inertia is not positive')
+    if np.any(inertia[:3] <= 0.0):
+        raise ScenarioError(f'sweep {sweep} = {value:g}: a principal moment of inertia would not be positive '
+                            f'(I_x, I_y, I_z = {", ".join(f"{x:,.0f}" for x in inertia[:3])} slug-ft²)')
     size = float(np.linalg.norm(h_b))
     s = coil_scale(scenario, size)
     sets += [f'disturbance.bias_momentum_per_orbit_ft_lb_s={_fmt_list(disturbance)}',
@@ -194,9 +195,9 @@ def bias_sweep(name: str, sweep: str, values: np.ndarray, steps: int | None = No
     """One row per swept value: |H_b|, the largest M_n, M_d, M_o, M_m over the orbits, the loop gains, and the
     memo's estimate 12.5·|H_b| beside it."""
     base = scenario_with_sets(name, sets or [])
+    points = [bias_sweep_sets(base, sweep, float(v)) for v in values]  # every point checked before the first run
     rows = []
-    for v in values:
-        point, h_b = bias_sweep_sets(base, sweep, float(v))
+    for v, (point, h_b) in zip(values, points, strict=True):
         if progress:
             progress(f'{sweep} = {v:.6g} (|H_b| = {h_b:.1f} ft-lb-sec)')
         r = run_report(scenario_with_sets(name, [*(sets or []), *point]), steps)
