@@ -91,8 +91,8 @@ def print_mm_table(name: str, sweep: str, rows: list[dict[str, Any]], slopes: di
     print(f'  fitted M_m = {slopes["hb_through_origin"]:.2f}·|H_b| (through the origin; least squares '
           f'{slopes["hb_ols"]:.2f}); the memo: {SEED_MM_PER_HB}·H_b')
     if sweep != 'hb':
-        print(f'  against {_SWEEP_LABEL[sweep]}: slope {slopes["value_ols"]:.4g} A·m² per slug-ft² (least squares); '
-              f'the memo (45° OP): 0.0665')
+        print(f'  against |{_SWEEP_LABEL[sweep]}|: slope {slopes["abs_value_ols"]:.4g} A·m² per slug-ft² (least squares); '
+              f'the memo (45° OP, M_m = 12.5·(3π/2)·n·(I_z − I_x)): 0.0665')
 
 
 def plot_mm(name: str, sweep: str, rows: list[dict[str, Any]], out: Path) -> Path:
@@ -173,7 +173,7 @@ def cmd_study(args: argparse.Namespace) -> int:
         values = np.array([r['value'] for r in rows])
         origin, ols = dump_study.fitted_slope(hb, mm)
         slopes = {'hb_through_origin': origin, 'hb_ols': ols,
-                  'value_ols': float(np.polyfit(values, mm, 1)[0]) if values.size > 1 else float('nan')}
+                  'abs_value_ols': float(np.polyfit(np.abs(values), mm, 1)[0]) if values.size > 1 else float('nan')}
         result['slopes'] = slopes
         print_mm_table(base.name, sweep, rows, slopes)
         plot = plot_mm(base.name, sweep, rows, out)
