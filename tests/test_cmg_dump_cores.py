@@ -196,3 +196,33 @@ def test_hold_law_through_the_rigid_body_stores_the_gravity_gradient_bias_and_th
     gg = gravity_gradient_inertial_hold(INERTIA, geometry, N)
     assert np.allclose(gg_sum, np.array(gg.constant_nm) * T, rtol=0.0, atol=0.005 * np.linalg.norm(gg_sum))
     assert float(mag_sum @ h0) < -0.1 * float(h0 @ h0)  # the dump acted against the held H_s
+
+
+def test_k_from_the_loop_gain_converges_from_zero_and_the_seed_k_is_predicted_to_diverge() -> None:
+    """Issue 21: the Workshop computer's design on its own orbit and field prediction over one day of orbits. The
+    seed's k = 4e6 is predicted at loop gains ≈ 4 to 16 (the hand calculation from Appendix A); the loop-gain
+    rule (largest gain 1) flies k ≈ 2.5e5, and from H_s = 0 the samples settle: every orbit's gains lie in (0, 2),
+    |ΔH_s| falls to a small part of |H_b| and H_s stays in a bounded region over the 16 orbits."""
+    from acds_controller.workshop import FieldPrediction, design_dump
+
+    q = dcm_to_quat(MODE_GEOMETRY['pop'].body_to_eci_dcm(INCLINATION, 0.0))
+    prediction = FieldPrediction(ORBIT, FIELD, q)
+    clock = OrbitClock(T)
+    seed_cfg, seed_design = design_dump(DumpLawConfig('khb', k_seed=4e6), prediction, clock, gain_rule='stated')
+    assert seed_cfg.k_seed == 4e6 and seed_design.orbits == 16
+    # the hand calculation's 4.0…16.1 is for B_0 = 0.26e-4 T; this FIELD's default dipole (7.94e22 A·m²) has
+    # B_0 = 0.254e-4 T, 0.955 of the gains: 3.8…15.4, and the orbits of the day sample η_E in 23° steps
+    low, high = seed_design.predicted_gains
+    assert 3.5 < low < 4.5 and 15.0 < high < 16.2
+    cfg, design = design_dump(DumpLawConfig('khb', k_seed=4e6), prediction, clock, gain_rule='loop_gain')
+    assert design.predicted_gains[1] == pytest.approx(1.0, rel=1e-12)
+    assert cfg.k_seed == pytest.approx(4e6 / seed_design.predicted_gains[1], rel=1e-12)
+    law = CmgDumpLaw(cfg, clock)
+    t, m, b, h_s, samples = ideal_hold(pop_field_body, law, 16)
+    stats = orbit_stats(t, m, b, np.ones(t.size, dtype=bool), h_s, clock, H_B_POP, k_seed=cfg.k_seed)
+    assert all(0.0 < min(s.loop_gains) and max(s.loop_gains) < 2.0 for s in stats)
+    delta = np.array([np.linalg.norm(s.delta_h_s_nms) for s in stats]) / np.linalg.norm(H_B_POP)
+    assert delta[0] == pytest.approx(1.0, rel=1e-6) and max(delta[4:]) < 0.1  # seen: ≤ 0.06 from orbit 3 on
+    settled = samples[4:]
+    assert max(np.linalg.norm(a - c) for a in settled for c in settled) < 0.5 * np.linalg.norm(H_B_POP)
+    assert max(np.linalg.norm(samples, axis=1)) < 5 * np.linalg.norm(H_B_POP)

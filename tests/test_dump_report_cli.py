@@ -44,10 +44,50 @@ def test_a_scenario_runs_with_the_direct_engine_and_takes_overrides(tmp_path, ca
     assert (tmp_path / 'run' / 'bag').is_dir() and (tmp_path / 'run' / 'dump_moment.png').is_file()
 
 
+def test_the_seed_k_prints_one_warning_and_the_json_says_the_loop_cannot_converge(tmp_path, capsys) -> None:
+    """Issue 21: with the memo's literal k (dump_gain_rule stated, 4e6) the loop gains leave (0, 2): one warning
+    line, ``loop_converges: false``; the shipped rule (loop gain) converges and warns nothing."""
+    literal, shipped = tmp_path / 'literal.json', tmp_path / 'shipped.json'
+    assert main(['dump-report', 'aap_workshop_pop_test', '--steps', str(STEPS), '--out', str(tmp_path / 'a'),
+                 '--set', 'controller.dump_gain_rule=stated', '--json', str(literal)]) == 0
+    text = capsys.readouterr().out
+    assert sum('WARNING' in line and 'cannot converge' in line for line in text.splitlines()) == 1, text
+    report = json.loads(literal.read_text())
+    assert report['loop_converges'] is False and report['loop_gain_max'] > 2.0 and report['k_seed'] == 4e6
+    assert main(['dump-report', 'aap_workshop_pop_test', '--steps', str(STEPS), '--out', str(tmp_path / 'b'),
+                 '--json', str(shipped)]) == 0
+    assert 'WARNING' not in capsys.readouterr().out
+    report = json.loads(shipped.read_text())
+    assert report['loop_converges'] is True and 0.0 < report['loop_gain_min'] < report['loop_gain_max'] < 2.0
+
+
+@pytest.mark.slow
+def test_k_sweep_and_mm_sweep_tables(tmp_path, capsys) -> None:
+    """The §5 k study and a §12 sweep on one orbit each (6 short direct runs): a row per value, the table, the plot
+    and the JSON."""
+    out = tmp_path / 'k.json'
+    assert main(['dump-report', 'aap_workshop_pop_test', '--steps', '290', '--out', str(tmp_path / 'k'),
+                 '--k-sweep', '2e5:4e6:2', '--json', str(out)]) == 0
+    rows = json.loads(out.read_text())['rows']
+    assert [r['k_seed'] for r in rows] == [2e5, 4e6]
+    assert rows[0]['loop_converges'] is True and rows[1]['loop_converges'] is False
+    assert rows[1]['orbits_to_converge_from_zero'] is None and rows[1]['loop_gain_min'] > 2.0
+    assert (tmp_path / 'k' / 'k_sweep.png').is_file() and 'k study' in capsys.readouterr().out
+    out = tmp_path / 'mm.json'
+    assert main(['dump-report', 'aap_workshop_pop_test', '--steps', '290', '--out', str(tmp_path / 'mm'),
+                 '--mm-sweep', 'hb:100:300:2', '--json', str(out)]) == 0
+    result = json.loads(out.read_text())
+    assert [r['H_b_ftlbs'] for r in result['rows']] == pytest.approx([100.0, 300.0])
+    assert result['rows'][1]['M_m_am2'] > 2.0 * result['rows'][0]['M_m_am2'] and result['slopes']['hb_ols'] > 0
+    assert (tmp_path / 'mm' / 'mm_sweep_hb.png').is_file()
+
+
 @pytest.mark.parametrize(('args', 'fragment'), [
     (['no_such_scenario'], 'no_such_scenario'),
-    (['aap_workshop_pop_test', '--set', 'dump_law=none'], 'expected SECTION.KEY=VALUE'),
+    (['aap_workshop_pop_test', '--set', 'dump_law'], 'expected SECTION.KEY=VALUE'),
     (['heao_b_acquisition', '--steps', '2'], 'not an AAP Workshop run'),
+    (['aap_workshop_pop_test', '--k-sweep', '1e5:2e5'], 'expected A:B:N'),
+    (['aap_workshop_pop_test', '--mm-sweep', 'mass:1:2:2'], 'KIND one of'),
 ])
 def test_bad_inputs_are_one_line(tmp_path, capsys, args, fragment) -> None:
     assert main(['dump-report', *args, '--out', str(tmp_path / 'out')]) == 2

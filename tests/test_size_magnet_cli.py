@@ -45,6 +45,25 @@ def test_from_report_and_day_constant(tmp_path, capsys) -> None:
     assert 'Iron core weight' in capsys.readouterr().out
 
 
+def test_a_flown_day_constant_profile_is_sized_as_it_flew(tmp_path, capsys) -> None:
+    """Issue 21 (§10 flown): a dump report of day-only dumping at constant |M| is sized at that |M| (factor 1, not
+    1.3 × its M_m again), and only as day-constant."""
+    report = tmp_path / 'day.json'
+    report.write_text(json.dumps({'M_n_am2': 0.0, 'M_d_am2': 4000.0, 'M_o_am2': 3130.0, 'M_m_am2': 4000.0,
+                                  'profile': 'day_constant', 'day_moment_am2': 4000.0, 'per_orbit': []}))
+    flown, typed = tmp_path / 'flown.json', tmp_path / 'typed.json'
+    assert main(['size-magnet', '--mode', 'day-constant', '--core', 'air', '--from-report', str(report),
+                 '--json', str(flown)]) == 0
+    assert main(['size-magnet', '--mode', 'day-constant', '--core', 'air', '--m-n-am2', '0', '--m-d-am2', '0',
+                 '--m-m-am2', str(4000 / 1.3), '--json', str(typed)]) == 0
+    a, b = (json.loads(p.read_text())['designs']['three_orthogonal'] for p in (flown, typed))
+    assert a['Total weight, lbs'] == pytest.approx(b['Total weight, lbs'], rel=1e-9)
+    assert 'day-only dumping flown' in json.loads(flown.read_text())['moments_source']
+    capsys.readouterr()
+    assert main(['size-magnet', '--mode', 'day-night', '--core', 'air', '--from-report', str(report)]) == 2
+    assert 'size it with --mode day-constant' in capsys.readouterr().err
+
+
 def test_section_12_estimate_and_errors(tmp_path, capsys) -> None:
     assert main(['size-magnet', '--mode', 'day-night', '--core', 'air', '--h-b-ftlbs', '255',
                  '--wire-area-in2', '0.008155']) == 0

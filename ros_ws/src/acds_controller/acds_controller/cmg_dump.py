@@ -22,6 +22,19 @@ The sampled loop: with the unsaturated k·H_s × B law the orbit's magnetic mome
 −k W (H_s − H_0), so the once-per-orbit samples obey H_{n+1} − H_0 = (I − k W_n)(H_n − H_0) + H_b. Its fixed
 point k (H_s − H_0) = W⁻¹ H_b is eq. (3)'s bracket (§3: "the two solutions are identical"), and it is reached
 only if every eigenvalue of k W lies in (0, 2) (:func:`loop_gains`); the report carries those gains per orbit.
+
+The seed's k in its own units does not converge (issue 21, worked by hand from Appendix A): on the 220 nmi
+orbit (T = 5,562.8 s) with B_0 = 0.26e-4 Wb/m², T·B_0² = 3.761e-6 T²·s, and W/(T·B_0²) has eigenvalues
+0.36–1.45 as the dipole turns with the Earth (η_E), so with k_SI = 2.950e6 the gains k·W are 4.0–16.1: the
+loop diverges for the whole of the seed's range 3e6–5e6. The field magnitude is the seed's (its own M_m =
+12.5 H_b, which depends on W but not on k, is reproduced), and the sampling is its once per orbit; what
+does not fit is k by a factor ≈ 10: the largest gain reaches 2 at k = 4.97e5 in the seed's units. The seed's
+range 3–5 × 10⁶ is the converging range 3–5 × 10⁵ (or the seed's M was in amp-turn-ft², ×10.76). The
+Workshop computer therefore may derive k from the loop-gain condition (:func:`loop_gain_k_seed`).
+
+Variants of the k law flown in the seed: |M| limited to a fraction of the unconstrained maximum, direction
+kept (§9, :func:`limit_magnitude`), and day-only dumping at a constant |M| in the direction of k H_s × B (§10,
+:func:`constant_magnitude`).
 """
 
 from __future__ import annotations
@@ -119,6 +132,38 @@ def loop_gains(w: np.ndarray, k_seed: float = K_SEED) -> np.ndarray:
     return np.linalg.eigvalsh(k_to_si(k_seed) * np.asarray(w, dtype=float))
 
 
+def loop_gain_k_seed(gramians: list[np.ndarray], largest_gain: float = 1.0) -> float:
+    """k (seed units) whose largest loop gain over the given orbits' gramians is ``largest_gain``: the loop-gain
+    condition of the sampled law, k = g / max_n λ_max(W_n) (g = 1: dead-beat on the fastest mode; any g in
+    (0, 2) keeps that orbit's loop convergent, the slowest mode then has k λ_min(W_n))."""
+    g = check_gain(largest_gain, 'largest loop gain', 1e-6, 2.0)
+    peak = max(float(np.linalg.eigvalsh(np.asarray(w, dtype=float))[-1]) for w in gramians)
+    if peak <= 0.0:
+        raise ControllerError('the field gramian is zero: no loop gain can be set')
+    return g / (k_to_si(1.0) * peak)
+
+
+def limit_magnitude(m_am2: np.ndarray, limit_am2: float) -> np.ndarray:
+    """M scaled down to |M| ≤ ``limit_am2``, its direction kept (§9: the limit is on M_m, the magnitude)."""
+    m = as_vector3(m_am2, 'm_am2')
+    size = float(np.linalg.norm(m))
+    return m if size <= limit_am2 else m * (limit_am2 / size)
+
+
+def constant_magnitude(m_am2: np.ndarray, size_am2: float) -> np.ndarray:
+    """M of magnitude ``size_am2`` along ``m_am2`` (§10: constant |M|, direction from k H_s × B); zero when m is."""
+    m = as_vector3(m_am2, 'm_am2')
+    norm = float(np.linalg.norm(m))
+    return np.zeros(3) if norm == 0.0 else m * (size_am2 / norm)
+
+
+def min_energy_peak_am2(b_body_t: np.ndarray, weights_s: np.ndarray, h_b_nms: np.ndarray) -> float:
+    """max_t |c × B(t)| with c = W⁻¹ H_b over the samples: M_m of eq. (3) on that orbit, A·m²."""
+    b, w = _samples(b_body_t, weights_s)
+    c, _ = min_energy_vector(field_gramian(b, w), h_b_nms)
+    return float(np.max(np.linalg.norm(np.cross(c, b), axis=1)))
+
+
 def proper_initial_h_s_nms(c: np.ndarray, k_seed: float = K_SEED, h_0_nms: np.ndarray | None = None) -> np.ndarray:
     """The §5 initialisation, k (H_s − H_0) = eq. (3)'s bracket c: then exactly H_b is dumped on the first orbit."""
     h = as_vector3(c, 'c') / k_to_si(k_seed)
@@ -164,6 +209,14 @@ class SampledMomentum:
         return self._h_s.copy()
 
 
+def predicted_orbit(predict_b_body_t: Callable[[float], np.ndarray], clock: OrbitClock, n: int,
+                    samples: int = PREDICTION_SAMPLES) -> tuple[np.ndarray, np.ndarray]:
+    """(B (samples + 1, 3) in T, trapezoid weights in s) of orbit ``n`` from a field prediction."""
+    t = np.linspace(clock.start_s(n), clock.start_s(n + 1), samples + 1)
+    b = np.array([as_vector3(predict_b_body_t(float(x)), 'predicted field') for x in t])
+    return b, trapezoid_weights(t)
+
+
 @dataclass(frozen=True)
 class DumpLawConfig:
     """Choice and parameters of the dump law (§3, §5).
@@ -171,7 +224,9 @@ class DumpLawConfig:
     ``law``: 'khb' | 'khb_shifted' | 'min_energy'; ``k_seed``: k in the seed's units (4e6);
     ``h_0_nms``: H_0 of the shifted law, N·m·s; ``max_moment_am2``: per-axis magnet limit, A·m² (None: no
     limit; the seed's §5 runs are unconstrained); ``h_b_nms``: bias momentum per orbit that the minimum-energy
-    law dumps (known in advance, §3), N·m·s; ``prediction_samples``: field samples per predicted orbit.
+    law dumps (known in advance, §3), N·m·s; ``prediction_samples``: field samples per predicted orbit;
+    ``moment_limit_am2``: limit on |M|, direction kept (§9; None: none); ``day_moment_am2``: day-only dumping
+    at this constant |M| (§10; None: day and night dumping).
     """
 
     law: str = 'khb'
@@ -180,6 +235,8 @@ class DumpLawConfig:
     max_moment_am2: float | None = None
     h_b_nms: tuple[float, float, float] | None = None
     prediction_samples: int = PREDICTION_SAMPLES
+    moment_limit_am2: float | None = None
+    day_moment_am2: float | None = None
 
     def __post_init__(self) -> None:
         if self.law not in LAWS:
@@ -188,6 +245,9 @@ class DumpLawConfig:
         as_vector3(self.h_0_nms, 'DumpLawConfig.h_0_nms')
         if self.max_moment_am2 is not None:
             check_gain(self.max_moment_am2, 'DumpLawConfig.max_moment_am2', 1e-9, 1e12)
+        for name in ('moment_limit_am2', 'day_moment_am2'):
+            if getattr(self, name) is not None:
+                check_gain(getattr(self, name), f'DumpLawConfig.{name}', 1e-9, 1e12)
         if self.law == 'min_energy' and self.h_b_nms is None:
             raise ControllerError("DumpLawConfig.law 'min_energy' needs h_b_nms, the bias momentum to dump per orbit")
         if self.h_b_nms is not None:
@@ -235,12 +295,11 @@ class CmgDumpLaw:
         """W of orbit ``n`` from the prediction (trapezoid rule over ``prediction_samples`` intervals), T²·s."""
         if self._predict is None:
             raise ControllerError('no field prediction was given to this law')
-        t = np.linspace(self.clock.start_s(n), self.clock.start_s(n + 1), self.cfg.prediction_samples + 1)
-        b = np.array([as_vector3(self._predict(float(x)), 'predicted field') for x in t])
-        return field_gramian(b, trapezoid_weights(t))
+        return field_gramian(*predicted_orbit(self._predict, self.clock, n, self.cfg.prediction_samples))
 
-    def step(self, t_s: float, h_s_nms: np.ndarray, b_body_t: np.ndarray) -> np.ndarray:
-        """Moment command M (A·m², body, per-axis limited) for the step at ``t_s`` with sampled H_s and measured B."""
+    def step(self, t_s: float, h_s_nms: np.ndarray, b_body_t: np.ndarray, day: bool = True) -> np.ndarray:
+        """Moment command M (A·m², body, per-axis limited) for the step at ``t_s`` with sampled H_s and measured B;
+        ``day``: the vehicle is in orbital daylight (only day-only dumping, §10, looks at it: zero at night)."""
         b = as_vector3(b_body_t, 'b_body_t')
         cfg = self.cfg
         if cfg.law == 'min_energy':
@@ -251,6 +310,10 @@ class CmgDumpLaw:
             m = np.cross(self._c, b)
         else:
             m = khb_moment(h_s_nms, b, cfg.k_seed, cfg.h_0_nms if cfg.law == 'khb_shifted' else None)
+        if cfg.day_moment_am2 is not None:
+            m = constant_magnitude(m, cfg.day_moment_am2) if day else np.zeros(3)
+        if cfg.moment_limit_am2 is not None:
+            m = limit_magnitude(m, cfg.moment_limit_am2)
         self._unsaturated = m
         return m if cfg.max_moment_am2 is None else saturate(m, cfg.max_moment_am2)
 
@@ -424,8 +487,12 @@ def dump_report(stats: list[OrbitStats]) -> dict[str, Any]:
         if s.loop_gains is not None:
             row['loop_gains'] = [float(x) for x in s.loop_gains]
         per_orbit.append(row)
+    gains = [g for s in stats if s.loop_gains is not None for g in (float(s.loop_gains[0]), float(s.loop_gains[-1]))]
     return {
         'orbits': len(stats),
+        'loop_gain_min': min(gains) if gains else None,
+        'loop_gain_max': max(gains) if gains else None,
+        'loop_converges': None if not gains else bool(0.0 < min(gains) and max(gains) < 2.0),
         'M_n_am2': _largest([s.m_n_am2 for s in stats]),
         'M_d_am2': _largest([s.m_d_am2 for s in stats]),
         'M_o_am2': _largest([s.m_o_am2 for s in stats]),
@@ -434,3 +501,13 @@ def dump_report(stats: list[OrbitStats]) -> dict[str, Any]:
         'min_energy_M_o_am2': _largest([s.min_energy_m_o_am2 for s in stats]),
         'per_orbit': per_orbit,
     }
+
+
+def loop_gain_warning(report: dict[str, Any]) -> str | None:
+    """One line when some orbit's loop gain (eigenvalue of k W) leaves (0, 2), so that H_s cannot converge
+    (module docstring); None when every gain is inside or the law has no loop gain."""
+    if report.get('loop_converges') is not False:
+        return None
+    return (f'WARNING: the sampled k·H_s × B loop cannot converge: loop gains (eigenvalues of k·W) '
+            f'{report["loop_gain_min"]:.3g}…{report["loop_gain_max"]:.3g} leave (0, 2) with k = '
+            f'{report.get("k_seed", float("nan")):.4g} (seed units); H_s grows until the coils or the CMGs saturate')

@@ -33,7 +33,7 @@ from acds_controller.dpa import Dpa, DpaConfig
 from acds_controller.magnetic_laws import ControllerError
 from acds_controller.transfer_assembly import TransferAssembly
 from acds_controller.wheel_laws import HEAO_A_ACQUISITION, HEAO_B_ACQUISITION, HEAO_B_ACQUISITION_PRELIMINARY
-from acds_controller.workshop import FieldPrediction, WorkshopComputer, WorkshopConfig
+from acds_controller.workshop import FieldPrediction, WorkshopComputer, WorkshopConfig, design_dump
 
 __all__ = ['WHEEL_GAIN_SETS', 'build_dpa', 'build_workshop', 'dump_law_config']
 
@@ -88,16 +88,25 @@ def build_workshop(sc: dict[str, Any], c: dict[str, Any], orbit: dict[str, Any],
                    earth: dict[str, Any]) -> tuple[TransferAssembly, WorkshopComputer]:
     """Transfer assembly and the AAP Workshop computer (seed 000) from the spacecraft, controller, orbit and earth
     sections (SI). The on-board field prediction flies the controller's own copy of the orbit and field models;
-    orbits are counted from the ascending node (:meth:`acds_common.environment.Orbit.node_time_s`)."""
+    orbits are counted from the ascending node (:meth:`acds_common.environment.Orbit.node_time_s`). The flown
+    dump law (k from the loop-gain condition, the §9 |M| limit, §10 day-only dumping) is designed on that
+    prediction (:func:`~acds_controller.workshop.design_dump`)."""
     with scenario_key('orbit', EnvironmentModelError):
         orbit_model = orbit_from_section(orbit)
     with scenario_key('earth', EnvironmentModelError):
         field = field_from_section(earth)
     with scenario_key('controller', ControllerError):
+        clock = OrbitClock(orbit_model.period_s, orbit_model.node_time_s())
+        prediction = FieldPrediction(orbit_model, field, np.array(c['target_quaternion_xyzw']))
+        dump, design = dump_law_config(c), None
+        if dump is not None:
+            dump, design = design_dump(
+                dump, prediction, clock, gain_rule=c['dump_gain_rule'], largest_gain=c['dump_loop_gain'],
+                moment_limit_fraction=c['dump_moment_limit_fraction'] or None,
+                day_moment_factor=c['dump_day_moment_factor'] if c['dump_day_only'] else None)
         cfg = WorkshopConfig(
             inertia_kg_m2=inertia_tensor(*sc['inertia']) * sc['inertia_scale'],
-            target_q_body_to_eci=np.array(c['target_quaternion_xyzw']), dump=dump_law_config(c),
+            target_q_body_to_eci=np.array(c['target_quaternion_xyzw']), dump=dump,
             hold=HoldGains(c['cmg_hold_bandwidth'], c['cmg_hold_damping']), h_s_init=c['dump_h_s_init'])
-        clock = OrbitClock(orbit_model.period_s, orbit_model.node_time_s())
-        computer = WorkshopComputer(cfg, clock, FieldPrediction(orbit_model, field, cfg.target_q_body_to_eci))
+        computer = WorkshopComputer(cfg, clock, prediction, design)
         return TransferAssembly(adc_bits=c['adc_bits']), computer

@@ -21,7 +21,8 @@ With ``wheels.kind`` cmg the node is the AAP Workshop's computer
 momentum and rate), modes ``cmg_dump`` / ``cmg_hold`` / ``standby`` (``cmg_dump`` when no mode
 manager is in the graph), and every step ``moment`` (A·m², the dump law's command to the coils),
 ``cmg_torque`` (N·m, the momentum rate the attitude hold asks of the CMGs) and
-``sampled_momentum`` (N·m·s, the H_s the dump law used); no wheel volts. Workshop telemetry
+``sampled_momentum`` (N·m·s, the H_s the dump law used); no wheel volts. The sun sensor tells it
+orbital day (a zero vector in the Earth's shadow) for day-only dumping (seed 000 §10). Workshop telemetry
 (H_s, its initialisation offset, attitude error, the predicted per-orbit loop gains) on
 ``diagnostics`` every ``controller.telemetry_every`` steps. A non-finite input commands zero
 moment and zero CMG torque for the step (H_s held), with a diagnostic.
@@ -139,7 +140,7 @@ class ControllerStep(Stepper):
             if inp['odometry'] is None:
                 raise ControllerError('the CMG attitude hold needs the attitude reference truth/odometry')
             out = self.workshop.step(t_s, mode, self.ta.sense(volts, bias), omega, np.array(inp['odometry'].orientation),
-                                     h)
+                                     h, day=any(x != 0.0 for x in xyz(inp['sun'])))
             self._h_s = vector3(out.h_s_nms)
             result: dict[str, Any] = {'moment': vector3(out.moment_am2), 'cmg_torque': vector3(out.cmg_rate_nm),
                                       'sampled_momentum': self._h_s}

@@ -58,6 +58,17 @@ SECTIONS: dict[str, dict[str, Field]] = {
                           choices=('khb', 'khb_shifted', 'min_energy', 'none')),
         'dump_gain': quantity('dump gain k (seed 000 §5: 4e6 amp-turn-m² per ft-lb-sec per Wb/m²)',
                         u.dump_gain_seed_to_si(4e6), 'per_s_t2', DUMP_GAIN, lo=0.0, hi=1e12),
+        'dump_gain_rule': Field('str', 'k of the khb laws: stated (dump_gain_* as given; the seed\'s 4e6 gives loop gains '
+                                '4–16, which diverge) or loop_gain (k such that the largest eigenvalue of k·W over '
+                                'one day of predicted orbits is dump_loop_gain)', 'stated', choices=('stated', 'loop_gain')),
+        'dump_loop_gain': Field('float', 'dump_gain_rule loop_gain: the largest loop gain (eigenvalue of k·W) over the '
+                                'predicted orbits; the loop converges for gains in (0, 2)', 1.0, lo=1e-6, hi=2.0),
+        'dump_moment_limit_fraction': Field('float', 'seed 000 §9: |M| limited (direction kept) to this fraction of the '
+                                            'predicted unconstrained M_m (seed: 0.85); 0: no limit', 0.0, lo=0.0, hi=10.0),
+        'dump_day_only': Field('bool', 'seed 000 §10: dump only in orbital daylight (sun sensor), at the constant '
+                               '|M| = dump_day_moment_factor × the predicted unconstrained M_m', False),
+        'dump_day_moment_factor': Field('float', 'seed 000 §10: day-only constant |M| over the day-and-night M_m (seed: '
+                                        '1.3)', 1.3, lo=1e-3, hi=100.0),
         'dump_h_0': quantity('khb_shifted: the shift H_0 of the region H_s settles in (§3)', [0.0, 0.0, 0.0], 'nms',
                        MOMENTUM, length=3, lo=-1e5, hi=1e5),
         'dump_bias_momentum': quantity('bias momentum H_b per orbit known on board (§3): what min_energy dumps and the '

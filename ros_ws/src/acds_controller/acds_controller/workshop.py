@@ -33,7 +33,8 @@ Modes: ``'cmg_dump'`` (hold + dump), ``'cmg_hold'`` (hold, magnets off), ``'stan
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from acds_common.environment import Orbit, TiltedDipoleField, gravity_gradient_torque_nm
@@ -45,8 +46,12 @@ from acds_controller.cmg_dump import (
     DumpLawConfig,
     OrbitClock,
     SampledMomentum,
+    field_gramian,
+    loop_gain_k_seed,
     loop_gains,
+    min_energy_peak_am2,
     min_energy_vector,
+    predicted_orbit,
     proper_initial_h_s_nms,
 )
 from acds_controller.cmg_hold import HoldGains, cmg_hold_rate
@@ -72,6 +77,62 @@ class FieldPrediction:
         """The gravity-gradient torque (N·m, body) of the on-board orbit at the attitude ``q_body_to_eci``."""
         return gravity_gradient_torque_nm(inertia_kg_m2,
                                           rotate_to_body(q_body_to_eci, self.orbit.position_velocity_eci(t_s)[0]))
+
+
+#: One sidereal day, s: the design looks ahead over the orbits in which the dipole turns once with the Earth
+#: (§5: "16 orbits during which time the earth makes approximately a full rotation").
+SIDEREAL_DAY_S = 86164.0905
+#: Gain rules of the k law: the scenario's k as stated, or k from the loop-gain condition (:func:`design_dump`).
+GAIN_RULES = ('stated', 'loop_gain')
+
+
+@dataclass(frozen=True)
+class DumpDesign:
+    """What the Workshop computer derives from its field prediction before it flies (issue 21; seed 000 §3, §9, §10).
+
+    ``k_seed``: the k it flies (seed units); ``gain_rule``: how it came; ``predicted_gains``: the smallest and
+    largest eigenvalue of k·W_n over the predicted orbits; ``predicted_peak_am2``: the largest |M| of eq. (3)
+    (the unconstrained minimum-energy profile, which the converged k law reproduces) over those orbits, the
+    reference of the §9 limit and the §10 constant |M|; ``orbits``: how many orbits were predicted.
+    """
+
+    k_seed: float
+    gain_rule: str
+    predicted_gains: tuple[float, float]
+    predicted_peak_am2: float | None
+    orbits: int
+
+
+def design_dump(dump: DumpLawConfig, prediction: FieldPrediction, clock: OrbitClock, *, gain_rule: str = 'stated',
+                largest_gain: float = 1.0, moment_limit_fraction: float | None = None,
+                day_moment_factor: float | None = None) -> tuple[DumpLawConfig, DumpDesign]:
+    """The flown dump law and its design, from the on-board prediction over the orbits of one sidereal day.
+
+    ``gain_rule`` 'loop_gain': k = ``largest_gain`` / max_n λ_max(W_n) (:func:`loop_gain_k_seed`), so that every
+    predicted orbit's loop converges; 'stated': ``dump.k_seed`` as given (the seed's 4e6 diverges, see
+    :mod:`acds_controller.cmg_dump`). ``moment_limit_fraction``: §9, |M| ≤ fraction × the predicted unconstrained
+    M_m (the seed's 0.85); ``day_moment_factor``: §10, dump in daylight only at |M| = factor × that M_m (1.3).
+    """
+    if gain_rule not in GAIN_RULES:
+        raise ControllerError(f'dump gain rule must be one of {GAIN_RULES}, got {gain_rule!r}')
+    first = clock.index(0.0)
+    count = math.ceil(SIDEREAL_DAY_S / clock.period_s)
+    orbits = [predicted_orbit(prediction, clock, n, dump.prediction_samples) for n in range(first, first + count)]
+    grams = [field_gramian(b, w) for b, w in orbits]
+    k_seed = loop_gain_k_seed(grams, largest_gain) if gain_rule == 'loop_gain' else dump.k_seed
+    gains = [loop_gains(w, k_seed) for w in grams]
+    peak = None
+    if dump.h_b_nms is not None and (moment_limit_fraction is not None or day_moment_factor is not None):
+        peak = max(min_energy_peak_am2(b, w, dump.h_b_nms) for b, w in orbits)
+    elif moment_limit_fraction is not None or day_moment_factor is not None:
+        raise ControllerError('the moment limit (§9) and day-only dumping (§10) are set from the predicted '
+                              'unconstrained M_m, which needs the bias momentum h_b_nms')
+    flown = replace(dump, k_seed=k_seed,
+                    moment_limit_am2=None if moment_limit_fraction is None else moment_limit_fraction * peak,
+                    day_moment_am2=None if day_moment_factor is None else day_moment_factor * peak)
+    design = DumpDesign(k_seed, gain_rule, (min(float(g[0]) for g in gains), max(float(g[-1]) for g in gains)),
+                        peak, count)
+    return flown, design
 
 
 @dataclass(frozen=True)
@@ -117,8 +178,9 @@ class WorkshopOutput:
 class WorkshopComputer:
     """Sampled H_s, the dump law and the CMG attitude hold, one control period per :meth:`step`."""
 
-    def __init__(self, cfg: WorkshopConfig, clock: OrbitClock, prediction: FieldPrediction) -> None:
-        self.cfg, self.clock, self.prediction = cfg, clock, prediction
+    def __init__(self, cfg: WorkshopConfig, clock: OrbitClock, prediction: FieldPrediction,
+                 design: DumpDesign | None = None) -> None:
+        self.cfg, self.clock, self.prediction, self.design = cfg, clock, prediction, design
         self.sampler = SampledMomentum(clock)
         self.law = None if cfg.dump is None else CmgDumpLaw(cfg.dump, clock, prediction)
         self._offset: np.ndarray | None = None
@@ -139,9 +201,9 @@ class WorkshopComputer:
         return proper_initial_h_s_nms(c, dump.k_seed, h_0) - h_cmg
 
     def step(self, t_s: float, mode: str, b_sensed_t: np.ndarray, omega_rad_s: np.ndarray,
-             q_body_to_eci: np.ndarray, h_cmg_nms: np.ndarray) -> WorkshopOutput:
+             q_body_to_eci: np.ndarray, h_cmg_nms: np.ndarray, day: bool = True) -> WorkshopOutput:
         """One control period at ``t_s``: measured field (T), gyro rates (rad/s), attitude (x, y, z, w, body→ECI)
-        and the CMG momentum at t_s (N·m·s), all body axes."""
+        and the CMG momentum at t_s (N·m·s), all body axes; ``day``: the sun sensor sees the sun (§10)."""
         if mode not in WORKSHOP_MODES:
             raise ControllerError(f'unknown Workshop mode {mode!r}; choose one of {WORKSHOP_MODES}')
         b = as_vector3(b_sensed_t, 'b_sensed_t')
@@ -160,7 +222,7 @@ class WorkshopComputer:
         hdot = np.zeros(3)
         if mode != 'standby':
             if mode == 'cmg_dump' and self.law is not None:
-                m = self.law.step(t_s, h_s, b)
+                m = self.law.step(t_s, h_s, b, day)
             feedforward = np.cross(m, b) + self.prediction.gravity_gradient_nm(t_s, self.cfg.inertia_kg_m2,
                                                                                 q_body_to_eci)
             hdot = cmg_hold_rate(theta, omega, self.cfg.inertia_kg_m2, h_cmg, feedforward, self.cfg.hold)
@@ -174,6 +236,7 @@ class WorkshopComputer:
             out['predicted_loop_gain_min'] = f'{self._predicted_gains[0]:.4g}'
             out['predicted_loop_gain_max'] = f'{self._predicted_gains[-1]:.4g}'
         if self.law is not None:
+            out['dump_k_seed'] = f'{self.law.cfg.k_seed:.6g}'
             raw = self.law.unsaturated_am2
             limit = self.law.cfg.max_moment_am2
             out['moment_saturated'] = 'true' if limit is not None and np.any(np.abs(raw) > limit) else 'false'

@@ -13,11 +13,15 @@ from acds_controller.cmg_dump import (
     OrbitAccumulator,
     OrbitClock,
     SampledMomentum,
+    constant_magnitude,
     dump_report,
     field_gramian,
     hold_weights,
     k_to_si,
     khb_moment,
+    limit_magnitude,
+    loop_gain_k_seed,
+    loop_gain_warning,
     loop_gains,
     min_energy_vector,
     orbit_stats,
@@ -150,6 +154,75 @@ def test_loop_gains_for_a_constant_field_direction() -> None:
     g = k_to_si(4e6) * B0 ** 2 * T_ORB
     assert gains == pytest.approx([0.0, g, g], rel=1e-9, abs=1e-9)
     assert g == pytest.approx(11.09, abs=0.01)
+
+
+def test_loop_gains_of_a_field_rotating_in_a_plane_match_the_closed_form() -> None:
+    """B = B0 (cos ωt, sin ωt, 0) over whole turns: W = B0² T (I − ⟨B̂B̂ᵀ⟩) = B0² T diag(½, ½, 1), so k·W has the
+    gains g/2, g/2, g with g = k B0² T (issue 21's closed form); the loop-gain rule puts the largest at its target."""
+    t = np.linspace(0.0, T_ORB, 2001)
+    w_rot = 3 * 2 * math.pi / T_ORB  # three turns in the orbit
+    b = B0 * np.column_stack([np.cos(w_rot * t), np.sin(w_rot * t), np.zeros_like(t)])
+    w = field_gramian(b, trapezoid_weights(t))
+    g = k_to_si(4e6) * B0 ** 2 * T_ORB
+    assert loop_gains(w, 4e6) == pytest.approx([g / 2, g / 2, g], rel=1e-5)
+    assert np.allclose(w, B0 ** 2 * T_ORB * np.diag([0.5, 0.5, 1.0]), rtol=1e-5, atol=1e-9 * B0 ** 2 * T_ORB)
+    k = loop_gain_k_seed([w], 1.0)
+    assert k == pytest.approx(1.0 / (k_to_si(1.0) * B0 ** 2 * T_ORB), rel=1e-5)
+    assert loop_gains(w, k) == pytest.approx([0.5, 0.5, 1.0], rel=1e-5)
+    assert loop_gain_k_seed([w, 0.5 * w], 1.5) == pytest.approx(1.5 * k, rel=1e-12)  # the largest W sets k
+    with pytest.raises(ControllerError, match='largest loop gain'):
+        loop_gain_k_seed([w], 2.5)
+
+
+@settings(max_examples=40, deadline=None)
+@given(H_VEC, st.floats(1.0, 1e5))
+def test_the_magnitude_limit_keeps_the_direction(m: np.ndarray, limit: float) -> None:
+    """§9: the limit is on |M|, not per axis: M is scaled, its direction kept; below the limit M is untouched."""
+    out = limit_magnitude(m, limit)
+    size = float(np.linalg.norm(m))
+    assert float(np.linalg.norm(out)) <= limit * (1 + 1e-12)
+    if size > limit:
+        assert np.allclose(out, m * (limit / size), rtol=1e-12)
+        assert float(np.linalg.norm(np.cross(out, m))) <= 1e-9 * size * limit
+    else:
+        assert np.array_equal(out, m)
+
+
+def test_day_only_dumping_is_zero_at_night_and_constant_in_daylight() -> None:
+    """§10: the moment has the constant |M| in daylight along k H_s × B, and is zero at night; the §9 limit caps
+    the day and night law's |M| with its direction."""
+    clock = OrbitClock(T_ORB)
+    h, b = np.array([100.0, -50.0, 300.0]), np.array([2e-5, -1e-5, 3e-5])
+    law = CmgDumpLaw(DumpLawConfig('khb', day_moment_am2=5000.0), clock)
+    day, night = law.step(0.0, h, b, day=True), law.step(10.0, h, b, day=False)
+    assert np.array_equal(night, np.zeros(3))
+    assert float(np.linalg.norm(day)) == pytest.approx(5000.0, rel=1e-12)
+    assert np.allclose(day / 5000.0, khb_moment(h, b) / np.linalg.norm(khb_moment(h, b)))
+    assert np.array_equal(constant_magnitude(np.zeros(3), 5000.0), np.zeros(3))
+    plain = khb_moment(h, b)
+    capped = CmgDumpLaw(DumpLawConfig('khb', moment_limit_am2=0.5 * float(np.linalg.norm(plain))), clock)
+    assert np.allclose(capped.step(0.0, h, b, day=False), 0.5 * plain)  # day and night: night is dumped too
+
+
+def test_the_report_says_whether_the_loop_converges() -> None:
+    """``loop_gain_max`` / ``loop_converges`` in the report and the one warning line: the seed's k on Appendix A's
+    field shape has gains above 2; a k with the largest gain 1 converges and warns nothing."""
+    clock = OrbitClock(T_ORB)
+    t = np.linspace(0.0, T_ORB, 557)
+    k_ok = loop_gain_k_seed([field_gramian(np.array([_rotating_field(x) for x in t]), trapezoid_weights(t))], 1.0)
+    for k, converges in ((4e6, False), (k_ok, True)):
+        law = CmgDumpLaw(DumpLawConfig('khb', k_seed=k), clock)
+        tt, m, bb, h_s = _ideal_hold_run(law, _rotating_field, H_B_POP, 2, 20.0)
+        rep = {'k_seed': k, **dump_report(orbit_stats(tt, m, bb, np.ones(tt.size, dtype=bool), h_s, clock, H_B_POP,
+                                                      k_seed=k))}
+        assert rep['loop_converges'] is converges
+        assert rep['loop_gain_max'] == max(r['loop_gains'][-1] for r in rep['per_orbit'])
+        warning = loop_gain_warning(rep)
+        assert (warning is None) is converges
+        if warning is not None:
+            assert 'cannot converge' in warning and '\n' not in warning
+    no_gains = dump_report(orbit_stats(tt, m, bb, np.ones(tt.size, dtype=bool), h_s, clock, H_B_POP))
+    assert no_gains['loop_converges'] is None and loop_gain_warning(no_gains) is None
 
 
 def _ideal_hold_run(law: CmgDumpLaw, b_of_t, h_b: np.ndarray, orbits: int, dt: float, h0: np.ndarray | None = None):

@@ -40,6 +40,14 @@ def _moments(args: argparse.Namespace) -> tuple[Any, str]:
         if missing:
             raise MagnetSizingError(f'dump report {args.from_report} lacks {", ".join(missing)}')
         m_n, m_d = rep.get('M_n_am2'), rep.get('M_d_am2')
+        if rep.get('profile') == 'day_constant':
+            # §10 flown: the report's |M| is already the constant day moment; it is sized as it flew (factor 1)
+            if args.mode != 'day-constant':
+                raise MagnetSizingError(f'dump report {args.from_report} flew day-only dumping at constant |M| '
+                                        '(§10): size it with --mode day-constant')
+            args.day_constant_factor = 1.0
+            return (DumpMoments(m_n or 0.0, m_d or 0.0, rep['M_o_am2'], rep['M_m_am2']),
+                    f'dump report {args.from_report} (day-only dumping flown at constant |M|, §10)')
         if args.mode == 'day-night' and (m_n is None or m_d is None):
             raise MagnetSizingError(f'dump report {args.from_report} has no orbital '
                                     f'{"night" if m_n is None else "day"} (M_n_am2/M_d_am2 null: eclipse off?); '
@@ -166,31 +174,10 @@ def cmd_size_magnet(args: argparse.Namespace) -> int:
 DUMP_REPORT_DOC = """The dump report (seed 000 §5, Tables 1 and 2) of an AAP Workshop run: per orbit M_n, M_d, M_o (rms |M|
 over orbital night, day, the whole orbit), M_m (max |M|), H_s as sampled, |ΔH_s|, the bias the CMGs took,
 the sampled loop's gains (eigenvalues of k·W) and the minimum-energy M_o on the orbit's own field; then the
-largest of each over the orbits. From a bag it reads the bag (read-only); from a scenario it first runs it
-with the direct engine, recording a bag into --out. Plots: |M|(t) and H_s per orbit (PNG, in --out)."""
-
-
-def _scenario_with_sets(name: str, sets: list[str]) -> Any:
-    """The scenario with ``SECTION.KEY=VALUE`` overrides (keys as in the YAML, with their unit), via a temporary
-    file that extends it."""
-    import tempfile
-
-    import yaml
-    from acds_common.scenario import ScenarioError, load_scenario, scenario_path
-
-    if not sets:
-        return load_scenario(name)
-    overlay: dict[str, Any] = {'extends': str(scenario_path(name).resolve())}
-    for item in sets:
-        key, sep, value = item.partition('=')
-        section, dot, field = key.partition('.')
-        if not sep or not field or not dot:
-            raise ScenarioError(f'--set {item!r}: expected SECTION.KEY=VALUE (e.g. controller.dump_h_s_init=measured)')
-        overlay.setdefault(section, {})[field] = yaml.safe_load(value)
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / 'dump_report_scenario.yaml'
-        path.write_text(yaml.safe_dump(overlay, sort_keys=False))
-        return load_scenario(str(path))
+largest of each over the orbits, and one warning line when some orbit's loop gain leaves (0, 2) (the loop
+cannot converge). From a bag it reads the bag (read-only); from a scenario it first runs it with the direct
+engine, recording a bag into --out. Plots: |M|(t) and H_s per orbit (PNG, in --out). --k-sweep (§5's k
+study) and --mm-sweep (§12's M_m estimation) run a scenario many times instead (no bag)."""
 
 
 def cmd_dump_report(args: argparse.Namespace) -> int:
@@ -206,6 +193,12 @@ def cmd_dump_report(args: argparse.Namespace) -> int:
 
     source = Path(args.source)
     is_bag = source.is_dir() or source.suffix in ('.mcap', '.db3')
+    if args.k_sweep or args.mm_sweep:
+        if is_bag:
+            print('acds dump-report: --k-sweep and --mm-sweep run a scenario, not a recorded bag', file=sys.stderr)
+            return 2
+        from ..dump_study import cmd_study
+        return cmd_study(args)
     try:
         if args.json:
             check_output_file('--json', Path(args.json))
@@ -217,12 +210,13 @@ def cmd_dump_report(args: argparse.Namespace) -> int:
             check_out_dir(out)
         else:
             from acds_runtime.direct import DirectRun
+            from acds_runtime.dump_study import scenario_with_sets
             from acds_runtime.preflight import preflight
 
             from ..workspace import new_run_dir, workspace
             from .run import Progress
 
-            scenario = _scenario_with_sets(args.source, args.set or [])
+            scenario = scenario_with_sets(args.source, args.set or [])
             check_workshop(scenario)
             preflight(scenario)
             if args.out:
@@ -261,13 +255,19 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description=DUMP_REPORT_DOC)
     p.add_argument('source', metavar='BAG|SCENARIO', help='a recorded bag (folder or .mcap/.db3) or a scenario')
     p.add_argument('--json', metavar='PATH', help='write the report (JSON keys M_n_am2, M_d_am2, M_o_am2, M_m_am2, '
-                   'delta_H_s_ftlbs, min_energy_M_o_am2: the largest over the orbits; per_orbit)')
+                   'delta_H_s_ftlbs, min_energy_M_o_am2: the largest over the orbits; loop_gain_min, loop_gain_max, '
+                   'loop_converges; per_orbit)')
     p.add_argument('--out', metavar='DIR', help='folder for the plots (and, from a scenario, the bag); default '
                    'runs/<scenario>_dump_<time> (a bag: plots/ beside it)')
     p.add_argument('--steps', type=step_count, help='scenario only: number of control steps (default: its duration)')
     p.add_argument('--set', action='append', metavar='SECTION.KEY=VALUE',
                    help='scenario only: override a scenario key, e.g. controller.dump_h_s_init=measured (H_s from '
                         'zero) or controller.dump_gain_am2_per_ftlbs_t=3e6; repeatable')
+    p.add_argument('--k-sweep', metavar='A:B:N', help='scenario only: the k study (§5): N values of k (seed units) from '
+                   'A to B, each flown from the §5 initialisation and from H_s = 0; table, k_sweep.png, --json rows')
+    p.add_argument('--mm-sweep', metavar='KIND:A:B:N', help='scenario only: the M_m estimation sweep (§12): KIND hb '
+                   '(|H_b|, ft-lb-sec, POP), iy_minus_iz (I_y − I_z, slug-ft², IOP, Fig. 7) or iz_minus_ix (45° OP); '
+                   'table with the fitted slope, mm_sweep_KIND.png, --json rows')
     p.set_defaults(func=cmd_dump_report)
 
     p = sub.add_parser('size-magnet', help='minimum-weight magnet + power-supply design for the CMG dump (seed 000)',

@@ -33,7 +33,8 @@ import numpy as np
 from acds_common import topics
 from acds_common.environment import orbit_from_section
 from acds_common.units import dump_gain_si_to_seed, nms_to_ftlbs
-from acds_controller.cmg_dump import OrbitAccumulator, OrbitClock, dump_report
+from acds_controller.cmg_dump import OrbitAccumulator, OrbitClock, dump_report, loop_gain_warning
+from acds_controller.configuration import build_workshop
 
 DIPOLE, COMMAND, B_BODY, TORQUE, TORQUE_GG, SUN, H_S, CMG_H, ODOMETRY = (topics.resolve(t) for t in (
     topics.DIPOLE_AVG, topics.MOMENT_COMMAND, topics.TRUTH_B_BODY, topics.TRUTH_TORQUE_MAG, topics.TRUTH_TORQUE_GG,
@@ -71,7 +72,11 @@ class Accumulator:
         self.clock = orbit_clock(sc)
         c = sc.values['controller']
         self.law = c['dump_law']
-        self.k_seed = dump_gain_si_to_seed(c['dump_gain'])
+        # the law the controller flies: k from its gain rule, the §9 limit and §10 day |M| from its prediction
+        computer = build_workshop(sc.values['spacecraft'], c, sc.values['orbit'], sc.values['earth'])[1]
+        self.design = computer.design
+        self.flown = None if computer.law is None else computer.law.cfg
+        self.k_seed = dump_gain_si_to_seed(c['dump_gain']) if computer.cfg.dump is None else computer.cfg.dump.k_seed
         self.capacity_nms = sc.get('wheels', 'cmg_capacity')
         self.q_target = np.array(c['target_quaternion_xyzw'], dtype=float)
         self.q_target /= np.linalg.norm(self.q_target)
@@ -119,7 +124,16 @@ class Accumulator:
             k, h = self._last_h
             self.orbits.finish(k * self.dt_s, h)
         report: dict[str, Any] = {'law': self.law, 'k_seed': self.k_seed, 'orbits': 0, 'H_s_range_ftlbs': None,
+                                  'loop_gain_min': None, 'loop_gain_max': None, 'loop_converges': None,
                                   'per_orbit': []}
+        if self.design is not None and self.flown is not None:
+            report.update({
+                'gain_rule': self.design.gain_rule,
+                'predicted_loop_gains': list(self.design.predicted_gains),
+                'predicted_unconstrained_M_m_am2': self.design.predicted_peak_am2,
+                'moment_limit_am2': self.flown.moment_limit_am2,
+                'day_moment_am2': self.flown.day_moment_am2,
+                'profile': 'day_constant' if self.flown.day_moment_am2 is not None else 'day_night'})
         if self.orbits.stats:
             report.update(dump_report(self.orbits.stats))
             for row in report['per_orbit']:
@@ -149,7 +163,16 @@ def print_tables(summary: dict[str, Any]) -> None:
     if report is None:
         return
     print(f'\n  AAP Workshop CMG dump (seed 000): law {report["law"]}, k = {report["k_seed"]:.4g} amp-turn-m² per '
-          f'ft-lb-sec per Wb/m²; {report["orbits"]} complete orbit(s)')
+          f'ft-lb-sec per Wb/m² ({report.get("gain_rule", "stated")}); {report["orbits"]} complete orbit(s)')
+    if report.get('moment_limit_am2') is not None:
+        print(f'    |M| limited to {report["moment_limit_am2"]:.0f} A·m² (§9: a fraction of the predicted unconstrained '
+              f'M_m {report["predicted_unconstrained_M_m_am2"]:.0f})')
+    if report.get('day_moment_am2') is not None:
+        print(f'    day-only dumping at constant |M| = {report["day_moment_am2"]:.0f} A·m² (§10: a multiple of the '
+              f'predicted unconstrained M_m {report["predicted_unconstrained_M_m_am2"]:.0f})')
+    warning = loop_gain_warning(report)
+    if warning is not None:
+        print(f'    {warning}')
     print(f'    {"orbit":>5} {"M_n":>9} {"M_d":>9} {"M_o":>9} {"M_m":>9} {"min-en M_o":>10} {"|H_s|":>9} '
           f'{"|ΔH_s|":>9} {"bias seen (x, y, z)":>27} {"k·W gains":>13} {"CMG peak":>9} {"att err":>7}')
     print(f'    {"":>5} {"A·m²":>9} {"A·m²":>9} {"A·m²":>9} {"A·m²":>9} {"A·m²":>10} {"ft-lb-s":>9} '
