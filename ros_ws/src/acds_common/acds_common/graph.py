@@ -275,8 +275,9 @@ def _formation_controller(params: dict[str, Any]) -> NodeSpec:
                    Input(f'{w}/b_body', f'{ns}/{topics.TRUTH_B_BODY}', 'formation_dynamics'),
                    Input(f'{w}/wheel_h', f'{ns}/{topics.WHEEL_MOMENTUM}', f'{w}/reaction_wheels', lag=1),
                    Input(f'{w}/wheel_hdot', f'{ns}/{topics.WHEEL_TORQUE}', f'{w}/reaction_wheels', lag=1)]
-    return NodeSpec('formation_controller', 'acds_controller',
-                    'acds_controller.formation_controller_step:FormationControllerStep',
+    stepper = {'array_spin': 'formation_array_step:FormationArrayStep', 'lqr': 'formation_lqr_step:FormationLqrStep'}.get(
+        _param(params, 'formation_law', 'hold'), 'formation_controller_step:FormationControllerStep')  # the law's variant
+    return NodeSpec('formation_controller', 'acds_controller', f'acds_controller.{stepper}',
                     (Stage('control', tuple(inputs)),),
                     (Output('moment', topics.MOMENT_COMMAND, BODY),
                      Output('wheel_torque', topics.WHEEL_TORQUE_COMMAND, BODY),
