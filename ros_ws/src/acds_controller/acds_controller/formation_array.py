@@ -14,9 +14,12 @@ ControllerError that names the stage and its residual:
 
 1. *feasibility* (Gauss–Newton, minimum-norm steps μ ← μ − J⁺ c) from the initial guess;
 2. *least dipole* (Newton on the Lagrange conditions μ + Jᵀλ = 0, c = 0). F is bilinear in the
-   dipoles, so J(μ) is linear in μ and the Hessian of λ·c is exact: column k is J(e_k)ᵀλ. The point
+   dipoles, so J(μ) is linear in μ and the Hessian of λ·c is exact: column k is J(e_k)ᵀλ. Where the
+   Hessian of the Lagrangian has a negative curvature along the constraints, it is shifted so that the
+   step descends (saddle-free Newton) instead of climbing to a saddle; a step is capped at half of
+   |μ| and followed by a Gauss–Newton restoration of the forces (a projected SQP). The point
    reached is checked to be a minimum (reduced Hessian positive definite on the constraints' tangent
-   space), not a saddle.
+   space); from a saddle the solve steps along the negative curvature and runs both stages again.
 
 In ``planar`` the dipoles and forces lie in the frame's x–y plane (2N unknowns, 2N − 2 constraints).
 For N = 2 this reproduces ``formation_control.min_norm_dipoles`` (tested).
@@ -59,10 +62,21 @@ from acds_controller.magnetic_laws import ControllerError, as_vector3, check_gai
 
 #: Frames the array law flies in (it spins about the frame z axis).
 ARRAY_FRAMES = ("planar", "free_space")
-#: Relative tolerance of the dipole solve (forces: of the largest commanded force; Lagrange: of |μ|).
+#: Relative tolerance of the dipole solve: the forces, of the largest commanded force; the Lagrange
+#: (optimality) conditions, of |μ| (the total dipole is flat at its minimum: 1e-8 of |μ| is ~1e-16 of Σ|μ|²).
 SOLVE_TOLERANCE = 1e-10
+LAGRANGE_TOLERANCE = 1e-8
 #: Newton iterations allowed per stage.
 MAX_NEWTON_ITERATIONS = 60
+#: A saddle is left along its negative curvature by this fraction of |μ|, at most this many times.
+SADDLE_STEP = 0.25
+MAX_SADDLE_ESCAPES = 8
+#: Least curvature (of ½|μ|², whose Hessian is I) the saddle-free Newton step gives a turned-over direction.
+CURVATURE_FLOOR = 0.01
+#: A stage-2 step is at most this fraction of |μ|; after it, the forces are restored (Gauss–Newton) to
+#: within this fraction of the largest commanded force before the next.
+MAX_STEP_FRACTION = 0.5
+RESTORE_FRACTION = 1e-3
 
 
 # ------------------------------------------------------------------------------ the least-dipole solve
@@ -80,10 +94,6 @@ def _force_jacobian(pos: np.ndarray, dip: np.ndarray, dims: int) -> np.ndarray:
             jac[rows, i * dims:(i + 1) * dims] += force_matrix(dip[j], pos[i] - pos[j])[:dims, :dims]
             jac[rows, j * dims:(j + 1) * dims] = force_matrix(dip[i], pos[i] - pos[j])[:dims, :dims]
     return jac
-
-
-def _constraint(pos: np.ndarray, dip: np.ndarray, forces: np.ndarray, dims: int) -> np.ndarray:
-    return (em_forces_n(pos, dip) - forces)[1:, :dims].ravel()
 
 
 @dataclass(frozen=True)
@@ -163,72 +173,96 @@ def cold_guesses(positions_m: np.ndarray, forces_n: np.ndarray) -> list[np.ndarr
 
 def _solve_from(positions_m: np.ndarray, forces_n: np.ndarray, guess_am2: np.ndarray, planar: bool,
                 tol: float) -> DipoleSolution:
-    """One Newton solve (both stages) from ``guess_am2`` (inputs checked by the caller)."""
+    """Newton's two stages from ``guess_am2`` (inputs checked by the caller). A Lagrange point that is a
+    saddle (a negative curvature of Σ|μ|² along the constraints) is left along that direction, by
+    ``SADDLE_STEP`` of |μ|, and both stages run again, at most ``MAX_SADDLE_ESCAPES`` times."""
     pos, forces = positions_m, forces_n
     n = len(pos)
-    dip = np.array(guess_am2, dtype=float)
-    scale = float(np.abs(forces).max())
     dims = 2 if planar else 3
-    if planar:
-        dip[:, 2] = 0.0
-    x = dip[:, :dims].ravel()
+    x = np.array(guess_am2, dtype=float)[:, :dims].ravel()
+    scale = float(np.abs(forces).max())
 
     def unpack(v: np.ndarray) -> np.ndarray:
         out = np.zeros((n, 3))
         out[:, :dims] = v.reshape(n, dims)
         return out
 
-    c = _constraint(pos, unpack(x), forces, dims)
-    feasible = 0
-    while np.abs(c).max() > tol * scale:
-        if feasible == MAX_NEWTON_ITERATIONS:
-            raise ControllerError(f"dipole solve, stage 1 (feasibility, Gauss–Newton): no convergence in "
-                                  f"{feasible} iterations, force residual {np.abs(c).max():.3e} N "
-                                  f"(tolerance {tol * scale:.3e} N)")
-        jac = _force_jacobian(pos, unpack(x), dims)
-        x = x - np.linalg.lstsq(jac, c, rcond=None)[0]
-        c = _constraint(pos, unpack(x), forces, dims)
-        feasible += 1
-    m = len(c)
-    basis = np.eye(n * dims)
-    lam = -np.linalg.lstsq(_force_jacobian(pos, unpack(x), dims).T, x, rcond=None)[0]
-    for newton in range(MAX_NEWTON_ITERATIONS + 1):
-        jac = _force_jacobian(pos, unpack(x), dims)
-        grad = x + jac.T @ lam
-        c = _constraint(pos, unpack(x), forces, dims)
-        if np.abs(c).max() <= tol * scale and np.linalg.norm(grad) <= tol * max(float(np.linalg.norm(x)), 1e-300):
-            _check_minimum(pos, x, lam, jac, dims, unpack)
-            return DipoleSolution(unpack(x), float(np.abs(em_forces_n(pos, unpack(x)) - forces).max()),
-                                  (feasible, newton))
-        if newton == MAX_NEWTON_ITERATIONS:
+    # F is bilinear in the dipoles: J(μ) = Σ_k μ_k J(e_k), c(μ) = ½ J(μ) μ − F*, Hessian of λ·c: Σ_i λ_i ∂J_i/∂μ.
+    basis_jac = np.stack([_force_jacobian(pos, unpack(e), dims) for e in np.eye(n * dims)])  # (k, m, n·dims)
+    target = forces[1:, :dims].ravel()
+
+    def jacobian(v: np.ndarray) -> np.ndarray:
+        return np.tensordot(v, basis_jac, axes=(0, 0))
+
+    def constraint(v: np.ndarray) -> np.ndarray:
+        return 0.5 * jacobian(v) @ v - target
+
+    def hessian(lam: np.ndarray) -> np.ndarray:  # of ½|μ|² + λ·c
+        return np.eye(n * dims) + np.einsum('kmj,m->jk', basis_jac, lam)
+
+    iterations = [0, 0]
+    for _escape in range(MAX_SADDLE_ESCAPES + 1):
+        c = constraint(x)
+        while np.abs(c).max() > tol * scale:
+            if iterations[0] >= MAX_NEWTON_ITERATIONS * (_escape + 1):
+                raise ControllerError(f"dipole solve, stage 1 (feasibility, Gauss–Newton): no convergence in "
+                                      f"{iterations[0]} iterations, force residual {np.abs(c).max():.3e} N "
+                                      f"(tolerance {tol * scale:.3e} N)")
+            x = x - np.linalg.lstsq(jacobian(x), c, rcond=None)[0]
+            c = constraint(x)
+            iterations[0] += 1
+        m = len(c)
+        lam = -np.linalg.lstsq(jacobian(x).T, x, rcond=None)[0]
+        for newton in range(MAX_NEWTON_ITERATIONS + 1):
+            jac = jacobian(x)
+            grad = x + jac.T @ lam
+            c = constraint(x)
+            if np.abs(c).max() <= tol * scale and np.linalg.norm(grad) <= LAGRANGE_TOLERANCE * float(np.linalg.norm(x)):
+                break
+            if newton == MAX_NEWTON_ITERATIONS:
+                raise ControllerError(f"dipole solve, stage 2 (least dipole, Newton on the Lagrange conditions): no "
+                                      f"convergence in {MAX_NEWTON_ITERATIONS} iterations, force residual "
+                                      f"{np.abs(c).max():.3e} N, Lagrange residual {np.linalg.norm(grad):.3e} A·m²")
+            h = hessian(lam)
+            _, sv, vt = np.linalg.svd(jac)
+            null = vt[int(np.sum(sv > 1e-12 * sv[0])):].T
+            if null.shape[1]:  # saddle-free Newton: a negative curvature along the constraints is turned over
+                low = float(np.linalg.eigvalsh(null.T @ (0.5 * (h + h.T)) @ null)[0])
+                if low < 0.0:
+                    h = h + (CURVATURE_FLOOR - 2.0 * low) * np.eye(n * dims)
+            kkt = np.block([[h, jac.T], [jac, np.zeros((m, m))]])
+            try:
+                sol = np.linalg.solve(kkt, np.concatenate([-x, -c]))
+            except np.linalg.LinAlgError:
+                raise ControllerError(f"dipole solve, stage 2 (least dipole, Newton on the Lagrange conditions): "
+                                      f"singular system at iteration {newton}, force residual {np.abs(c).max():.3e} N"
+                                      ) from None
+            step = sol[:n * dims]
+            cap = MAX_STEP_FRACTION * float(np.linalg.norm(x))
+            if np.linalg.norm(step) > cap:  # the quadratic model is not trusted that far: shorter, then restore
+                step *= cap / float(np.linalg.norm(step))
+            x, lam = x + step, sol[n * dims:]
+            iterations[1] += 1
+            for _ in range(MAX_NEWTON_ITERATIONS):
+                c = constraint(x)
+                if np.abs(c).max() <= RESTORE_FRACTION * scale:
+                    break
+                x = x - np.linalg.lstsq(jacobian(x), c, rcond=None)[0]
+                iterations[0] += 1
+        _, sv, vt = np.linalg.svd(jac)
+        null = vt[int(np.sum(sv > 1e-12 * sv[0])):].T
+        if null.shape[1] == 0:
             break
-        hess = np.eye(n * dims) + np.stack([_force_jacobian(pos, unpack(e), dims).T @ lam for e in basis], axis=1)
-        kkt = np.block([[hess, jac.T], [jac, np.zeros((m, m))]])
-        try:
-            sol = np.linalg.solve(kkt, np.concatenate([-x, -c]))
-        except np.linalg.LinAlgError:
-            raise ControllerError(f"dipole solve, stage 2 (least dipole, Newton on the Lagrange conditions): singular "
-                                  f"system at iteration {newton}, force residual {np.abs(c).max():.3e} N") from None
-        x = x + sol[:n * dims]
-        lam = sol[n * dims:]
-    raise ControllerError(f"dipole solve, stage 2 (least dipole, Newton on the Lagrange conditions): no convergence "
-                          f"in {MAX_NEWTON_ITERATIONS} iterations, force residual {np.abs(c).max():.3e} N, Lagrange "
-                          f"residual {np.linalg.norm(grad):.3e} A·m²")
-
-
-def _check_minimum(pos: np.ndarray, x: np.ndarray, lam: np.ndarray, jac: np.ndarray, dims: int, unpack) -> None:
-    """The Lagrange point must be a minimum: the Hessian positive definite on the constraints' tangent space."""
-    size = len(x)
-    hess = np.eye(size) + np.stack([_force_jacobian(pos, unpack(e), dims).T @ lam for e in np.eye(size)], axis=1)
-    _, s, vt = np.linalg.svd(jac)
-    null = vt[int(np.sum(s > 1e-12 * s[0])):].T
-    if null.shape[1] == 0:
-        return
-    reduced = null.T @ (0.5 * (hess + hess.T)) @ null
-    low = float(np.linalg.eigvalsh(reduced)[0])
-    if low <= -1e-9:
-        raise ControllerError(f"dipole solve, stage 2 (least dipole): reached a saddle of Σ|μ|², not a minimum "
-                              f"(reduced Hessian eigenvalue {low:.3e}); start from another guess")
+        h = hessian(lam)
+        low, vec = np.linalg.eigh(null.T @ (0.5 * (h + h.T)) @ null)
+        if low[0] > -1e-9:
+            break
+        x = x + SADDLE_STEP * float(np.linalg.norm(x)) * (null @ vec[:, 0])
+    else:
+        raise ControllerError(f"dipole solve, stage 2 (least dipole): still at a saddle of Σ|μ|² after "
+                              f"{MAX_SADDLE_ESCAPES} escapes (reduced Hessian eigenvalue {low[0]:.3e}), force residual "
+                              f"{np.abs(c).max():.3e} N")
+    return DipoleSolution(unpack(x), float(np.abs(em_forces_n(pos, unpack(x)) - forces).max()), tuple(iterations))
 
 
 # --------------------------------------------------------------------------------- spinning array

@@ -10,8 +10,9 @@ and an LQR (slide 44). Here, for N ≥ 2 vehicles with any coils and wheels:
   axis at Ω; every vehicle turns with it (body axes = the rotating frame's axes), its wheels holding
   h_i = −(I_zz,i + m_i |p_i|²) Ω ẑ (slide 40, per vehicle, so the cluster's total angular momentum is
   zero); the dipoles are the least-Σ|μ|² solution (``formation_array.least_dipole_solution``) for the
-  centripetal forces −m_i Ω² p_i, and each vehicle's wheels take its nominal electromagnetic torque
-  (zero for a linear array, whose dipoles lie on the baseline).
+  centripetal forces −m_i Ω² p_i (a vehicle without coils has none, and can only sit at the centre),
+  and each vehicle's wheels take its nominal electromagnetic torque (zero for a linear array, whose
+  dipoles lie on the baseline).
 * Model: the same equations the graph flies in the ``free_space`` frame (``dynamics.formation``; the
   test suite checks the accelerations against it): far-field dipole–dipole wrench of every pair
   (``acds_common.dipole_field``), m_i r̈_i = F_i, I ω̇ = τ_EM − ḣ − ω × (I ω + h). Written in the rotating
@@ -115,10 +116,18 @@ def spin_nominal(vehicles: Sequence[LinearVehicle], places_m: np.ndarray, rate_r
     places = np.asarray(places_m, dtype=float)
     places = places - mass @ places / mass.sum()
     forces = -mass[:, None] * rate_rad_s ** 2 * places * np.array([1.0, 1.0, 0.0])
-    dip = least_dipole_solution(places, forces, planar=planar).dipoles_am2
+    active = [k for k, v in enumerate(vehicles) if v.coil_axes_body.shape[1] > 0]
+    for k, v in enumerate(vehicles):
+        if k not in active and np.linalg.norm(forces[k]) > 0.0:
+            raise ControllerError(f"{v.name} has no coils, so no force holds it at {places[k].tolist()} m off the spin "
+                                  "axis (a coil-less vehicle can only sit at the centre of mass)")
+    if len(active) < 2:
+        raise ControllerError(f"a spinning array needs at least two vehicles with coils, got {len(active)}")
+    dip = np.zeros((len(vehicles), 3))
+    dip[active] = least_dipole_solution(places[active], forces[active], planar=planar).dipoles_am2
     for v, mu in zip(vehicles, dip, strict=True):
         axes = v.coil_axes_body
-        if axes.shape[1] == 0 or np.linalg.norm(mu - axes @ (axes.T @ mu)) > 1e-9 * max(float(np.linalg.norm(mu)), 1.0):
+        if np.linalg.norm(mu - axes @ (axes.T @ mu)) > 1e-9 * max(float(np.linalg.norm(mu)), 1.0):
             raise ControllerError(f"{v.name}: its coils {axes.T.tolist()} cannot make the steady spin's dipole "
                                   f"{mu.tolist()} A·m²")
     _, torque = em_wrench(places, dip)
@@ -228,6 +237,20 @@ class SpinningArrayModel:
 
 
 # ------------------------------------------------------------------------ stability, controllability
+
+
+def review_two_vehicle_eigenvalues(mass_kg: float, r0_m: float, rate_rad_s: float, i_rr_kg_m2: float,
+                                   i_zz_kg_m2: float) -> dict[str, float]:
+    """Slide 42's closed forms for two identical vehicles at r0 from the centre spinning at φ̇0 (the
+    extraction is garbled; read as): λ1–6 = 0, λ7,8 = ±φ̇0, λ9,10 = ±iφ̇0,
+    λ11,12 = ±i (r0φ̇0/I_rr) √(m(m r0² + I_rr/3)), λ13,14 = ±i (r0φ̇0/I_rr) √(m(m r0² + I_rr)),
+    λ15,16 = ±i r0φ̇0 √(m/(3 I_zz)), λ17,18 = ±i r0φ̇0 √(m/I_zz); I_rr = I_rr,s + I_rr,w (the model's I_xx)."""
+    m, r, w, i_rr, i_zz = mass_kg, r0_m, abs(rate_rad_s), i_rr_kg_m2, i_zz_kg_m2
+    return {'zero (count)': 6.0, 'lambda7,8 (real)': w, 'lambda9,10 (imag)': w,
+            'lambda11,12 (imag)': r * w / i_rr * math.sqrt(m * (m * r * r + i_rr / 3.0)),
+            'lambda13,14 (imag)': r * w / i_rr * math.sqrt(m * (m * r * r + i_rr)),
+            'lambda15,16 (imag)': r * w * math.sqrt(m / (3.0 * i_zz)),
+            'lambda17,18 (imag)': r * w * math.sqrt(m / i_zz)}
 
 
 @dataclass(frozen=True)
