@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -249,7 +250,6 @@ def linear_run(controller: Any, sc: Any, deviation: float, steps: int) -> np.nda
 def radius_sweep(sc: Any, deviations_pct: tuple[float, ...]) -> list[dict[str, Any]]:
     """One row per deviation (module docstring)."""
     import tempfile
-    from pathlib import Path
 
     from acds_controller.formation_lqr_step import lqr_controller
     from acds_controller.magnetic_laws import ControllerError
@@ -292,7 +292,7 @@ def cmd_radius_sweep(args: argparse.Namespace) -> int:
     if sc.values['formation']['law'] != 'lqr':
         raise UsageError(f'{args.scenario}: formation.law must be lqr (the study runs the same LQR on both models)')
     if args.json:
-        check_output_file('--json', args.json)
+        check_output_file('--json', Path(args.json))
     steady_spin(sc)
     rows = radius_sweep(sc, args.deviations_pct)
     print(f'emff-radius-sweep {sc.name}: {sc.duration_s():g} s per run; "diverge" = |d_nonlinear − d_linear| > '
@@ -379,8 +379,6 @@ def airtrack_study(configuration: str, step_m: float, duration_s: float, dt_s: f
 
 def cmd_airtrack(args: argparse.Namespace) -> int:
     """Both airtrack configurations' step responses: table and plots."""
-    from pathlib import Path
-
     out_dir = Path(args.out)
     out_dir.mkdir(parents=True, exist_ok=True)
     import matplotlib

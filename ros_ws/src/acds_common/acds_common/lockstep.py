@@ -176,6 +176,10 @@ class LockstepNode(Node):
         self.dt_ns = round(self.params['control_period_s'] * 1e9)
         self.graph_nodes: list[str] = self.params['graph_nodes']
         self.input_timeout_s: float = self.params['input_timeout_s']
+        declared = self.spec.stepper  # a scenario-chosen variant (e.g. formation.law) runs its own stepper
+        if declared != f'{stepper_cls.__module__}:{stepper_cls.__qualname__}':
+            module, _, cls_name = declared.partition(':')
+            stepper_cls = getattr(importlib.import_module(module), cls_name)
         self.stepper = stepper_cls(self.params, log=self._log)
         self.failure: str | None = None
         self.done = False
