@@ -373,3 +373,22 @@ def test_airtrack_poles_are_the_slides_and_lqr_holds_the_step(configuration):
         assert r['open_loop']['ended_at_s'] is not None  # the magnets come together
     else:
         assert r['open_loop']['settling_time_2pct_s'] is None and r['open_loop']['overshoot_pct'] > 90.0  # undamped
+
+
+def test_radius_sweep_starts_both_models_at_the_same_perturbed_radius():
+    sys.path.insert(0, str(ROOT / 'scripts'))
+    from acds_cli.verbs.emff import linear_run, perturbed_data, steady_spin
+    from acds_controller.formation_lqr_step import lqr_controller
+    sc = load_scenario('emff_two_vehicle_lqr')
+    data = perturbed_data(sc, 0.03)
+    a, b = (v['vehicle'] for v in data['vehicles'])
+    assert np.allclose(a['initial_position_m'], [-1.25 * 1.03, 0, 0]) and np.allclose(b['initial_position_m'], [1.2875, 0, 0])
+    assert np.allclose(b['initial_velocity_m_s'], [0, 0.05 * 1.2875, 0])  # a rigid turn at Ω: only Δr perturbed
+    assert steady_spin(sc)[1] == 0.05
+
+    def section(name, vehicle):
+        return next(v for v in sc.values['vehicles'] if v['name'] == vehicle)[name]
+
+    ctl = lqr_controller(sc.values['formation'], ['a', 'b'], section)
+    sep = linear_run(ctl, sc, 0.03, 1500)
+    assert sep[0] == pytest.approx(2.575) and abs(sep[-1] - 2.5) < 0.01 * 0.075
