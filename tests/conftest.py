@@ -1,15 +1,14 @@
-"""Cross-package tests: make ``scripts/acds_cli`` importable and load its pytest harness."""
+"""Cross-package tests: the pytest harness of acds_runtime, the CLI's workspace and a ROS log folder in the checkout."""
 
 import hashlib
 import os
-import sys
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / 'scripts'))
 os.environ.setdefault('ROS_LOG_DIR', str(ROOT / 'runs' / 'ros_log'))
+os.environ.setdefault('ACDS_WORKSPACE', str(ROOT))
 
 pytest_plugins = ['acds_runtime.testing']
 

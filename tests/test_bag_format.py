@@ -22,10 +22,10 @@ from pathlib import Path
 
 import pytest
 import yaml
-from acds_cli.bag.reader import open_bag
 from acds_common import topics
 from acds_common.cdr import Codec
 from acds_common.scenario import load_scenario
+from acds_runtime.bag.reader import open_bag
 from acds_runtime.direct import DirectRun
 from mcap.reader import make_reader
 from rosbags.rosbag2 import Reader
@@ -80,7 +80,7 @@ def test_mcap_bags_are_written_as_rosbag2_jazzy_writes_them(tmp_path):
 
 
 def _acds(*argv: str, tmp_path: Path) -> subprocess.CompletedProcess:
-    env = dict(os.environ, PYTHONPATH=str(ROOT / 'scripts'), ROS_LOG_DIR=str(tmp_path / 'ros_log'))
+    env = dict(os.environ, ROS_LOG_DIR=str(tmp_path / 'ros_log'))
     return subprocess.run([sys.executable, '-m', 'acds_cli', *argv], cwd=ROOT, env=env, capture_output=True,
                           text=True, timeout=300, check=False)
 

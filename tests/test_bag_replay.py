@@ -13,10 +13,10 @@ import pytest
 import rclpy
 from acds_cli.bag.compare import run_compare
 from acds_cli.bag.player import Player
-from acds_cli.bag.reader import open_bag
 from acds_common import topics
 from acds_common.lockstep import LOCKSTEP_QOS, release_node
 from acds_common.scenario import load_scenario
+from acds_runtime.bag.reader import open_bag
 from acds_runtime.launcher import DomainLease, GraphRun
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.context import Context
@@ -55,7 +55,7 @@ def test_compare_passes_on_the_unchanged_node(recorded):
 
 
 def test_compare_fails_naming_step_topic_and_field_when_a_parameter_changes(recorded):
-    env = dict(os.environ, PYTHONPATH=str(ROOT / 'scripts'))
+    env = dict(os.environ)
     out = subprocess.run([sys.executable, '-m', 'acds_cli', 'compare', str(recorded), '--node', 'reaction_wheels',
                           '--set', 'wheels_initial_momentum_nms:=[1.0, -2.0, 0.75]'],
                          cwd=ROOT, env=env, capture_output=True, text=True, timeout=300, check=False)

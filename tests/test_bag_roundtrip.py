@@ -7,11 +7,11 @@ import sqlite3
 import pytest
 import yaml
 from acds_cli.bag.info import bag_info
-from acds_cli.bag.reader import open_bag
 from acds_common import topics
 from acds_common.graph import node_spec
 from acds_common.scenario import load_scenario
 from acds_runtime.bag import writer as bag_writer
+from acds_runtime.bag.reader import open_bag
 from acds_runtime.launcher import GraphRun, LaunchError
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore

@@ -20,6 +20,7 @@ import math
 import numpy as np
 import pytest
 from acds_common import units
+from acds_common.attitude import dcm_to_quat
 from acds_common.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
 from acds_controller.cmg_dump import (
     CmgDumpLaw,
@@ -42,7 +43,7 @@ from dynamics.disturbances import (
     seed_disturbance,
     workshop_inertia_kg_m2,
 )
-from dynamics.rigid_body_model import RigidBodyModel, dcm_to_quat
+from dynamics.rigid_body_model import RigidBodyModel
 
 INCLINATION = math.radians(35.0)
 ORBIT = Orbit(OrbitConfig(kind='circular', inclination_rad=INCLINATION, altitude_m=220.0 * units.NMI_M))

@@ -11,7 +11,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def run_acds(*args: str) -> subprocess.CompletedProcess[str]:
-    env = {'PYTHONPATH': str(ROOT / 'scripts'), 'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': '/tmp/acds_ros_log'}
+    env = {'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': '/tmp/acds_ros_log'}
     return subprocess.run([sys.executable, '-m', 'acds_cli', *args], capture_output=True, text=True,
                           cwd=ROOT, env=env, timeout=120, check=False)
 

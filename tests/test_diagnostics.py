@@ -12,10 +12,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from acds_cli.bag.reader import open_bag
 from acds_common import frames, topics
 from acds_common.messages import ERROR, OK, WALL_CLOCK_PREFIX, WARN
 from acds_common.scenario import load_scenario
+from acds_runtime.bag.reader import open_bag
 from acds_runtime.bag.writer import typestore
 from acds_runtime.direct import DirectRun
 from dynamics.rigid_body_step import DIAGNOSTICS_EVERY

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from acds_common.attitude import dcm_to_quat, quat_to_dcm
 from acds_common.scenario import load_scenario
 from acds_controller import formation_array
 from acds_controller.formation_array import least_dipole_solution, linear_array_rate_rad_s, mission_efficiency
@@ -28,6 +29,7 @@ from acds_controller.formation_linear import (
     group_eigenvalues,
     lqr_gain,
     review_two_vehicle_eigenvalues,
+    rotation_from_vector,
     spin_nominal,
 )
 from acds_controller.formation_lqr import LqrFormationController, LqrWeights
@@ -41,7 +43,6 @@ from dynamics.formation import (
     VehicleSpec,
     VehicleState,
 )
-from dynamics.rigid_body_model import quat_to_dcm
 
 ROOT = Path(__file__).resolve().parents[1]
 INERTIA = np.diag([0.67, 0.67, 1.34])  # EMFFORCE (module dynamics.formation)
@@ -172,29 +173,22 @@ def test_linear_model_is_the_dynamics_the_graph_flies():
              for v in vehicles]
     states, ins = [], []
     for k in range(3):
-        from acds_controller.formation_linear import _rodrigues
-        rot = _rodrigues(dtheta[k])
+        rot = rotation_from_vector(dtheta[k])
         w = rot.T @ omega + domega[k]
-        q = _dcm_to_quat(rot)
+        q = dcm_to_quat(rot)
+        assert np.allclose(quat_to_dcm(q), rot, atol=1e-12)
         states.append(VehicleState(sigma[k], u[k] + np.cross(omega, sigma[k]), q, w))
         ins.append((nominal.dipoles_am2[k] + inputs[6 * k:6 * k + 3], nominal.wheel_h_nms[k],
                     nominal.wheel_hdot_nm[k] + inputs[6 * k + 3:6 * k + 6]))
     dyn = FormationDynamics(FormationConfig(frame='free_space'), specs, states)
     y = (dyn._pos, dyn._vel, dyn._q, dyn._w)
     step = tuple(np.array([x[i] for x in ins]) for i in range(3))
-    (_vel, acc, _qdot, wdot), _ = dyn._deriv(0.0, y, step, 0.0)
+    _vel, acc, _qdot, wdot, _ = dyn._deriv(0.0, y, step, 0.0)
     acc_model = rdot[1] + 2.0 * np.cross(omega, u) + np.cross(omega, np.cross(omega, sigma))
-    rot_all = [_rodrigues(dtheta[k]) for k in range(3)]
+    rot_all = [rotation_from_vector(dtheta[k]) for k in range(3)]
     wdot_model = np.array([rdot[3][k] - np.cross(domega[k], rot_all[k].T @ omega) for k in range(3)])
     assert np.allclose(acc_model, acc, rtol=0, atol=1e-12 * np.abs(acc).max())
     assert np.allclose(wdot_model, wdot, rtol=0, atol=1e-10 * np.abs(wdot).max())
-
-
-def _dcm_to_quat(c: np.ndarray) -> np.ndarray:
-    w = 0.5 * math.sqrt(1.0 + np.trace(c))
-    q = np.array([(c[2, 1] - c[1, 2]) / (4 * w), (c[0, 2] - c[2, 0]) / (4 * w), (c[1, 0] - c[0, 1]) / (4 * w), w])
-    assert np.allclose(quat_to_dcm(q), c, atol=1e-12)
-    return q
 
 
 def _two_vehicle_model(coils_b: np.ndarray | None = None) -> SpinningArrayModel:
@@ -316,7 +310,7 @@ BASE = (ROOT / 'scenarios' / 'emff_three_vehicle_array.yaml').read_text()
 
 
 def _run_acds(*args: str) -> subprocess.CompletedProcess[str]:
-    env = {'PYTHONPATH': str(ROOT / 'scripts'), 'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': '/tmp/acds_ros_log'}
+    env = {'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': '/tmp/acds_ros_log'}
     return subprocess.run([sys.executable, '-m', 'acds_cli', *args], capture_output=True, text=True, cwd=ROOT,
                           env=env, timeout=120, check=False)
 
@@ -353,9 +347,8 @@ def test_bad_formation_is_one_line_exit_2(tmp_path, edit, message):
 
 @pytest.mark.parametrize('configuration', ['stable', 'unstable'])
 def test_airtrack_poles_are_the_slides_and_lqr_holds_the_step(configuration):
-    from dynamics.airtrack import AirtrackConfig, acceleration, linearised
-    sys.path.insert(0, str(ROOT / 'scripts'))
     from acds_cli.verbs.emff import airtrack_study
+    from dynamics.airtrack import AirtrackConfig, acceleration, linearised
     cfg = AirtrackConfig(configuration=configuration)
     a, _ = linearised(cfg)
     s2 = 6.0 * 4e-7 * math.pi * cfg.nominal_dipole_am2 * cfg.magnet_dipole_am2 / (math.pi * cfg.mass_kg * 0.5 ** 5)
@@ -376,7 +369,6 @@ def test_airtrack_poles_are_the_slides_and_lqr_holds_the_step(configuration):
 
 
 def test_radius_sweep_starts_both_models_at_the_same_perturbed_radius():
-    sys.path.insert(0, str(ROOT / 'scripts'))
     from acds_cli.verbs.emff import linear_run, perturbed_data, steady_spin
     from acds_controller.formation_lqr_step import lqr_controller
     sc = load_scenario('emff_two_vehicle_lqr')

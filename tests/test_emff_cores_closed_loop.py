@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from acds_common.attitude import quat_to_dcm
 from acds_common.environment import EarthFieldConfig, Orbit, OrbitConfig, TiltedDipoleField
 from acds_controller.formation_control import (
     AttitudeLaw,
@@ -35,7 +36,6 @@ from dynamics.formation import (
     VehicleState,
     emfforce_vehicle,
 )
-from dynamics.rigid_body_model import quat_to_dcm
 
 YAW_WHEEL = np.array([[0.0], [0.0], [1.0]])
 

@@ -30,7 +30,7 @@ def test_direct_engine_equals_the_process_graph(launch_graph, tmp_path, name, st
         kept = graph.monitor.snapshot()
     assert result.steps == direct.steps
     assert _comparable(direct.summary) == _comparable(result.summary)
-    from acds_cli.bag.reader import open_bag
+    from acds_runtime.bag.reader import open_bag
 
     bag = open_bag(tmp_path / 'direct_bag')
     recorded: dict[str, list[bytes]] = {}

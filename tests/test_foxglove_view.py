@@ -268,7 +268,7 @@ def test_play_serves_a_bag_the_same_way(tmp_path: Path) -> None:
     DirectRun(load_scenario('heao_b_acquisition'), steps=30, record=bag).run()
     lease = DomainLease()  # a domain no run holds (play refuses a held one)
     lease.close()
-    env = {**os.environ, 'PYTHONPATH': str(ROOT / 'scripts')}
+    env = dict(os.environ)
     play = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'play', str(bag), '--domain', str(lease.domain_id),
                              '--foxglove', '0', '--wait', '60'], stderr=subprocess.PIPE, text=True, env=env)
     try:

@@ -24,7 +24,7 @@ def test_signal_stops_every_node(tmp_path, sig):
     proc = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'run', 'free_tumble_heao_b', '--steps', '1000000',
                              '--run-dir', str(run_dir), '--quiet'],
                             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env={'PYTHONPATH': str(ROOT / 'scripts'), 'PATH': '/usr/bin:/bin',
+                            env={'PATH': '/usr/bin:/bin',
                                  'ROS_LOG_DIR': str(tmp_path / 'log')})
     assert proc.stderr is not None
     for line in proc.stderr:  # wait on the run's own progress output, not on a timer

@@ -31,7 +31,7 @@ def test_shortened_detumble_removes_rate_and_kinetic_energy(tmp_path: Path) -> N
     """Ten minutes at the 1 s period: |ω| well down from 8.66°/s, ½ωᵀJω falling every 100 s."""
     sc = load_scenario('oresat_detumble')
     run = DirectRun(sc, steps=600, record=tmp_path / 'bag').run()
-    from acds_cli.bag.reader import open_bag
+    from acds_runtime.bag.reader import open_bag
 
     codec = Codec(topics.TYPES[topics.TRUTH_ODOMETRY])
     omega = np.array([codec.decode(data)[1].angular for topic, _t, data in open_bag(tmp_path / 'bag').messages()

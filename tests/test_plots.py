@@ -15,9 +15,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 from acds_cli.bag.plots import figures, make_plots
-from acds_cli.bag.reader import open_bag
 from acds_common import topics
 from acds_common.scenario import load_scenario
+from acds_runtime.bag.reader import open_bag
 from acds_runtime.bag.writer import BagError, typestore
 from acds_runtime.direct import DirectRun
 
@@ -91,7 +91,7 @@ def test_long_series_are_gathered_at_a_common_stride_and_the_modes_whole(acquisi
     """Bounded plotting memory: at most ~max_steps steps per numeric series, the same steps on every topic
     (series combine at common stamps), every mode message kept."""
     from acds_cli.bag.plots import _gather
-    from acds_cli.bag.reader import open_bag
+    from acds_runtime.bag.reader import open_bag
 
     bag = open_bag(acquisition[0])
     vectors = {topics.GYRO: lambda m: [m.angular_velocity.x], topics.WHEEL_MOMENTUM: lambda m: [m.vector.x]}

@@ -30,10 +30,10 @@ VENV_BIN = Path(sys.executable).parent
 PYTHON_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml', 'matplotlib': 'python3-matplotlib',
                'pytest': 'python3-pytest', 'rosbags': 'python3-rosbags-pip', 'rclpy': 'rclpy',
                'dask': 'python3-dask', 'tqdm': 'python3-tqdm', 'ppigrf': 'python3-ppigrf-pip',
-               'foxglove': 'python3-foxglove-sdk-pip', 'websockets': 'python3-websockets'}
+               'foxglove': 'python3-foxglove-sdk-pip', 'websockets': 'python3-websockets', 'mcap': 'python3-mcap-pip'}
 #: Packages whose code publishes or subscribes to any graph topic by its type name
-#: (``acds_common.lockstep.message_class``: the node host, and the runtime's monitor and recorder).
-EVERY_TOPIC = {'acds_common', 'acds_runtime'}
+#: (``acds_common.lockstep.message_class``: the node host, the runtime's monitor and recorder, the CLI's recorder and player).
+EVERY_TOPIC = {'acds_common', 'acds_runtime', 'acds_cli'}
 #: Packages that start every node (the launcher runs each node's executable, the direct engine
 #: imports each stepper by its ``package.module:Class`` path).
 EVERY_NODE = {'acds_runtime'}
@@ -133,6 +133,7 @@ def _tree_state() -> str:
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(900)  # eight packages built one after the other: > 300 s on a loaded 2-core machine
 def test_colcon_build_installs_executables_where_ros2_run_looks(tmp_path):
     before = _tree_state()
     proc = subprocess.run(

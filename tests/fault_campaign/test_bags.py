@@ -85,7 +85,7 @@ else:
 
 
 def _env() -> dict[str, str]:
-    return dict(os.environ, PYTHONPATH=str(ROOT / 'scripts'), ROS_LOG_DIR=os.environ.get('ROS_LOG_DIR', '/tmp/acds_ros_log'))
+    return dict(os.environ, ROS_LOG_DIR=os.environ.get('ROS_LOG_DIR', '/tmp/acds_ros_log'))
 
 
 def make_bag(path: Path, storage: str = 'mcap', steps: int = 120, **spec) -> dict:
@@ -188,7 +188,7 @@ def test_what_is_not_a_bag_is_one_line_and_nothing_changes(tmp_path, folder_stat
 
 
 def test_truncated_metadata_says_what_is_wrong(tmp_path):
-    from acds_cli.bag.reader import open_bag
+    from acds_runtime.bag.reader import open_bag
     from acds_runtime.bag.writer import BagError
 
     bag = _truncated_metadata(tmp_path)
@@ -234,7 +234,7 @@ def test_sqlite_hot_journal_is_rolled_back_in_memory_only(tmp_path, folder_state
     exactly the committed transactions, and the database and its journal stay byte-identical."""
     import sqlite3
 
-    from acds_cli.bag.reader import open_bag
+    from acds_runtime.bag.reader import open_bag
     from rosbags.rosbag2 import Reader
 
     bag = tmp_path / 'hot'
@@ -264,7 +264,7 @@ def test_sqlite_hot_journal_is_rolled_back_in_memory_only(tmp_path, folder_state
 
 
 def test_unclosed_mcap_streams_in_time_order_across_out_of_order_chunks(tmp_path, folder_state):
-    from acds_cli.bag.reader import open_bag
+    from acds_runtime.bag.reader import open_bag
 
     bag = tmp_path / 'late'
     make_bag(bag, steps=200, late=100, flush_every=40, spill=10, close=False)
@@ -305,7 +305,7 @@ def test_recover_writes_a_repaired_copy_and_never_touches_the_source(tmp_path, f
     assert custom['acds.scenario_name'] == 'fault_campaign' and custom['acds.steps'] == '150'
     assert custom['acds.recovered'].startswith('170 messages from ')
     assert yaml.safe_load(custom['acds.publishers']) == {WHEELS: ['reaction_wheels']}
-    from acds_cli.bag.reader import open_bag
+    from acds_runtime.bag.reader import open_bag
     assert got == list(open_bag(src).messages()), 'same messages, stamps and order'
     # the copy is an ordinary closed bag
     info = acds('info', str(dest))
@@ -366,7 +366,7 @@ def test_a_dead_recorders_lock_file_does_not_look_like_a_recording(tmp_path, fol
 
 
 def test_info_during_acds_run_record_does_not_disturb_the_recording(launch_graph, tmp_path):
-    from acds_cli.bag.reader import open_bag
+    from acds_runtime.bag.reader import open_bag
 
     bag = tmp_path / 'bag'
     with launch_graph('free_tumble_heao_b', steps=100000, record=bag) as graph:

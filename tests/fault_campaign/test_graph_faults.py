@@ -122,7 +122,7 @@ def test_play_refuses_a_domain_a_running_graph_holds(launch_graph, tmp_path):
         wait_for_messages(graph, topics.CLOCK, 5)
         out = subprocess.run([sys.executable, '-m', 'acds_cli', 'play', str(bag), '--domain',
                               str(graph.lease.domain_id), '--wait', '0'], cwd=ROOT, capture_output=True, text=True,
-                             timeout=120, env={**os.environ, 'PYTHONPATH': str(ROOT / 'scripts')})
+                             timeout=120, env=dict(os.environ))
     assert out.returncode == 2 and 'belongs to a running graph' in out.stderr, out.stderr
     assert len(out.stderr.strip().splitlines()) == 1
 
@@ -165,7 +165,7 @@ def _peak_rss_kib(tmp_path: Path, steps: int) -> int:
     out = subprocess.run([sys.executable, '-c', script, 'run', 'free_tumble_heao_b', '--steps', str(steps),
                           '--no-record', '--quiet', '--run-dir', str(tmp_path / f'run_{steps}')],
                          cwd=ROOT, capture_output=True, text=True, timeout=900,
-                         env={**os.environ, 'PYTHONPATH': str(ROOT / 'scripts')})
+                         env=dict(os.environ))
     assert out.returncode == 0, out.stderr[-2000:]
     return int(next(line for line in out.stderr.splitlines() if line.startswith('RSS')).split()[1])
 

@@ -21,7 +21,7 @@ VENV_BIN = Path(sys.executable).parent
 
 
 def _env(tmp_path: Path) -> dict[str, str]:
-    return {'PYTHONPATH': str(ROOT / 'scripts'), 'PATH': f'{VENV_BIN}:/usr/bin:/bin',
+    return {'PATH': f'{VENV_BIN}:/usr/bin:/bin',
             'ROS_LOG_DIR': str(tmp_path / 'log'), 'CI': 'true'}
 
 

@@ -89,8 +89,14 @@ STOP_GRACE_S = 10.0
 #: A node still running this long after its main loop ended (its flush takes at most 5 s) prints every thread's
 #: stack to its output, so the launcher's report of a hung exit says where it hung.
 STUCK_TRACE_S = 7.0
+#: What the time owner prints as it leaves a completed run, followed by its last step: the launcher's word for where
+#: the run ends (the run monitor may still be draining steps before it; issue 18 §1).
+COMPLETE_PREFIX = 'RUN COMPLETE at step '
 #: Wall seconds the graph may take to become ready and fire its first step (at least; ``input_timeout_s`` if longer).
 READY_TIMEOUT_S = 20.0
+#: A watchdog tick (every 0.1 s) this much later than the one before means the process did not run in between
+#: (SIGSTOP, a cgroup freezer, a starved or suspended machine): that gap is not time spent waiting (issue 18 §4).
+FROZEN_GAP_S = 1.0
 #: Seconds between checks that every input topic has only its declared publisher.
 INTRUDER_CHECK_PERIOD_S = 1.0
 #: What discovery reports for a publisher whose node name it has not learnt yet, and how long it may stay so.
@@ -183,6 +189,8 @@ class LockstepNode(Node):
         self.stepper = stepper_cls(self.params, log=self._log)
         self.failure: str | None = None
         self.done = False
+        #: The step whose stage found the stepper finished (the run's last step), once done.
+        self.last_step: int | None = None
         self._ports: dict[str, _Port] = {}
         for out in self.spec.outputs:
             qos = LOCKSTEP_QOS if out.lockstep else COMMAND_QOS
@@ -205,6 +213,9 @@ class LockstepNode(Node):
         self._ready_from: set[str] = set()
         self._last_progress = time.monotonic()
         self._created = time.monotonic()
+        self._last_tick = time.monotonic()
+        #: The launcher that started this node (0: started by hand); while it is stopped the graph is paused.
+        self._launcher = int(os.environ.get(LAUNCHER_PID_ENV, '0') or 0)
         self._last_intruder_check = 0.0
         self._unnamed_since: dict[str, float] = {}
         self._max_lag = max((i.lag for s in self._stages for i in s.inputs), default=0)
@@ -413,6 +424,7 @@ class LockstepNode(Node):
         self._publish(outputs, k)
         if self.stepper.finished:
             self.done = True
+            self.last_step = k
         elif self.time_owner and stage is self._stages[-1]:
             self._publish_clock(k + 1)
 
@@ -464,8 +476,17 @@ class LockstepNode(Node):
                 out[self.resolve_topic_name(topics.MONITOR_ACK)] = {MONITOR_NAME}
         return out
 
+    def _paused_for(self, now: float) -> float:
+        """Seconds since the last watchdog tick that were a pause, not waiting: the whole gap when this process was
+        not running, or the tick when its launcher is stopped (Ctrl-Z, SIGSTOP: it paces the graph)."""
+        gap, self._last_tick = now - self._last_tick, now
+        return gap if gap > FROZEN_GAP_S or (self._launcher and _stopped(self._launcher)) else 0.0
+
     def _watchdog(self) -> None:
         now = time.monotonic()
+        paused = self._paused_for(now)
+        self._last_progress += paused
+        self._created += paused
         if not self._started:
             self._check_ready(now)
             return
@@ -562,6 +583,16 @@ def release_node(executor: Any, node: Any, context: Any = None) -> None:
     rclpy.try_shutdown(context=context)
 
 
+def _stopped(pid: int) -> bool:
+    """Whether process ``pid`` is stopped (state T: SIGSTOP/SIGTSTP, or t: traced); False when it is gone."""
+    try:
+        with open(f'/proc/{pid}/stat', 'rb') as fh:
+            stat = fh.read()
+    except OSError:
+        return False
+    return stat[stat.rindex(b')') + 2:stat.rindex(b')') + 3] in (b'T', b't')
+
+
 def _die_with_launcher() -> bool:
     """Ask the kernel to SIGKILL this node the moment the launcher that started it dies (issue 9 §2).
 
@@ -621,6 +652,8 @@ def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
             code = EXIT_LOCKSTEP
         else:  # completed, or stopped by a signal: deliver what was published before leaving
             node.flush(timeout_s=2.0 if stop['signal'] is not None else 5.0)
+            if node.time_owner and node.done:
+                print(f'[{name}] {COMPLETE_PREFIX}{node.last_step}', flush=True)
     except (ConfigError, ValueError) as exc:
         print(f'[{name}] CONFIGURATION ERROR: {exc}', file=sys.stderr, flush=True)
         code = EXIT_CONFIG
@@ -638,5 +671,11 @@ def run_node(stepper_cls: type[Stepper], args: list[str] | None = None) -> int:
     os._exit(code)
 
 
-__all__ = ['COMMAND_QOS', 'LOCKSTEP_QOS', 'ConfigError', 'LockstepError', 'LockstepNode', 'message_class',
-           'release_node', 'run_node']
+def completed_step(line: str) -> int | None:
+    """The last step a time owner's output line announces (:data:`COMPLETE_PREFIX`), or None."""
+    _, mark, rest = line.partition(COMPLETE_PREFIX)
+    return int(rest) if mark and rest.strip().isdigit() else None
+
+
+__all__ = ['COMMAND_QOS', 'COMPLETE_PREFIX', 'LOCKSTEP_QOS', 'ConfigError', 'LockstepError', 'LockstepNode',
+           'completed_step', 'message_class', 'release_node', 'run_node']

@@ -1,6 +1,7 @@
 """Scenario files: schema, unit conversion, and the node parameters they become.
 
-A scenario is a YAML file (``scenarios/<name>.yaml``). Quantities carry their
+A scenario is a YAML file (``scenarios/<name>.yaml``; the shipped ones are found through the
+``acds.scenarios`` entry point, :data:`SCENARIO_DIR`). Quantities carry their
 unit in the key, e.g. ``altitude_nmi: 225`` or ``inertia_slug_ft2: [...]``;
 each field accepts a small set of units and is converted to SI here, the one
 place where seed units meet SI (spec header "Units"). ``extends: <name>``
@@ -19,7 +20,7 @@ digits, ``_ - .`` (not starting with ``.``); quaternions must be normalisable;
 ``nodes`` must hold the time owner ``rigid_body`` and no node twice; a run has
 at most :data:`MAX_STEPS` steps. A model's own checks (inertia positive
 definite, apogee above perigee, ...) are the cores' and run in the launcher
-before any process starts (``scripts/acds_cli/preflight.py``).
+before any process starts (:mod:`acds_runtime.preflight`).
 
 The schema is the single source of truth: node parameter names
 (``<section>_<field>_<si unit>``), types, defaults, ranges and descriptions
@@ -34,6 +35,8 @@ import math
 import os
 import re
 from dataclasses import dataclass, field
+from importlib.metadata import entry_points
+from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
@@ -447,8 +450,22 @@ FORMATION_VEHICLE_SECTIONS = ('spacecraft', 'vehicle', 'em_driver', 'wheels')
 #: Nodes a vehicle of a formation may run (each in its namespace /acds/<vehicle>).
 VEHICLE_NODES = ('em_driver', 'reaction_wheels', 'formation_controller')
 
+#: Entry-point group naming the packages that ship scenarios, each in its ``scenarios`` package-data folder.
+SCENARIO_ENTRY_POINTS = 'acds.scenarios'
+
+
+def _shipped_dir() -> Path:
+    """$ACDS_SCENARIO_DIR, else the ``scenarios`` folder of the package the ``shipped`` entry point names
+    (``acds_cli``), else ``./scenarios`` (no such package installed: the nodes alone need none)."""
+    if os.environ.get('ACDS_SCENARIO_DIR'):
+        return Path(os.environ['ACDS_SCENARIO_DIR'])
+    for ep in entry_points(group=SCENARIO_ENTRY_POINTS, name='shipped'):
+        return Path(str(files(ep.module) / 'scenarios')).resolve()
+    return Path('scenarios').resolve()
+
+
 #: Where shipped scenarios live (override with ACDS_SCENARIO_DIR).
-SCENARIO_DIR = Path(os.environ.get('ACDS_SCENARIO_DIR', Path(__file__).resolve().parents[4] / 'scenarios'))
+SCENARIO_DIR = _shipped_dir()
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,7 @@
 """Small-vector kernels on plain Python floats, shared by the cores' per-step loops (no numpy).
 
-3-vectors are float triples, 3×3 matrices triples of rows, quaternions (x, y, z, w) Hamilton,
-scalar last. On 3-vectors numpy's call overhead (~0.5–1 µs per operation) is many times the
+3-vectors are float triples, 3×3 matrices triples of rows (quaternions and rotations:
+:mod:`acds_common.attitude`). On 3-vectors numpy's call overhead (~0.5–1 µs per operation) is many times the
 arithmetic, and the cores run dozens of such operations per control step; IEEE doubles give the
 same bits on every machine (CPython never fuses a multiply and an add).
 """
@@ -15,7 +15,6 @@ import numpy as np
 
 Vec3 = tuple[float, float, float]
 Mat3 = tuple[Vec3, Vec3, Vec3]
-Quat = tuple[float, float, float, float]
 #: The zero 3-vector.
 ZERO: Vec3 = (0.0, 0.0, 0.0)
 
@@ -52,24 +51,6 @@ def mtv(m: Mat3, v: Sequence[float]) -> Vec3:
 def mat3(m: np.ndarray | Sequence[Sequence[float]]) -> Mat3:
     """A 3×3 array as a triple of float rows."""
     return tuple(tuple(float(c) for c in row) for row in np.asarray(m, dtype=float))  # type: ignore[return-value]
-
-
-def dcm(q: Sequence[float]) -> Mat3:
-    """Rotation matrix R of the unit quaternion q = (x, y, z, w): v_rotated = R v (body → reference)."""
-    x, y, z, w = q
-    return ((1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)),
-            (2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)),
-            (2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)))
-
-
-def quat_mul(q1: Sequence[float], q2: Sequence[float]) -> Quat:
-    """Hamilton product q1 ⊗ q2 of (x, y, z, w) quaternions, so that R(q1 ⊗ q2) = R(q1) R(q2)."""
-    x1, y1, z1, w1 = q1
-    x2, y2, z2, w2 = q2
-    return (w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2)
 
 
 def clip(v: Sequence[float], limit: float) -> Vec3:

@@ -32,6 +32,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from acds_common.attitude import conj, to_body
 from acds_common.dpa_commands import AXES, GAIN_TABLE, LAW_CHOICES, SCALAR_GAINS
 from acds_common.units import FT_LB_NM, deg, nms_to_ftlbs, rad_s_to_rpm, rpm_to_rad_s, tesla_to_gauss
 from acds_common.vec3 import ZERO, Vec3, clip, mat3, mv, norm
@@ -64,7 +65,6 @@ from acds_controller.wheel_laws import (
     as_unit_quaternion,
     inertial_hold_error_xyz,
     pointing_error_xyz,
-    rotate_to_body_xyz,
     scan_yaw_volts,
     unit_quaternion_xyzw,
     wheel_volts_xyz,
@@ -206,8 +206,8 @@ class Dpa:
         self._delta = mat3(config.coupling_delta_t_per_am2)
         qt = unit_quaternion_xyzw(config.target_q_body_to_eci, 'target_q_body_to_eci')
         self._target_q = qt
-        self._scan_axis_eci = rotate_to_body_xyz(
-            unit_quaternion_xyzw((-qt[0], -qt[1], -qt[2], qt[3]), 'q_body_to_eci'), (0.0, 0.0, 1.0))
+        self._scan_axis_eci = to_body(
+            unit_quaternion_xyzw(conj(qt), 'q_body_to_eci'), (0.0, 0.0, 1.0))
         self._acquisition_gain_si = bxh_gain_to_si(config.acquisition_gain_study)
         self._bdot_gain_si = bdot_gain_to_si(config.bdot_gain_study)
         self._unloading_gain_si = {'mode_1b': bxh_gain_to_si(config.unloading_gain_mode_1b_study),
@@ -305,7 +305,7 @@ class Dpa:
         if mode == 'celestial_point':
             theta = inertial_hold_error_xyz(q, self._target_q)
             return theta, wheel_volts_xyz(theta, omega, gains, c.v_sat_v)
-        theta = pointing_error_xyz(rotate_to_body_xyz(q, self._scan_axis_eci))
+        theta = pointing_error_xyz(to_body(q, self._scan_axis_eci))
         vx, vy, _vz = wheel_volts_xyz(theta, omega, gains, c.v_sat_v)
         return theta, (vx, vy, scan_yaw_volts(omega[2], c.scan_rate_rad_s, gains.k_p_v_per_rad[2], gains.k_r_s[2],
                                               c.v_sat_v))

@@ -17,10 +17,10 @@ import math
 from typing import Any
 
 import numpy as np
+from acds_common.attitude import quat_to_dcm
 from acds_common.environment import Orbit, OrbitConfig, hill_frame
 from acds_common.inertia import inertia_tensor
 from acds_common.messages import diagnostic, vec, vector3
-from acds_common.rotations import quat_to_dcm
 from acds_common.stepper import Stepper
 from acds_common.validation import scenario_key
 

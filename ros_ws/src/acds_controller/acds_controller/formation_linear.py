@@ -85,7 +85,8 @@ class SpinNominal:
     wheel_hdot_nm: np.ndarray
 
 
-def _rodrigues(theta: np.ndarray) -> np.ndarray:
+def rotation_from_vector(theta: np.ndarray) -> np.ndarray:
+    """exp([θ×]): the rotation matrix of rotation vector θ (Rodrigues); ``formation_lqr.rotation_vector`` inverts it."""
     angle = float(np.linalg.norm(theta))
     k = np.array([[0.0, -theta[2], theta[1]], [theta[2], 0.0, -theta[0]], [-theta[1], theta[0], 0.0]])
     if angle < 1e-300:
@@ -156,7 +157,7 @@ class SpinningArrayModel:
         sigma, u, dtheta, domega = state.reshape(4, n, 3)
         nom = self.nominal
         omega_vec = nom.rate_rad_s * _Z
-        rot = np.stack([_rodrigues(dtheta[k]) for k in range(n)])  # body → inertial at t = 0
+        rot = np.stack([rotation_from_vector(dtheta[k]) for k in range(n)])  # body → inertial at t = 0
         dip_body, hdot = nom.dipoles_am2.copy(), nom.wheel_hdot_nm.copy()
         at = 0
         for k, (v, (nc, nw)) in enumerate(zip(self.vehicles, self.input_sizes, strict=True)):

@@ -24,8 +24,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from acds_common.attitude import Quat, conj, quat_mul, to_body
 from acds_common.units import rad, rpm_to_rad_s
-from acds_common.vec3 import Quat, Vec3, quat_mul
+from acds_common.vec3 import Vec3
 
 from acds_controller.magnetic_laws import ControllerError, as_xyz, check_gain
 
@@ -164,11 +165,6 @@ def pointing_error(target_body_unit: np.ndarray) -> np.ndarray:
     return np.array(pointing_error_xyz(as_xyz(target_body_unit, 'target_body_unit')))
 
 
-def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
-    """Hamilton product q1 ⊗ q2 of (x, y, z, w) quaternions, so that R(q1 ⊗ q2) = R(q1) R(q2)."""
-    return np.array(quat_mul(q1, q2))
-
-
 def unit_quaternion_xyzw(q: object, name: str) -> Quat:
     """Kernel of :func:`as_unit_quaternion`: the same checks, a float 4-tuple."""
     try:
@@ -188,21 +184,15 @@ def as_unit_quaternion(q: object, name: str) -> np.ndarray:
     return np.array(unit_quaternion_xyzw(q, name))
 
 
-def rotate_to_body_xyz(q: Sequence[float], v_eci: Sequence[float]) -> Vec3:
-    """Kernel of :func:`rotate_to_body` (q a unit quaternion)."""
-    r = quat_mul(quat_mul((-q[0], -q[1], -q[2], q[3]), (v_eci[0], v_eci[1], v_eci[2], 0.0)), q)
-    return r[0], r[1], r[2]
-
-
 def rotate_to_body(q_body_to_eci: np.ndarray, v_eci: np.ndarray) -> np.ndarray:
     """Express an ECI vector in body axes: R(q)ᵀ v, q body→ECI (x, y, z, w)."""
     q = unit_quaternion_xyzw(q_body_to_eci, 'q_body_to_eci')
-    return np.array(rotate_to_body_xyz(q, as_xyz(v_eci, 'v_eci')))
+    return np.array(to_body(q, as_xyz(v_eci, 'v_eci')))
 
 
 def inertial_hold_error_xyz(q: Sequence[float], q_target: Sequence[float]) -> Vec3:
     """Kernel of :func:`inertial_hold_error` (unit quaternions)."""
-    x, y, z, w = quat_mul((-q_target[0], -q_target[1], -q_target[2], q_target[3]), q)
+    x, y, z, w = quat_mul(conj(q_target), q)
     c = 2.0 * (1.0 if w >= 0.0 else -1.0)
     return c * x, c * y, c * z
 

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from acds_common.attitude import quat_mul
 from acds_common.dpa_commands import GAIN_LIMITS, GAIN_TABLE
 from acds_common.units import SLUG_FT2_KG_M2, rad, rpm_to_rad_s
 from acds_controller.b_cross_omega import K_OMEGA_SEED, detumble_moment, dump_moment
@@ -18,7 +19,6 @@ from acds_controller.magnetic_laws import (
     saturate,
     wheel_command_momentum_nms,
 )
-from acds_controller.wheel_laws import quat_multiply
 
 #: HEAO-B inertia (Table 4-1, slug-ft²), products of inertia entered as −I_xy etc. (test use only).
 INERTIA_B = SLUG_FT2_KG_M2 * np.array([[1520.0, -47.0, -359.0], [-47.0, 7970.0, -4.0], [-359.0, -4.0, 7920.0]])
@@ -143,7 +143,7 @@ def test_mode_1b_unloads_wheel_momentum() -> None:
 def test_celestial_point_holds_target_and_unloads_with_g_0_02() -> None:
     q_t = _q(np.array([0.3, -0.2, 0.9]), 1.1)
     dpa = _dpa(target_q_body_to_eci=q_t)
-    q = quat_multiply(q_t, _q(np.array([0.0, 1.0, 0.0]), 1e-5))
+    q = quat_mul(q_t, _q(np.array([0.0, 1.0, 0.0]), 1e-5))
     h = np.array([1.0, 2.0, -1.5])
     out = dpa.step('celestial_point', B_T, np.zeros(3), SUN_Z, h, q, 0.5)
     np.testing.assert_allclose(out.wheel_volts_v, [0.0, 2.16, 0.0], atol=1e-6)
@@ -152,7 +152,7 @@ def test_celestial_point_holds_target_and_unloads_with_g_0_02() -> None:
 
 def test_celestial_scan_holds_axis_and_controls_scan_rate() -> None:
     dpa = _dpa()
-    q = quat_multiply(_q(np.array([0.0, 0.0, 1.0]), 2.0), _q(np.array([1.0, 0.0, 0.0]), 1e-5))
+    q = quat_mul(_q(np.array([0.0, 0.0, 1.0]), 2.0), _q(np.array([1.0, 0.0, 0.0]), 1e-5))
     h = np.array([2.0, -1.0, 0.5])
     omega = np.array([0.0, 0.0, rpm_to_rad_s(0.03)])
     out = dpa.step('celestial_scan', B_T, omega, SUN_Z, h, q, 0.5)

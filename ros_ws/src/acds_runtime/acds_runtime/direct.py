@@ -46,6 +46,10 @@ def build_steppers(graph: Graph, params: dict[str, dict[str, Any]],
     return out
 
 
+#: Steps between two prunings of the values no input reads any more (memory stays bounded either way).
+PRUNE_EVERY = 64
+
+
 class DirectRun:
     """Run a scenario's graph in this process (the ``--engine direct`` of ``acds run``)."""
 
@@ -74,11 +78,11 @@ class DirectRun:
         self._store: dict[str, dict[int, Any]] = {topic: {} for topic, _codec, out in self._codecs.values()
                                                   if out.every_step}
         # Per node and output key, what _emit needs every step: (topic, codec, stamp offset, its store or None,
-        # many, observed, hashed: the observer needs its bytes).
+        # many, the observer's sink for its bytes (truth: hashed) or None, for its value or None).
         self._routes: dict[str, dict[str, tuple[Any, ...]]] = {name: {} for name in self.graph.nodes}
         for (node, key), (topic, codec, out) in self._codecs.items():
             self._routes[node][key] = (topic, codec, out.stamp_offset, self._store[topic] if out.every_step else None,
-                                       out.many, self.observer.wants(topic), self.observer.hashes(topic))
+                                       out.many, self.observer.truth_sink(topic), self.observer.value_sink(topic))
         self._max_lag = max((i.lag for spec in self.graph.nodes.values() for st in spec.stages for i in st.inputs),
                             default=0)
         self._writer: Any = None
@@ -86,24 +90,44 @@ class DirectRun:
         self.live_sink = live(self.params) if live is not None else None
 
     def _emit(self, node: str, outputs: dict[str, Any], k: int, *, initial: bool = False) -> None:
-        record, live = self._writer is not None, self.live_sink
+        """Hand a stage's outputs of step k on: to their stores (the consumers' inputs), to the run observer
+        (the bytes of truth topics only: nothing else is encoded unless a bag is recorded or a live view fed)."""
         routes = self._routes[node]
+        bytes_out = self._writer is not None or self.live_sink is not None
+        dt_ns = self.dt_ns
         for key, value in outputs.items():
             route = routes.get(key)
             if route is None:
                 raise LaunchError(f'{node}: stepper returned undeclared output {key!r}')
-            topic, codec, offset, store, many, observed, hashed = route
+            topic, codec, offset, store, many, truth, feed = route
             step = k if initial else k + offset
             if store is not None:
                 store[step] = value
-            if record or live is not None or observed:
-                for item in (value if many else (value,)):
-                    data = codec.encode(step * self.dt_ns, item) if record or live is not None or hashed else None
-                    if record:
-                        self._writer.write(topic, data)
-                    if live is not None:
-                        live(topic, data, item)
-                    self.observer.feed(topic, step, item, data)
+            if bytes_out:
+                self._publish(topic, codec, step, value if many else (value,), truth, feed)
+            elif many:
+                if feed is not None:
+                    for item in value:
+                        feed(topic, step, item)
+            else:
+                if truth is not None:
+                    truth(codec.encode(step * dt_ns, value))
+                if feed is not None:
+                    feed(topic, step, value)
+
+    def _publish(self, topic: str, codec: Codec, step: int, items: Any, truth: Any, feed: Any) -> None:
+        """Recording or a live view: every message encoded, written, shown and observed."""
+        live = self.live_sink
+        for item in items:
+            data = codec.encode(step * self.dt_ns, item)
+            if self._writer is not None:
+                self._writer.write(topic, data)
+            if live is not None:
+                live(topic, data, item)
+            if truth is not None:
+                truth(data)
+            if feed is not None:
+                feed(topic, step, item)
 
     def _clock_tick(self, k: int) -> None:
         if self._writer is not None or self.live_sink is not None:
@@ -142,44 +166,49 @@ class DirectRun:
         owner_name = self.graph.time_owner
         owner = self.steppers[owner_name]
         present = set(self.graph.nodes)
-        # Per stage: its bound method, the inputs of absent sources (always None) and, per input of a present
-        # source, (key, store of its topic, lag, topic, source).
+        # Per stage: its node, name, bound method, the inputs of absent sources (always None) and, per input of a
+        # present source, (key, store of its topic, lag, topic, source). A lagged input is None before its first
+        # step: each store holds None at the steps before 0 its readers look back to.
         plan = []
         for name, stage in self.graph.firing_order():
             spec = self.graph.nodes[name]
             absent = {inp.key: None for inp in stage.inputs if inp.source not in present}
             live = tuple((inp.key, self._store.get(spec.topic(inp.topic), {}), inp.lag, spec.topic(inp.topic),
                           inp.source) for inp in stage.inputs if inp.source in present)
+            for _key, store, lag, _topic, _source in live:
+                store.update(dict.fromkeys(range(-lag, 0)))
             plan.append((name, stage.name, getattr(self.steppers[name], stage.name), absent, live))
         buffers = list(self._store.values())
+        emit, progress, steps, dt_ns = self._emit, self.progress, self.steps, self.dt_ns
         self._clock_tick(0)
         self._emit(owner_name, owner.start(), 0, initial=True)
         k = 0
         while True:
-            t_s = k * self.dt_ns / 1e9
+            t_s = k * dt_ns / 1e9
             for name, stage_name, method, absent, live in plan:
                 inputs = dict(absent)
                 for key, store, lag, topic, source in live:
-                    back = k - lag
-                    if back < 0:
-                        inputs[key] = None
-                        continue
                     try:
-                        inputs[key] = store[back]
+                        inputs[key] = store[k - lag]
                     except KeyError:
                         raise LaunchError(f'node {source} produced no {topic} for step '
-                                          f'{back} ({name}.{stage_name} needs it)') from None
+                                          f'{k - lag} ({name}.{stage_name} needs it)') from None
                 try:
                     outputs = method(k, t_s, inputs)
                 except StepError as exc:
                     raise LaunchError(f'node {name} failed at step {k}: {exc}') from None
-                self._emit(name, outputs, k)
+                except Exception as exc:  # noqa: BLE001 (as a node process reports it: one line naming the step)
+                    raise LaunchError(f'node {name} failed: stage {stage_name} raised {type(exc).__name__} at step '
+                                      f'{k}: {exc}') from None
+                emit(name, outputs, k)
             if owner.finished:
                 return k
             k += 1
             self._clock_tick(k)
-            if self.progress is not None:
-                self.progress(k, self.steps, time.monotonic() - t0)
-            oldest = k - self._max_lag - 1
-            for buf in buffers:
-                buf.pop(oldest, None)
+            if progress is not None:
+                progress(k, steps, time.monotonic() - t0)
+            if not k % PRUNE_EVERY:  # values no input can still read
+                oldest = k - self._max_lag
+                for buf in buffers:
+                    for old in [s for s in buf if s < oldest]:
+                        del buf[old]

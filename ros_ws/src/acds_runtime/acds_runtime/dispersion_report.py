@@ -20,6 +20,14 @@ Final stored wheel momentum is the Table 4-7 column *at capture*: its percentile
 captured samples only (``n`` says how many). Peaks (wheel |h|, moment command) are over the whole
 of every run. Failed runs (an error) are counted and listed, and take part in nothing.
 
+Intervals. Each percentile has a percentile-bootstrap interval at :data:`CONFIDENCE_PCT` (the
+samples that count resampled with replacement :data:`BOOTSTRAP_RESAMPLES` times from a generator
+seeded by the study seed and the quantity, so a study's intervals are reproducible; censored values
+stay +∞, so a bound that touches them is "> T"), and beside it the sample count that would make the
+interval's full width the stated share of the percentile's value (``--target-width``, default
+:data:`TARGET_WIDTH_PCT` %): a quantile estimate's error falls as 1/√n (its asymptotic variance is
+p(1 − p)/(n f(x_p)²)), so n · (width / target)², rounded up.
+
 Sensitivity. Spearman's rank correlation of acquisition time (and time on magnetics only) with each
 drawn variable and each derived angle, censored samples ranked above every reached time (ties
 averaged). With n samples, |ρ| > 1.96/√(n − 1) is unlikely (5 %) under no dependence. Drawn angles
@@ -48,8 +56,12 @@ from .summary import summary_json
 
 #: Percentiles reported for every quantity.
 PERCENTILES = (5, 10, 25, 50, 75, 90, 95)
-#: Bootstrap resamples of the paired median ratio.
+#: Bootstrap resamples of the paired median ratio and of each percentile's interval.
 BOOTSTRAP_RESAMPLES = 2000
+#: Confidence of the interval on each percentile, %.
+CONFIDENCE_PCT = 95.0
+#: Default full width of the interval a study should reach, % of the percentile's value (module doc).
+TARGET_WIDTH_PCT = 10.0
 #: Spawn key of the bootstrap's generator under the study seed (sample streams use (index, ...)).
 BOOTSTRAP_STREAM = 0xB0075
 #: Time keys whose None means "not reached by the end of the run" (censored), and when the sample counts.
@@ -120,7 +132,6 @@ def make_row(index: int, name: str, drawn: dict[str, Any], geometry: dict[str, A
         'wheel_saturation_time_min': summary.get('wheel_saturation_time_min'),
         'final_mode': summary.get('final_mode'),
         'truth_digest': summary.get('truth_digest'),
-        'wall_seconds': summary.get('wall_seconds'),
     })
     return row
 
@@ -167,18 +178,46 @@ def percentile(values: np.ndarray, p: float) -> float | None:
     return v if math.isfinite(v) else None
 
 
-def describe(rows: Sequence[dict[str, Any]], q: Quantity) -> dict[str, Any]:
-    """``{"p5": …, …, "p95": …, "n", "censored", "censored_above", "unit"}`` of one quantity."""
+def _bootstrap_sorted(values: np.ndarray, seed: int, stream: tuple[int, ...]) -> np.ndarray:
+    """:data:`BOOTSTRAP_RESAMPLES` resamples of ``values`` (with replacement), each row sorted; seeded by the
+    study seed under ``(BOOTSTRAP_STREAM, *stream)``."""
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(BOOTSTRAP_STREAM, *stream)))
+    return np.sort(values[rng.integers(len(values), size=(BOOTSTRAP_RESAMPLES, len(values)))], axis=1)
+
+
+def samples_for_width(n: int, interval: Sequence[float | None], value: float | None, target_pct: float) -> int | None:
+    """Samples that would bring the interval's full width to ``target_pct`` % of ``value`` (1/√n, module doc)."""
+    lo, hi = interval
+    if lo is None or hi is None or value is None or value == 0 or hi == lo:  # hi == lo: one value, any n will do
+        return None
+    return max(2, math.ceil(n * ((hi - lo) / (target_pct / 100 * abs(value))) ** 2))
+
+
+def describe(rows: Sequence[dict[str, Any]], q: Quantity, seed: int, stream: int,
+             target_pct: float = TARGET_WIDTH_PCT) -> dict[str, Any]:
+    """``{"p5": …, …, "p95": …, "n", "censored", "censored_above", "unit", "interval": {"p5": [lo, hi], …},
+    "samples_for_width": {"p5": N, …}, "confidence_pct", "target_width_pct"}`` of one quantity (module doc)."""
     vals, censor_at = values_of(rows, q)
     out: dict[str, Any] = {f'p{p}': percentile(vals, p) for p in PERCENTILES}
     out.update(n=len(vals), censored=len(censor_at), censored_above=min(censor_at) if censor_at else None,
                unit=q.unit)
+    tail = (100.0 - CONFIDENCE_PCT) / 2
+    boot = _bootstrap_sorted(vals, seed, (stream,)) if len(vals) else None
+    intervals: dict[str, list[float | None]] = {}
+    for p in PERCENTILES:
+        dist = _interpolate(boot, p) if boot is not None else np.array([])
+        intervals[f'p{p}'] = [percentile(dist, tail), percentile(dist, 100.0 - tail)]
+    out['interval'] = intervals
+    out['samples_for_width'] = {k: samples_for_width(len(vals), v, out[k], target_pct) for k, v in intervals.items()}
+    out.update(confidence_pct=CONFIDENCE_PCT, target_width_pct=target_pct)
     return out
 
 
-def percentiles(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+def percentiles(rows: Sequence[dict[str, Any]], seed: int, target_pct: float = TARGET_WIDTH_PCT
+                ) -> dict[str, dict[str, Any]]:
     """:func:`describe` of every quantity the rows have."""
-    return {q.key: describe(rows, q) for q in QUANTITIES if any(q.key in r for r in rows)}
+    return {q.key: describe(rows, q, seed, i, target_pct) for i, q in enumerate(QUANTITIES)
+            if any(q.key in r for r in rows)}
 
 
 def ranks(x: np.ndarray) -> np.ndarray:
@@ -240,9 +279,7 @@ def paired_ratio(case: np.ndarray, ref: np.ndarray, seed: int) -> dict[str, Any]
     out: dict[str, Any] = {'ratio_median': percentile(x, 50), 'ratio_ci90': [None, None], 'pairs': len(x),
                            'pairs_dropped': dropped}
     if len(x):
-        rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(BOOTSTRAP_STREAM,)))
-        boot = np.sort(x[rng.integers(len(x), size=(BOOTSTRAP_RESAMPLES, len(x)))], axis=1)
-        medians = _interpolate(boot, 50)
+        medians = _interpolate(_bootstrap_sorted(x, seed, ()), 50)
         out['ratio_ci90'] = [percentile(medians, 5), percentile(medians, 95)]
     return out
 
@@ -274,14 +311,27 @@ def _fmt(v: float | None, above: float | None, spec: str = '.1f') -> str:
 
 
 def percentile_table(stats: dict[str, dict[str, Any]]) -> str:
-    """The percentile table in study units (text)."""
-    head = f'{"quantity":44s} {"unit":9s} {"n":>4s} {"cens":>4s} ' + ' '.join(f'{"p" + str(p):>7s}' for p in PERCENTILES)
-    lines = [head, '-' * len(head)]
+    """The percentile table in study units (text): per quantity its percentiles, their bootstrap intervals and
+    the samples that would narrow each interval to the target width."""
+    cell = 15
+    head = f'{"quantity":44s} {"unit":9s} {"n":>5s} {"cens":>4s} ' + ' '.join(f'{"p" + str(p):>{cell}s}'
+                                                                           for p in PERCENTILES)
+    some = next(iter(stats.values()), {})
+    lines = [f'each percentile, below it its {some.get("confidence_pct", CONFIDENCE_PCT):g} % bootstrap interval and '
+             f'the samples for an interval {some.get("target_width_pct", TARGET_WIDTH_PCT):g} % of the value wide',
+             head, '-' * len(head)]
     labels = {q.key: q.label for q in QUANTITIES}
+    pad = ' ' * (44 + 9 + 5 + 4 + 3)
     for key, s in stats.items():
         spec = '.0f' if s['unit'] == 'A·m²' else '.2f' if s['unit'] == 'ft-lb-sec' else '.1f'
-        lines.append(f'{labels[key]:44s} {s["unit"]:9s} {s["n"]:4d} {s["censored"]:4d} ' +
-                     ' '.join(f'{_fmt(s[f"p{p}"], s["censored_above"], spec):>7s}' for p in PERCENTILES))
+        above = s['censored_above']
+        lines.append(f'{labels[key]:44s} {s["unit"]:9s} {s["n"]:5d} {s["censored"]:4d} ' +
+                     ' '.join(f'{_fmt(s[f"p{p}"], above, spec):>{cell}s}' for p in PERCENTILES))
+        intervals = [s['interval'][f'p{p}'] for p in PERCENTILES]
+        lines.append(f'{"  interval":{len(pad) - 1}s} ' + ' '.join(
+            f'{"[" + _fmt(lo, above, spec) + ", " + _fmt(hi, above, spec) + "]":>{cell}s}' for lo, hi in intervals))
+        lines.append(f'{"  samples for the target width":{len(pad) - 1}s} ' + ' '.join(
+            f'{_fmt(s["samples_for_width"][f"p{p}"], None, "d"):>{cell}s}' for p in PERCENTILES))
     return '\n'.join(lines)
 
 

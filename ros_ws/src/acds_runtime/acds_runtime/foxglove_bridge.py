@@ -37,13 +37,13 @@ from dataclasses import dataclass
 from typing import Any
 
 from acds_common import topics, units
+from acds_common.attitude import dcm_to_quat
 from acds_common.cdr import Codec, stamp_ns
 from acds_common.environment import Sun, SunConfig, ecliptic_normal_eci, sun_frame_dcm
 from acds_common.frames import SUN_FRAME
 from acds_common.graph import build_graph
 from acds_common.messages import mode_status
 from acds_common.scenario import SCHEMA
-from dynamics.rigid_body_model import dcm_to_quat
 from foxglove.channels import FrameTransformsChannel
 from foxglove.messages import FrameTransform, FrameTransforms, Quaternion, Timestamp, Vector3
 from foxglove.websocket import Capability, ServerListener

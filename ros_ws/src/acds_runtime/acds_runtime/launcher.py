@@ -27,7 +27,7 @@ from typing import IO, Any
 import yaml
 from acds_common import topics
 from acds_common.graph import Graph, build_graph
-from acds_common.lockstep import LAUNCHER_PID_ENV, STOP_GRACE_S
+from acds_common.lockstep import LAUNCHER_PID_ENV, STOP_GRACE_S, completed_step
 from acds_common.parameters import node_parameters, parameters_yaml
 from acds_common.scenario import Scenario
 
@@ -35,12 +35,14 @@ from . import shm
 from .monitor import RunMonitor
 from .summary import RunObserver
 
-ROOT = Path(__file__).resolve().parents[2]
 VENV_BIN = Path(sys.executable).parent
 FASTDDS_PROFILE = Path(__file__).with_name('fastdds_profile.xml')
 DOMAIN_LOCK_DIR = Path(os.environ.get('ACDS_DOMAIN_LOCK_DIR', '/tmp/acds_domains'))
 #: Domain IDs handed out to runs (0 stays free for a user's own ROS graph).
 DOMAIN_RANGE = range(11, 100)
+#: Wall seconds the run monitor may go without taking in a single message while it drains a completed run's last
+#: steps; a slow monitor on a starved machine keeps going as long as it advances (issue 18 §1).
+DRAIN_STALL_S = 30.0
 
 
 class LaunchError(RuntimeError):
@@ -57,6 +59,8 @@ class NodeProcess:
     reader: threading.Thread | None = None
     #: Seconds it was given to stop after SIGINT when the launcher had to SIGKILL it (None: it stopped, or died).
     killed_after_s: float | None = None
+    #: The last step of the run, as the time owner announced it on leaving a completed run.
+    completed_step: int | None = None
 
 
 @dataclass
@@ -152,6 +156,8 @@ class GraphRun:
         self.lease: DomainLease | None = None
         self.monitor: RunMonitor | None = None
         self._t0 = 0.0
+        #: The SIGTSTP handler this run replaced (restored when it stops); None when not installed.
+        self._tstp_before: Any = None
 
     # ---- lifecycle ----------------------------------------------------------------------------------
     def __enter__(self) -> GraphRun:
@@ -240,11 +246,32 @@ class GraphRun:
             proc.reader = threading.Thread(target=self._forward, args=(proc, popen.stdout), daemon=True)
             proc.reader.start()
             self.processes[name] = proc
+        if threading.current_thread() is threading.main_thread():
+            self._tstp_before = signal.signal(signal.SIGTSTP, self._suspend)
+
+    def _suspend(self, _signum: int, _frame: Any) -> None:
+        """Ctrl-Z (SIGTSTP): stop every node with the launcher, and continue them when it is continued (issue 18
+        §4). The nodes run in sessions of their own, so the terminal's signal reaches only the launcher; a graph
+        whose nodes ran on would wait on a stopped run monitor and time out."""
+        self._signal_nodes(signal.SIGSTOP)
+        # SIGSTOP, not the default action of SIGTSTP, which the kernel discards in an orphaned process group (a
+        # launcher started in a session of its own); the shell sees the job stopped either way.
+        os.kill(os.getpid(), signal.SIGSTOP)  # returns on SIGCONT (fg, bg)
+        self._signal_nodes(signal.SIGCONT)
+
+    def _signal_nodes(self, sig: signal.Signals) -> None:
+        for proc in self.processes.values():
+            if proc.popen.poll() is None:
+                try:
+                    os.killpg(proc.popen.pid, sig)
+                except ProcessLookupError:
+                    pass
 
     def _forward(self, proc: NodeProcess, stream: IO[str] | None) -> None:
         assert stream is not None
         for line in stream:
             line = line.rstrip('\n')
+            proc.completed_step = completed_step(line) if proc.completed_step is None else proc.completed_step
             proc.tail.append(line)
             self.echo(f'[{proc.name}] {line}')
 
@@ -306,18 +333,17 @@ class GraphRun:
         return f'{head}\n  last lines of {proc.name}:\n{lines}'
 
     def _complete(self) -> RunResult:
-        """The time owner finished: wait for every per-step topic's last step, stop the nodes, summarise."""
-        assert self.monitor is not None and self.observer is not None
+        """The time owner finished: drain the monitor (and so the recorder) through the owner's last step, stop the
+        nodes, summarise. Completion is the step the time owner announced, never how far the monitor got."""
+        assert self.monitor is not None and self.observer is not None and self.graph is not None
         wall = time.monotonic() - self._t0
-        mon = self.monitor
-        if not mon.wait_for(lambda: mon.clock_step >= 0, timeout_s=10.0):
-            self._check_health()
-            raise LaunchError('run monitor received no /clock at all (its /clock reader never matched rigid_body)')
-        final = mon.clock_step
-        if not mon.wait_for(lambda: mon.complete_through(final), timeout_s=10.0):
-            late = {t: k for t, k in mon.last_steps().items() if k < final}
-            raise LaunchError(f'run monitor did not receive step {final} of ' +
-                              ', '.join(f'{t} (last step {k})' for t, k in sorted(late.items())))
+        owner = self.processes[self.graph.time_owner]
+        if owner.reader is not None:
+            owner.reader.join(timeout=5.0)
+        final = owner.completed_step
+        if final is None:
+            raise LaunchError(f'{owner.name} exited 0 without announcing its last step; the run is not valid')
+        self._drain(final)
         codes = self._stop_children()
         # Every output of every step is in (above): a node that hung on its way out cost nothing but is reported.
         warnings = [self._death_report(proc, codes[name]) for name, proc in self.processes.items()
@@ -328,15 +354,25 @@ class GraphRun:
             raise LaunchError(self._death_report(self.processes[name], bad[name]))
         self._check_health()
         summary = self.observer.summary(final, wall)
-        return RunResult(self.scenario, final, wall, summary, codes, self.record, mon, warnings)
+        return RunResult(self.scenario, final, wall, summary, codes, self.record, self.monitor, warnings)
+
+    def _drain(self, final: int) -> None:
+        """Wait until the monitor holds every step 0…``final`` of /clock and of every per-step topic, as long as it
+        advances (:data:`DRAIN_STALL_S` without a message ends the wait); a step it lacks then fails the run."""
+        mon = self.monitor
+        assert mon is not None
+        while mon.behind(final) and not mon.gaps():
+            seen = mon.received()
+            if not mon.wait_for(lambda s=seen: not mon.behind(final) or mon.received() != s, timeout_s=DRAIN_STALL_S):
+                break
+        self._check_health()
+        missing = mon.behind(final) + mon.gaps()
+        if missing:
+            raise LaunchError(f'the run ended at step {final} but the run monitor lacks ' + ', '.join(missing) +
+                              ': the summary and the bag would miss them, so the run is not valid')
 
     def _stop_children(self, grace_s: float = STOP_GRACE_S) -> dict[str, int]:
-        for proc in self.processes.values():
-            if proc.popen.poll() is None:
-                try:
-                    os.killpg(proc.popen.pid, signal.SIGINT)
-                except ProcessLookupError:
-                    pass
+        self._signal_nodes(signal.SIGINT)
         deadline = time.monotonic() + grace_s
         codes: dict[str, int] = {}
         for name, proc in self.processes.items():
@@ -350,6 +386,9 @@ class GraphRun:
 
     def stop(self) -> None:
         """Stop every child (SIGINT, then SIGKILL after a grace period) and release the domain."""
+        if self._tstp_before is not None:
+            signal.signal(signal.SIGTSTP, self._tstp_before)
+            self._tstp_before = None
         if any(p.popen.poll() is None for p in self.processes.values()):
             self._stop_children()
         for proc in self.processes.values():

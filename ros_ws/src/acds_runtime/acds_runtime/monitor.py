@@ -48,6 +48,8 @@ class TopicState:
     last_step: int = -1
     count: int = 0
     kept: list[bytes] = field(default_factory=list)
+    #: Steps that never arrived between two that did (first missing, last missing), per-step topics of one publisher.
+    gaps: list[tuple[int, int]] = field(default_factory=list)
 
 
 class RunMonitor:
@@ -157,9 +159,12 @@ class RunMonitor:
         k = stamp_ns(data) // self.dt_ns if st.stamped else None
         with self._lock:
             if k is not None and st.every_step:
-                if k <= st.last_step and len(st.publishers) == 1:
-                    self._intrude(f'a second message for step {k} on {topic}: data from a publisher outside '
-                                  f'the graph (declared: {", ".join(sorted(st.publishers))})')
+                if len(st.publishers) == 1:
+                    if k <= st.last_step:
+                        self._intrude(f'a second message for step {k} on {topic}: data from a publisher outside '
+                                      f'the graph (declared: {", ".join(sorted(st.publishers))})')
+                    elif st.last_step >= 0 and k > st.last_step + 1:
+                        st.gaps.append((st.last_step + 1, k - 1))
                 st.last_step = max(st.last_step, k)
             st.count += 1
             if self.keep:
@@ -179,6 +184,8 @@ class RunMonitor:
         if self.sink is not None:
             self.sink(topics.CLOCK, data)
         with self._lock:
+            if self.clock_step >= 0 and k > self.clock_step + 1:
+                self._clock.gaps.append((self.clock_step + 1, k - 1))
             self.clock_step = max(self.clock_step, k)
             self._clock.count += 1
             if self.keep:
@@ -198,6 +205,26 @@ class RunMonitor:
         """Whether every per-step topic of the graph has arrived up to step ``k``."""
         with self._lock:
             return all(st.last_step >= k for st in self.topics.values() if st.every_step)
+
+    def _per_step(self) -> list[tuple[TopicState, int]]:
+        """/clock and every per-step topic, each with its last step (call with the lock held)."""
+        return [(self._clock, self.clock_step), *((st, st.last_step) for st in self.topics.values() if st.every_step)]
+
+    def behind(self, k: int) -> list[str]:
+        """/clock and the per-step topics not yet received up to step ``k``, with the step each is at."""
+        with self._lock:
+            return [f'{st.name} (last step {last})' for st, last in self._per_step() if last < k]
+
+    def gaps(self) -> list[str]:
+        """Steps that never arrived between two that did, by topic (a step missing for good)."""
+        with self._lock:
+            return [f'{st.name} steps {a}…{b}' if b > a else f'{st.name} step {a}'
+                    for st, _ in self._per_step() for a, b in st.gaps]
+
+    def received(self) -> int:
+        """Messages taken in so far, on every topic (a measure of progress)."""
+        with self._lock:
+            return self._clock.count + sum(st.count for st in self.topics.values())
 
     def messages(self, topic: str) -> list[Any]:
         """Kept messages of ``topic`` (relative or absolute name) as rclpy objects (``keep=True`` only)."""

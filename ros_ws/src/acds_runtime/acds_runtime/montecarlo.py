@@ -16,10 +16,13 @@ gives the result a single machine gives.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import shutil
 import sys
 import tempfile
-from collections.abc import Callable, Sequence
+import time
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,7 +39,8 @@ class MonteCarloError(RuntimeError):
 
 def run_sample(text: str, engine: str = 'direct', steps: int | None = None) -> dict[str, Any]:
     """The task: run one sample's scenario (YAML text) for ``steps`` (default: its duration, or to
-    capture) and return its run summary; a failed run returns ``{'scenario', 'error'}``."""
+    capture) and return its run summary; a failed run (a diverging sample, a node that fails) returns
+    ``{'scenario', 'error'}`` on every engine, so one sample never takes the study's others with it."""
     from .launcher import GraphRun, LaunchError
 
     scenario = scenario_from_text(text)
@@ -46,11 +50,51 @@ def run_sample(text: str, engine: str = 'direct', steps: int | None = None) -> d
             return DirectRun(scenario, steps=steps).run().summary
         if engine != 'graph':
             raise MonteCarloError(f'unknown engine {engine!r} (engines: {", ".join(ENGINES)})')
-        with tempfile.TemporaryDirectory(prefix='acds_mc_') as tmp, \
-                GraphRun(scenario, Path(tmp), steps=steps, echo=lambda _line: None) as graph:
+        with sample_folder() as tmp, GraphRun(scenario, tmp, steps=steps, echo=lambda _line: None) as graph:
             return graph.wait().summary
     except LaunchError as exc:
         return {'scenario': scenario.name, 'error': str(exc)}
+
+
+#: Prefix of a graph sample's temporary run folder (in the temporary directory, ``TMPDIR``).
+SAMPLE_DIR_PREFIX = 'acds_mc_'
+#: The lock file a live sample holds (``flock``) in its folder: a folder whose lock nobody holds is a zombie.
+_SAMPLE_LOCK = '.owner'
+
+
+@contextlib.contextmanager
+def sample_folder() -> Iterator[Path]:
+    """A graph sample's run folder, locked while its process lives, removed when the sample ends."""
+    import fcntl
+
+    folder = Path(tempfile.mkdtemp(prefix=SAMPLE_DIR_PREFIX))
+    try:
+        with open(folder / _SAMPLE_LOCK, 'w') as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            yield folder
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def clean_zombies(before: set[str] | None = None) -> tuple[list[str], list[Path]]:
+    """Remove what graph samples of a study that was killed (its process, or a Dask worker) left: Fast DDS
+    segments and ports in /dev/shm nobody holds (:func:`acds_runtime.shm.clean_run`: zombies only, among the
+    entries not in ``before``, default every entry) and sample folders whose lock nobody holds (and not
+    created in the last :data:`acds_runtime.shm.MIN_AGE_S`). Returns both lists."""
+    from . import shm
+
+    removed = shm.clean_run(set() if before is None else before)
+    folders = []
+    for folder in Path(tempfile.gettempdir()).glob(f'{SAMPLE_DIR_PREFIX}*'):
+        lock = folder / _SAMPLE_LOCK
+        try:
+            young = time.time() - (lock if lock.exists() else folder).stat().st_mtime < shm.MIN_AGE_S
+        except OSError:
+            continue
+        if folder.is_dir() and not young and not (lock.exists() and shm.lock_held(lock)):
+            shutil.rmtree(folder, ignore_errors=True)
+            folders.append(folder)
+    return removed, folders
 
 
 def _environment() -> dict[str, str]:
@@ -78,30 +122,62 @@ class Execution:
 
 def run_samples(texts: Sequence[str], *, engine: str = 'direct', steps: int | None = None, jobs: int = 1,
                 scheduler: str | None = None, progress: bool = True,
-                on_result: Callable[[int], None] | None = None) -> tuple[list[dict[str, Any]], Execution]:
+                on_result: Callable[[int, dict[str, Any]], None] | None = None
+                ) -> tuple[list[dict[str, Any]], Execution]:
     """Run every sample; its summaries in the order of ``texts``, and where they ran.
 
-    ``on_result(done)`` is called after each finished sample (``done`` finished so far).
+    ``on_result(i, summary)`` is called as each sample finishes (``i`` its position in ``texts``), in the
+    order they finish. On the graph engine, what killed studies left behind is removed first
+    (:func:`clean_zombies`) and what this one's runs leave (an interrupted one too) at its end.
     """
     if engine not in ENGINES:
         raise MonteCarloError(f'unknown engine {engine!r} (engines: {", ".join(ENGINES)})')
     from tqdm import tqdm
 
+    from . import shm
+
+    before = None
+    if engine == 'graph':
+        clean_zombies()
+        before = shm.snapshot()
     tty = sys.stderr.isatty()
     bar = tqdm(total=len(texts), desc='[montecarlo] samples', unit='run', file=sys.stderr, disable=not progress,
                mininterval=0.5 if tty else 10.0, ascii=not tty, dynamic_ncols=tty)
     try:
         if scheduler is None and jobs == 1:
             results = []
-            for text in texts:
+            for i, text in enumerate(texts):
                 results.append(run_sample(text, engine, steps))
                 bar.update(1)
                 if on_result is not None:
-                    on_result(len(results))
+                    on_result(i, results[-1])
             return results, Execution('in-process', 1, 1)
         return _run_dask(texts, engine, steps, jobs, scheduler, bar, on_result)
     finally:
         bar.close()
+        if before is not None:  # the zombies of runs this study's end interrupted (live or young ones: next start)
+            clean_zombies(before)
+
+
+#: The resource tracker's report of the semaphores it unlinks after its parent died (-W syntax).
+TRACKER_REPORT = 'ignore:resource_tracker:UserWarning:multiprocessing.resource_tracker'
+
+
+def quiet_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker without its report of "leaked semaphore objects" (issue 18 item 8).
+
+    A local cluster's nannies hand each worker process two multiprocessing queues (three named
+    semaphores each), which the tracker, shared by this process and its workers, unlinks when this
+    process is SIGKILLed: nothing is left in /dev/shm, but it printed "There appear to be 12 leaked
+    semaphore objects" (two workers) over the user's terminal. The tracker takes its warning filters
+    from this interpreter's ``-W`` options when it starts, so the filter is added first; a tracker
+    already running is left as it is.
+    """
+    from multiprocessing import resource_tracker
+
+    if TRACKER_REPORT not in sys.warnoptions:
+        sys.warnoptions.append(TRACKER_REPORT)
+    resource_tracker.ensure_running()
 
 
 def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:
@@ -111,6 +187,7 @@ def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:
     from dask.distributed import Client, LocalCluster
 
     if scheduler is None:
+        quiet_resource_tracker()
         cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None,
                                silence_logs=logging.ERROR)
         return Client(cluster, set_as_default=False), cluster
@@ -143,7 +220,7 @@ def _check_workers(client: Any, notes: list[str]) -> None:
 
 
 def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, scheduler: str | None, bar: Any,
-              on_result: Callable[[int], None] | None) -> tuple[list[dict[str, Any]], Execution]:
+              on_result: Callable[[int, dict[str, Any]], None] | None) -> tuple[list[dict[str, Any]], Execution]:
     from dask.distributed import as_completed
 
     client, cluster = _connect(jobs, scheduler)
@@ -156,21 +233,22 @@ def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, s
         indices: dict[str, list[int]] = {}
         for i, text in enumerate(texts):
             indices.setdefault(task_key(text, engine, steps), []).append(i)
-        futures = [client.submit(run_sample, texts[ix[0]], engine, steps, key=key, pure=False)
-                   for key, ix in indices.items()]
+        pending = as_completed(loop=client.loop)
+        for key, ix in indices.items():
+            pending.add(client.submit(run_sample, texts[ix[0]], engine, steps, key=key, pure=False))
         results: list[dict[str, Any] | None] = [None] * len(texts)
-        done = 0
-        for future in as_completed(futures, loop=client.loop):
+        for future in pending:
             try:
                 summary = future.result()
             except Exception as exc:  # noqa: BLE001 (a sample that failed on every try is reported, not dropped)
                 summary = {'error': f'{type(exc).__name__}: {exc}'}
-            for i in indices[future.key]:
+            ix = indices[future.key]
+            future.release()  # read: the scheduler may forget it (a lost worker then recomputes nothing read)
+            for i in ix:
                 results[i] = summary
-                done += 1
-            bar.update(len(indices[future.key]))
-            if on_result is not None:
-                on_result(done)
+                if on_result is not None:
+                    on_result(i, summary)
+            bar.update(len(ix))
         missing = [i for i, r in enumerate(results) if r is None]
         if missing:  # as_completed yields every future; this would be a Dask bug, said rather than hidden
             raise MonteCarloError(f'samples {missing} came back from no task')

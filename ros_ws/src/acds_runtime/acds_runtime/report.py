@@ -5,6 +5,7 @@ Keys carry their unit in the name (``_min``, ``_ftlbs``, ``_deg_s``, ``_gauss``,
 (and ``/ rss``), a missing value as ``—``. Tables (lists of records: transitions, passes,
 events; reports holding records: a formation's vehicles, the dump report's orbits) are printed by
 their summary modules (:func:`acds_runtime.summary.print_tables`). The
+integration health (the largest RK4 step angle and its verdict) is always printed; the
 momentum and energy drift rows appear only for torque-free runs, where they are integration error.
 """
 
@@ -22,6 +23,7 @@ UNITS: tuple[tuple[str, str, str], ...] = (
     ('_am2', 'A·m²', '.1f'),
     ('_dyne_cm', 'dyne-cm', '.1f'),
     ('_rel', '(relative)', '.3e'),
+    ('_rad', 'rad', '.3g'),
 )
 #: Keys of the headline, not rows.
 HEADLINE = ('scenario', 'steps', 'sim_minutes', 'wall_seconds')
@@ -31,7 +33,8 @@ TORQUE_FREE = 'torque_free'
 MISSING = '—'
 #: Labels clearer than the key's words.
 LABELS = {'b_min_gauss': '|B| min seen', 'b_max_gauss': '|B| max seen',
-          'final_momentum_ftlbs': 'final |H| (body + wheels)', 'final_rates_deg_s': 'final body rates'}
+          'final_momentum_ftlbs': 'final |H| (body + wheels)', 'final_rates_deg_s': 'final body rates',
+          'step_angle_max_rad': 'RK4 step angle max (|ω| + 2 ω_orbit)·h'}
 
 
 def _unit(key: str) -> tuple[str, str, str]:

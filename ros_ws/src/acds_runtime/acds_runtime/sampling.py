@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 import yaml
 from acds_common import units
+from acds_common.attitude import dcm_to_quat, quat_to_dcm, rotation_between
 from acds_common.scenario import SAFE_NAME, SCHEMA, Field, Scenario, ScenarioError, load_scenario
 
 
@@ -352,22 +353,6 @@ def _set(raw: dict[str, Any], key: Key, value: Any) -> None:
     section[key.key] = value
 
 
-def _rotate_onto(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The smallest rotation matrix taking the direction of ``a`` onto that of ``b`` (Rodrigues)."""
-    a, b = a / np.linalg.norm(a), b / np.linalg.norm(b)
-    axis = np.cross(a, b)
-    s, c = float(np.linalg.norm(axis)), float(a @ b)
-    if s < 1e-12:
-        if c > 0:
-            return np.eye(3)
-        perp = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
-        axis, s = perp / np.linalg.norm(perp), 0.0
-    else:
-        axis = axis / s
-    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-    return np.eye(3) + s * k + (1.0 - c) * (k @ k)
-
-
 def _model(scenario: Scenario) -> Any:
     """The dynamics' rigid body of ``scenario`` at t0 (the very model its run starts from)."""
     from dynamics.configuration import RIGID_BODY_SECTIONS, build_rigid_body
@@ -377,15 +362,13 @@ def _model(scenario: Scenario) -> Any:
 
 def h_parallel_b_attitude(scenario: Scenario) -> list[float]:
     """``scenario``'s attitude turned by the smallest rotation that puts I·ω0 along B at t0 (case 4)."""
-    from dynamics.rigid_body_model import dcm_to_quat, quat_to_dcm
-
     model = _model(scenario)
     h_body = model.inertia_kg_m2 @ model.omega_body_rad_s
     if not np.linalg.norm(h_body) > 0.0:
         raise SamplingError(f'{scenario.name}: h_parallel_b(): the initial body momentum I·ω0 is zero')
     truth = model.truth(np.zeros(3))
     r_body_to_eci = quat_to_dcm(model.q_body_to_eci)
-    turned = _rotate_onto(r_body_to_eci @ h_body, truth.b_eci_t) @ r_body_to_eci
+    turned = rotation_between(r_body_to_eci @ h_body, truth.b_eci_t) @ r_body_to_eci
     return [float(c) for c in dcm_to_quat(turned)]
 
 

@@ -26,15 +26,19 @@ import hashlib
 import json
 import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from acds_common import topics
+from acds_common.attitude import dcm
 from acds_common.cdr import Codec
+from acds_common.environment import orbit_from_section
 from acds_common.graph import Graph
 from acds_common.inertia import inertia_tensor
 from acds_common.units import nms_to_ftlbs, tesla_to_gauss
-from acds_common.vec3 import dcm, dot, mat3, mv, norm
+from acds_common.vec3 import dot, mat3, mv, norm
+from dynamics import integration_accuracy as accuracy
 
 #: Per-step topics the common (dynamics) summary reads.
 ODOMETRY, B_BODY, WHEEL_H, WHEEL_HDOT, TORQUE_MAG, TORQUE_GG = (topics.resolve(t) for t in (
@@ -52,12 +56,14 @@ def _summary_modules() -> list:
 
 
 class DynamicsSummary:
-    """Final rates and momentum, the |B| range seen (every single-vehicle run); momentum and energy drift of torque-free runs.
+    """Final rates and momentum, the |B| range seen (every single-vehicle run); the integration's health.
 
-    A run is torque-free when every step's magnetic, gravity-gradient and wheel torque is zero:
-    |H| in ECI and the rotational energy are then constants of the motion and their largest relative
-    change is integration error (``momentum_drift_rel``, ``energy_drift_rel``; null otherwise, where
-    the change is physics).
+    Integration health, always: the largest step angle θ = (|ω| + 2 ω_orbit)·Δt/substeps over the
+    run's steps (``step_angle_max_rad``) against the bounds of :mod:`dynamics.integration_accuracy`
+    (``integration``: ok, or the warning bound it passed). A run is torque-free when every step's
+    magnetic, gravity-gradient and wheel torque is zero: |H| in ECI and the rotational energy are then
+    constants of the motion and their largest relative change is integration error
+    (``momentum_drift_rel``, ``energy_drift_rel``; null otherwise, where the change is physics).
     """
 
     topics = (ODOMETRY, B_BODY, WHEEL_H, WHEEL_HDOT, TORQUE_MAG, TORQUE_GG)
@@ -80,24 +86,33 @@ class DynamicsSummary:
         self.b_min = math.inf
         self.b_max = 0.0
         self.torque_free = True
+        self._substep_s = sc.control_period_s / sc.get('dynamics', 'substeps')
+        self._orbit_rate = accuracy.orbit_rate_max_rad_s(orbit_from_section(sc.values['orbit']))
+        self.max_omega = 0.0
+        self._last: tuple[Any, Any] | None = None  # (odometry, wheel momentum) of the last step
+
+    def _h_e(self, odom: Any, wheel: Any) -> tuple[float, float]:
+        """|H| in ECI (body + wheels) and the rotational energy of one step's truth (floats, vec3)."""
+        omega = odom.angular
+        iw = mv(self._inertia, omega)
+        h_body = iw if wheel is None else (iw[0] + wheel[0], iw[1] + wheel[1], iw[2] + wheel[2])
+        return norm(mv(dcm(odom.orientation), h_body)), 0.5 * dot(omega, iw)
 
     def step(self, _k: int, values: dict[str, Any]) -> None:
-        """One step's truth."""
+        """One step's truth. The drifts are kept while the run is torque-free only (they are reported only
+        then); the final momentum is computed once, from the last step's truth (:meth:`contribute`)."""
         if self.torque_free and any(v is not None and any(v) for v in (values.get(t) for t in self.topics[3:])):
             self.torque_free = False
         odom = values.get(ODOMETRY)
-        if odom is not None:  # floats (vec3): this runs every step
-            omega = odom.angular
-            iw = mv(self._inertia, omega)
-            wheel = values.get(WHEEL_H)
-            h_body = iw if wheel is None else (iw[0] + wheel[0], iw[1] + wheel[1], iw[2] + wheel[2])
-            h = norm(mv(dcm(odom.orientation), h_body))  # |H| in ECI
-            e = 0.5 * dot(omega, iw)
-            if self.h0 is None:
-                self.h0, self.e0 = h, e
-            self.max_dh = max(self.max_dh, abs(h - self.h0))
-            self.max_de = max(self.max_de, abs(e - self.e0))
-            self.final_rates, self.final_h = odom.angular, h
+        if odom is not None:
+            self._last = (odom, values.get(WHEEL_H))
+            self.max_omega = max(self.max_omega, norm(odom.angular))
+            if self.h0 is None or self.torque_free:
+                h, e = self._h_e(*self._last)
+                if self.h0 is None:
+                    self.h0, self.e0 = h, e
+                self.max_dh = max(self.max_dh, abs(h - self.h0))
+                self.max_de = max(self.max_de, abs(e - self.e0))
         b = values.get(B_BODY)
         if b is not None:
             g = tesla_to_gauss(norm(b[0]))
@@ -105,7 +120,14 @@ class DynamicsSummary:
 
     def contribute(self, summary: dict[str, Any]) -> None:
         """Add the dynamics keys."""
+        if self._last is not None:
+            self.final_rates, self.final_h = self._last[0].angular, self._h_e(*self._last)[0]
+        theta = (self.max_omega + 2.0 * self._orbit_rate) * self._substep_s
         summary.update({
+            'step_angle_max_rad': theta,
+            'integration': ('ok' if theta <= accuracy.STEP_ANGLE_WARN_RAD else
+                            f'WARNING: step angle above {accuracy.STEP_ANGLE_WARN_RAD:g} rad '
+                            f'(raise dynamics.substeps; {accuracy.STUDY})'),
             'torque_free': self.torque_free,
             'momentum_drift_rel': (self.max_dh / self.h0 if self.h0 else 0.0) if self.torque_free else None,
             'energy_drift_rel': (self.max_de / self.e0 if self.e0 else 0.0) if self.torque_free else None,
@@ -148,21 +170,22 @@ class RunObserver:
             t_ns, value = codec.decode(data)
             self.feed_value(topic, t_ns // self.dt_ns, value)
 
-    def feed(self, topic: str, k: int, value: Any, data: bytes | None) -> None:
-        """A message as the direct engine produces it: its value and (for truth topics) its bytes."""
-        if data is not None and topic in self._digests:
-            self._digests[topic].update(data)
+    def truth_sink(self, topic: str) -> Callable[[bytes], None] | None:
+        """For the direct engine: what takes each serialized message of ``topic`` (absolute) when it is a truth
+        topic (hashed into the digest, counted), else None: the engine encodes nothing else it does not record."""
+        digest = self._digests.get(topic)
+        if digest is None:
+            return None
+        update = digest.update
+
+        def sink(data: bytes) -> None:
+            update(data)
             self.truth_messages += 1
-        if topic in self.codecs:
-            self.feed_value(topic, k, value)
+        return sink
 
-    def wants(self, topic: str) -> bool:
-        """Whether this observer reads ``topic`` (absolute) at all (the direct engine skips the rest)."""
-        return topic in self.codecs or topic in self._digests
-
-    def hashes(self, topic: str) -> bool:
-        """Whether :meth:`feed` needs the bytes of ``topic`` (a truth topic: hashed into the digest)."""
-        return topic in self._digests
+    def value_sink(self, topic: str) -> Callable[[str, int, Any], None] | None:
+        """For the direct engine: :meth:`feed_value` when the summaries read ``topic``, else None."""
+        return self.feed_value if topic in self.codecs else None
 
     def feed_value(self, topic: str, k: int, value: Any) -> None:
         """A decoded value of step k."""
@@ -228,11 +251,11 @@ def _finite(value: Any, where: str, replaced: list[str]) -> Any:
     return value
 
 
-def summary_json(obj: Any) -> tuple[str, list[str]]:
+def summary_json(obj: Any, indent: int | None = 2) -> tuple[str, list[str]]:
     """Strict JSON text of a summary (or a list of them) with every non-finite number written as ``null``,
-    and the keys that were replaced (e.g. ``passes[0].ripple_pct``)."""
+    and the keys that were replaced (e.g. ``passes[0].ripple_pct``); ``indent=None``: one line."""
     replaced: list[str] = []
-    text = json.dumps(_finite(obj, '', replaced), indent=2, allow_nan=False) + '\n'
+    text = json.dumps(_finite(obj, '', replaced), indent=indent, allow_nan=False) + '\n'
     return text, replaced
 
 

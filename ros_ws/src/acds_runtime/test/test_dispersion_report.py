@@ -30,13 +30,13 @@ def test_percentiles_match_numpy_and_a_censored_tail_is_unknown():
 def test_describe_counts_censored_and_uses_the_right_sample_sets():
     rows = [_row(0, 10.0, 50.0), _row(1, 20.0, None, sim=80.0), _row(2, None, None, sim=90.0), _row(3, 5.0, 30.0),
             {'index': 4, 'name': 's4', 'error': 'boom'}]
-    acq = dr.describe(rows, dr.QUANTITIES[2])
+    acq = dr.describe(rows, dr.QUANTITIES[2], 1, 2)
     assert (acq['n'], acq['censored'], acq['censored_above']) == (4, 2, 80.0)
     assert acq['p25'] == pytest.approx(np.percentile([30, 50, 1e9, 1e9], 25))
     assert acq['p75'] is None
-    wheels = dr.describe(rows, dr.QUANTITIES[1])  # only samples that reached Mode 1B
+    wheels = dr.describe(rows, dr.QUANTITIES[1], 1, 1)  # only samples that reached Mode 1B
     assert (wheels['n'], wheels['censored']) == (3, 1)
-    final_h = dr.describe(rows, dr.QUANTITIES[3])  # only captured samples
+    final_h = dr.describe(rows, dr.QUANTITIES[3], 1, 3)  # only captured samples
     assert (final_h['n'], final_h['p50']) == (2, 1.0)
     assert set(acq) >= {f'p{p}' for p in dr.PERCENTILES}
 

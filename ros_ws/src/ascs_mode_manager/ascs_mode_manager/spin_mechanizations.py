@@ -423,3 +423,11 @@ def closed_form_power_w(mech: Mechanization) -> float:
     """Average bus power, W, at the design field: channels · V · I_p · (2/π for the sine drive)."""
     factor = 2.0 / math.pi if mech.drive == "sine" else 1.0
     return mech.channels * mech.bus_v * mech.current_a * factor
+
+
+def table_rows(field_g: float = DESIGN_FIELD_T / GAUSS_T) -> list[dict]:
+    """Seed 001 Table 1 recomputed: one dict per mechanization key, each run in a ``field_g`` (G) field rotating
+    at 4 rpm in the plane of motor action (two whole revolutions, spin-up, coil RL lag included), its columns
+    from the simulated history (:func:`summarise`)."""
+    return [{"mechanization": key, **summarise(simulate_rotating_field(mech, field_g))}
+            for key, mech in MECHANIZATIONS.items()]

@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 
 import numpy as np
 import pytest
 from acds_common.units import GAUSS_T, nm_to_dyne_cm
-from ascs_mode_manager import mechanizations_tool
 from ascs_mode_manager.spin_mechanizations import (
     ATTITUDE_COIL,
     MECHANIZATIONS,
@@ -142,23 +139,3 @@ def test_invalid_inputs_raise(bad: dict) -> None:
         simulate_rotating_field(MECHANIZATIONS["one_channel_constant"], **kwargs)
     with pytest.raises(AscsError):
         coil_moments(MECHANIZATIONS["two_channel_sine"], np.array([math.nan, 0.0]), 0.0, 1)
-
-
-def test_mechanizations_tool_csv(capsys: pytest.CaptureFixture[str]) -> None:
-    assert mechanizations_tool.main(["--csv"]) == 0
-    out = capsys.readouterr().out
-    assert out.splitlines()[0] == mechanizations_tool.CSV_HEADER
-    rows = list(csv.DictReader(io.StringIO(out)))
-    assert [r["mechanization"] for r in rows] == list(KEYS)
-    by_key = {r["mechanization"]: r for r in rows}
-    assert float(by_key["two_channel_sine"]["ripple_pct"]) < 0.5
-    assert float(by_key["two_channel_constant"]["sweep_deg"]) == pytest.approx(90.0, abs=0.5)
-    assert int(by_key["one_channel_constant"]["coils"]) == 1
-    for r in rows:
-        assert float(r["avg_torque_dyne_cm"]) == pytest.approx(506.0, rel=0.015)
-
-
-def test_mechanizations_tool_readable(capsys: pytest.CaptureFixture[str]) -> None:
-    assert mechanizations_tool.main([]) == 0
-    out = capsys.readouterr().out
-    assert "one_channel_constant" in out and "Table 1" in out

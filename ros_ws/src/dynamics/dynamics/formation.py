@@ -32,8 +32,9 @@ Seed 004 (MIT SSL / Lockheed Martin EMFF final review, 2003). What is modelled, 
 * Rotational equations per vehicle (body axes), as in ``rigid_body_model``:
   I ω̇ = −ω × (I ω + h) − ḣ + τ_EM + τ_Earth + τ_gg, q̇ = ½ q ⊗ (ω, 0), with h(τ) = h0 + ḣ·τ over
   the step. In ``planar`` the table keeps ω along z and d(I_zz ω_z + h_z)/dt = τ_z.
-* Integration: fixed-step RK4, ``substeps`` per ``advance`` call, deterministic (no randomness, fixed
-  evaluation order); quaternions renormalised after each substep.
+* Integration: fixed-step RK4 (``dynamics.integrator.rk4_step``, the rigid body's), ``substeps`` per
+  ``advance`` call, deterministic (no randomness, fixed evaluation order); quaternions renormalised
+  after each substep.
 * Momentum bookkeeping (``FormationDynamics.momentum``): in ``free_space`` the total linear momentum
   Σ m v and angular momentum Σ (r × m v + R (I ω + h)) about the origin are constants of the motion
   (slide 3: "only internal forces are present"; slide 18: "angular momentum conserved by shearing of
@@ -67,15 +68,18 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from acds_common import units
+from acds_common.attitude import quat_rates, quat_to_dcm
 from acds_common.dipole_field import cross3, dipole_pair_wrench
 from acds_common.environment import Orbit, hill_frame
 
 from dynamics import biot_savart
 from dynamics.errors import DynamicsError, finite_float, finite_vector3
-from dynamics.rigid_body_model import DEFAULT_SUBSTEPS, gravity_gradient_torque_nm, inertia_tensor, quat_to_dcm
+from dynamics.integrator import rk4_step
+from dynamics.rigid_body_model import DEFAULT_SUBSTEPS, gravity_gradient_torque_nm, inertia_tensor
 
 #: Frames of relative motion (see the module docstring).
 FRAMES = ("planar", "free_space", "hill")
@@ -299,12 +303,6 @@ class FormationTruth:
     hill_to_eci: np.ndarray | None = field(default=None)
 
 
-def _quat_derivative(q: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """q̇ = ½ q ⊗ (ω, 0) for (N, 4) quaternions (x, y, z, w) and (N, 3) body rates."""
-    qv, qw = q[:, :3], q[:, 3:]
-    return 0.5 * np.concatenate([qw * w + cross3(qv, w), -np.sum(qv * w, axis=1, keepdims=True)], axis=1)
-
-
 class FormationDynamics:
     """The formation's translational and rotational dynamics (module docstring), the time owner's core.
 
@@ -456,8 +454,9 @@ class FormationDynamics:
             force[k] = h2e.T @ grad
         return force, torque
 
-    def _deriv(self, t_s: float, y: tuple[np.ndarray, ...], inputs: tuple[np.ndarray, ...],
-               tau_s: float) -> tuple[tuple[np.ndarray, ...], Wrenches]:
+    def _deriv(self, t_s: float, y: Sequence[np.ndarray], inputs: tuple[np.ndarray, ...],
+               tau_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Wrenches]:
+        """(ṗ, v̇, q̇, ω̇) and the wrenches at time ``t_s``, state y, ``tau_s`` into the step."""
         pos, vel, q, w = y
         dip_body, h0, hdot = inputs
         wr = self._wrenches(t_s, pos, q, dip_body)
@@ -475,7 +474,7 @@ class FormationDynamics:
             h = h0 + hdot * tau_s
             iw = np.einsum("nij,nj->ni", self._inertia, w)
             wdot = np.einsum("nij,nj->ni", self._inertia_inv, torque - cross3(w, iw + h))
-        return (vel, acc, _quat_derivative(q, w), wdot), wr
+        return vel, acc, quat_rates(q, w), wdot, wr
 
     def advance(self, dt_s: float, inputs: Sequence[VehicleInput]) -> None:
         """Integrate t → t + ``dt_s`` with each vehicle's ``VehicleInput`` (same order as the vehicles).
@@ -501,16 +500,17 @@ class FormationDynamics:
         sums = [np.zeros((len(self.vehicles), 3)) for _ in range(5)]
         for k in range(m):
             t_k = self._t + k * sub
-            slopes = []
-            for weight, frac in ((1.0, 0.0), (2.0, 0.5), (2.0, 0.5), (1.0, 1.0)):
-                ys = y if not slopes else tuple(a + frac * sub * d for a, d in zip(y, slopes[-1], strict=True))
-                d, wr = self._deriv(t_k + frac * sub, ys, step, (k + frac) * sub)
-                slopes.append(d)
+
+            def rate(ys: Sequence[np.ndarray], frac: float, t_k: float = t_k, k: int = k) -> tuple[Any, ...]:
+                """(ṗ, v̇, q̇, ω̇, the stage's wrenches) ``frac`` into substep k."""
+                return self._deriv(t_k + frac * sub, ys, step, (k + frac) * sub)
+
+            y, stages = rk4_step(y, rate, sub)
+            for weight, stage in zip((1.0, 2.0, 2.0, 1.0), stages, strict=True):
+                wr = stage[4]
                 for s, part in zip(sums, (wr.em_force_n, wr.em_torque_body_nm, wr.earth_force_n,
                                           wr.earth_torque_body_nm, wr.gg_torque_body_nm), strict=True):
                     s += weight * part
-            y = tuple(a + sub / 6.0 * (d1 + 2.0 * d2 + 2.0 * d3 + d4)
-                      for a, d1, d2, d3, d4 in zip(y, *slopes, strict=True))
             y = (y[0], y[1], y[2] / np.linalg.norm(y[2], axis=1, keepdims=True), y[3])
         if not all(np.all(np.isfinite(a)) for a in y):
             raise DynamicsError("formation integration diverged (non-finite state): reduce dt_s or raise substeps")

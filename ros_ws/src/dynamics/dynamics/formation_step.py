@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 from acds_common import topics
+from acds_common.attitude import quat_to_dcm
 from acds_common.cdr import OdometryValue
 from acds_common.environment import EarthFieldConfig, Orbit, OrbitConfig, TiltedDipoleField
 from acds_common.inertia import inertia_tensor
@@ -41,7 +42,6 @@ from dynamics.formation import (
     VehicleSpec,
     VehicleState,
 )
-from dynamics.rigid_body_model import quat_to_dcm
 
 _ZERO_COV = (0.0,) * 9
 _ZERO = (0.0, 0.0, 0.0)

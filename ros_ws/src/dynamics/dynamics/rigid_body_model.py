@@ -10,9 +10,9 @@ Equations (spec §3; seed 002 §4.3 "three-degree-of-freedom rigid body angular 
 h is the wheels' momentum in body axes, ḣ its rate: the body feels −ḣ. T_d is an optional body-fixed
 disturbance torque (seed 000: the Workshop's aerodynamic bias, :mod:`dynamics.disturbances`), applied as
 its exact mean over each ``advance`` step (it varies at orbital rate, a step lasts seconds). Integration
-is RK4 with a fixed number of substeps per ``advance`` call; orbit position and field are evaluated once at each
-distinct RK4 stage time (2n + 1 per call, the end one shared with ``truth`` and the next call's
-start); the quaternion is renormalised after every substep.
+is RK4 (:func:`dynamics.integrator.rk4_step`) with a fixed number of substeps per ``advance`` call;
+orbit position and field are evaluated once at each distinct RK4 stage time (2n + 1 per call, the end
+one shared with ``truth`` and the next call's start); the quaternion is renormalised after every substep.
 
 Speed: the kernel is written on plain Python floats (one derivative is ~200 float operations on
 3-vectors, where numpy's per-call overhead would dominate); IEEE doubles without fused operations
@@ -27,14 +27,16 @@ from collections.abc import Sequence
 
 import numpy as np
 from acds_common import units
+from acds_common.attitude import dcm
 from acds_common.environment import MagneticFieldModel, Orbit, Sun, field_xyz, sun_frame_dcm
 from acds_common.environment import ecliptic_normal_eci as default_ecliptic_normal_eci
 from acds_common.environment import gravity_gradient_torque_nm as gravity_gradient_torque_nm  # the public form
 from acds_common.inertia import InertiaError, inertia_tensor
-from acds_common.vec3 import ZERO, Mat3, Vec3, cross, dcm, mat3, mtv, mv
+from acds_common.vec3 import ZERO, Mat3, Vec3, cross, mat3, mtv, mv
 
 from dynamics.disturbances import DisturbanceTorque
 from dynamics.errors import DynamicsError, finite_float, finite_vector3, finite_xyz
+from dynamics.integrator import rk4_step
 
 #: Default RK4 substeps per ``advance`` call (0.1 s substeps at the 0.5 s HEAO control period).
 DEFAULT_SUBSTEPS = 5
@@ -50,36 +52,6 @@ HEAO_B_INERTIA_SLUG_FT2: dict[str, float] = {
 def heao_inertia_kg_m2(table: dict[str, float]) -> np.ndarray:
     """Inertia tensor in kg·m² from a Table 4-1 dict in slug-ft² (e.g. HEAO_B_INERTIA_SLUG_FT2)."""
     return inertia_tensor(**{k: units.slugft2_to_kgm2(v) for k, v in table.items()})
-
-
-def quat_to_dcm(q_xyzw: np.ndarray) -> np.ndarray:
-    """Rotation matrix R (body → ECI: v_eci = R v_body) of a unit Hamilton quaternion (x, y, z, w)."""
-    return np.array(dcm(tuple(float(c) for c in q_xyzw)))
-
-
-def dcm_to_quat(dcm_body_to_eci: np.ndarray) -> np.ndarray:
-    """Unit quaternion (x, y, z, w), w ≥ 0, of a rotation matrix (inverse of ``quat_to_dcm``; Shepperd)."""
-    m = np.asarray(dcm_body_to_eci, dtype=float)
-    if m.shape != (3, 3) or not np.allclose(m @ m.T, np.eye(3), atol=1e-9) or np.linalg.det(m) < 0.0:
-        raise DynamicsError("dcm_body_to_eci must be a 3x3 proper rotation matrix")
-    tr = m[0, 0] + m[1, 1] + m[2, 2]
-    cands = [tr, m[0, 0], m[1, 1], m[2, 2]]
-    i = int(np.argmax(cands))
-    if i == 0:
-        w = 0.5 * math.sqrt(1.0 + tr)
-        q = np.array([(m[2, 1] - m[1, 2]) / (4 * w), (m[0, 2] - m[2, 0]) / (4 * w),
-                      (m[1, 0] - m[0, 1]) / (4 * w), w])
-    else:
-        a = i - 1
-        b, c = (a + 1) % 3, (a + 2) % 3
-        va = 0.5 * math.sqrt(1.0 + m[a, a] - m[b, b] - m[c, c])
-        q = np.empty(4)
-        q[a] = va
-        q[b] = (m[b, a] + m[a, b]) / (4 * va)
-        q[c] = (m[c, a] + m[a, c]) / (4 * va)
-        q[3] = (m[c, b] - m[b, c]) / (4 * va)
-    q = q / np.linalg.norm(q)
-    return -q if q[3] < 0.0 else q
 
 
 def magnetic_torque_nm(dipole_body_am2: np.ndarray, b_body_t: np.ndarray) -> np.ndarray:
@@ -330,13 +302,16 @@ class RigidBodyModel:
         (j00, j01, j02), (j10, j11, j12), (j20, j21, j22) = self._inertia_inv_t
         k_gg = 3.0 * units.EARTH_MU_M3_S2
 
-        def deriv(qx: float, qy: float, qz: float, qw: float, wx: float, wy: float, wz: float, tau: float,
-                  stage: _Env) -> tuple[float, ...]:
-            """(q̇, ω̇, T_mag, T_gg) as 13 floats at attitude q, rate ω, ``tau`` into the step."""
-            r, b = stage
+        k = 0  # the substep the stages belong to
+
+        def deriv(y: Sequence[float], frac: float) -> tuple[float, ...]:
+            """(q̇, ω̇, T_mag, T_gg) as 13 floats at state y = (q, ω), ``frac`` into substep k."""
+            qx, qy, qz, qw, wx, wy, wz = y
+            tau = (k + frac) * sub
+            r, b = env[2 * k + int(2.0 * frac)]
             tmx = tmy = tmz = tgx = tgy = tgz = 0.0
             if r is not None:
-                # R (body → ECI) of q; a vector's body components are Rᵀ v.
+                # R (body → ECI) of q, acds_common.attitude.dcm inlined; a vector's body components are Rᵀ v.
                 xx, yy, zz = qx * qx, qy * qy, qz * qz
                 xy, xz, yz, xw, yw, zw = qx * qy, qx * qz, qy * qz, qx * qw, qy * qw, qz * qw
                 r00, r01, r02 = 1.0 - 2.0 * (yy + zz), 2.0 * (xy - zw), 2.0 * (xz + yw)
@@ -371,34 +346,19 @@ class RigidBodyModel:
                     j00 * nx + j01 * ny + j02 * nz, j10 * nx + j11 * ny + j12 * nz, j20 * nx + j21 * ny + j22 * nz,
                     tmx, tmy, tmz, tgx, tgy, tgz)
 
-        qx, qy, qz, qw = self._q
-        wx, wy, wz = self._w
+        y = (*self._q, *self._w)
         smx = smy = smz = sgx = sgy = sgz = 0.0  # Σ stage weight · (T_mag, T_gg)
-        half, sixth = 0.5 * sub, sub / 6.0
-        for k in range(n):
-            e0, eh, e1 = env[2 * k], env[2 * k + 1], env[2 * k + 2]
-            a = deriv(qx, qy, qz, qw, wx, wy, wz, k * sub, e0)
-            b = deriv(qx + half * a[0], qy + half * a[1], qz + half * a[2], qw + half * a[3],
-                      wx + half * a[4], wy + half * a[5], wz + half * a[6], (k + 0.5) * sub, eh)
-            c = deriv(qx + half * b[0], qy + half * b[1], qz + half * b[2], qw + half * b[3],
-                      wx + half * b[4], wy + half * b[5], wz + half * b[6], (k + 0.5) * sub, eh)
-            d = deriv(qx + sub * c[0], qy + sub * c[1], qz + sub * c[2], qw + sub * c[3],
-                      wx + sub * c[4], wy + sub * c[5], wz + sub * c[6], (k + 1.0) * sub, e1)
-            qx += sixth * (a[0] + 2.0 * b[0] + 2.0 * c[0] + d[0])
-            qy += sixth * (a[1] + 2.0 * b[1] + 2.0 * c[1] + d[1])
-            qz += sixth * (a[2] + 2.0 * b[2] + 2.0 * c[2] + d[2])
-            qw += sixth * (a[3] + 2.0 * b[3] + 2.0 * c[3] + d[3])
-            wx += sixth * (a[4] + 2.0 * b[4] + 2.0 * c[4] + d[4])
-            wy += sixth * (a[5] + 2.0 * b[5] + 2.0 * c[5] + d[5])
-            wz += sixth * (a[6] + 2.0 * b[6] + 2.0 * c[6] + d[6])
+        for k in range(n):  # noqa: B007 (deriv reads k: the substep its stages belong to)
+            (qx, qy, qz, qw, wx, wy, wz), (a, b, c, d) = rk4_step(y, deriv, sub)
             norm = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
-            qx, qy, qz, qw = qx / norm, qy / norm, qz / norm, qw / norm
+            y = (qx / norm, qy / norm, qz / norm, qw / norm, wx, wy, wz)
             smx += a[7] + 2.0 * b[7] + 2.0 * c[7] + d[7]
             smy += a[8] + 2.0 * b[8] + 2.0 * c[8] + d[8]
             smz += a[9] + 2.0 * b[9] + 2.0 * c[9] + d[9]
             sgx += a[10] + 2.0 * b[10] + 2.0 * c[10] + d[10]
             sgy += a[11] + 2.0 * b[11] + 2.0 * c[11] + d[11]
             sgz += a[12] + 2.0 * b[12] + 2.0 * c[12] + d[12]
+        qx, qy, qz, qw, wx, wy, wz = y
         if not math.isfinite(qx + qy + qz + qw + wx + wy + wz):  # a finite sum: every component finite
             raise DynamicsError("integration diverged (non-finite state): reduce dt_s or raise substeps")
         self._q, self._w = (qx, qy, qz, qw), (wx, wy, wz)

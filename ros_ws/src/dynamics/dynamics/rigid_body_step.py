@@ -17,6 +17,12 @@ integration error), the relative drift of H_ECI and of the energy since step 0; 
 :data:`QUATERNION_NORM_TOLERANCE` or :data:`DRIFT_TOLERANCE`. It also reports the wall time of the
 stage (``wall_*`` keys: measurements of the machine, not data; comparisons of runs skip them).
 
+The step against the dynamics (:mod:`dynamics.integration_accuracy`): the step angle
+θ = (|ω| + 2 ω_orbit)·Δt/substeps is checked at construction (the pre-flight builds this stepper: a θ
+beyond the hard bound refuses the scenario naming ``dynamics.substeps``) and after every step (beyond
+the hard bound the run stops naming the key; above the warning bound one ``warn`` line, once per run);
+``/diagnostics`` carries the largest θ so far (``step_angle_max_rad``).
+
 The rate gyros are the study's ideal gyros (spec §3): ``sensors/gyro`` carries the true body
 rates with an all-zero ``angular_velocity_covariance``.
 """
@@ -33,7 +39,9 @@ from acds_common.cdr import OdometryValue
 from acds_common.messages import MODE_STATUS, OK, WALL_CLOCK_PREFIX, WARN, diagnostic, status_value, xyz
 from acds_common.stepper import StepError, Stepper
 
+from dynamics import integration_accuracy as accuracy
 from dynamics.configuration import RIGID_BODY_SECTIONS, actuator_limits, build_rigid_body
+from dynamics.errors import DynamicsError
 from dynamics.rigid_body_model import Truth
 
 #: ``angular_velocity_covariance`` of the ideal gyros, rad²/s² (row-major 3×3).
@@ -91,6 +99,29 @@ class RigidBodyStep(Stepper):
         self._e0_j = 0.0
         self._wall_s = 0.0
         self._wall_steps = 0
+        self._orbit_rate = accuracy.orbit_rate_max_rad_s(self.model.orbit)
+        self._warned = False
+        self.step_angle_max_rad = 0.0
+        self._check_step(float(np.linalg.norm(self.model.omega_body_rad_s)))
+
+    def _check_step(self, omega_rad_s: float, k: int | None = None) -> None:
+        """The step angle at body rate ``omega_rad_s`` (initial, or at the end of step k): past the hard bound refuse
+        the scenario (construction: DynamicsError, the pre-flight's) or stop the run; above the warning bound warn once."""
+        theta = accuracy.step_angle_rad(omega_rad_s, self._orbit_rate, self.control_period_s, self.model.substeps)
+        if theta > self.step_angle_max_rad:
+            self.step_angle_max_rad = theta
+        if theta <= accuracy.STEP_ANGLE_WARN_RAD:
+            return
+        what = 'its initial' if k is None else f"step {k + 1}'s"
+        args = (omega_rad_s, self._orbit_rate, self.control_period_s, self.model.substeps)
+        refused = accuracy.refusal(what, *args)
+        if refused is not None:
+            if k is None:
+                raise DynamicsError(refused)
+            raise StepError(f'{refused}; the run stops')
+        if not self._warned:
+            self._warned = True
+            self.log('warn', accuracy.warning(what, *args))
 
     def start(self) -> dict[str, Any]:
         """The truth of step 0."""
@@ -102,7 +133,8 @@ class RigidBodyStep(Stepper):
         finite = bool(np.all(np.isfinite(state)))
         norm_error = abs(float(np.linalg.norm(truth.q_body_to_eci)) - 1.0)
         values: dict[str, object] = {'state_finite': str(finite).lower(), 'quaternion_norm_error': f'{norm_error:.3e}',
-                                     'torque_free': str(self.torque_free).lower()}
+                                     'torque_free': str(self.torque_free).lower(),
+                                     'step_angle_max_rad': f'{self.step_angle_max_rad:.3e}'}
         problems = [] if finite else ['non-finite state']
         if norm_error > QUATERNION_NORM_TOLERANCE:
             problems.append(f'quaternion norm off by {norm_error:.2e}')
@@ -138,6 +170,8 @@ class RigidBodyStep(Stepper):
         self._wheel_h = h_end
         truth = self.model.truth(h_end)
         out = truth_outputs(truth)
+        w = truth.omega_xyz
+        self._check_step(math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), k)
         if self.torque_free and (any(dipole) or any(hdot)):
             self.torque_free = False
         wall = time.perf_counter() - wall0

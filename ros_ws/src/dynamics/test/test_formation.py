@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from acds_common.attitude import quat_to_dcm
 from acds_common.dipole_field import dipole_force_n
 from acds_common.environment import EarthFieldConfig, Orbit, OrbitConfig, TiltedDipoleField
 from acds_common.units import NMI_M
@@ -23,7 +24,7 @@ from dynamics.formation import (
     VehicleState,
     emfforce_vehicle,
 )
-from dynamics.rigid_body_model import gravity_gradient_torque_nm, quat_to_dcm
+from dynamics.rigid_body_model import gravity_gradient_torque_nm
 
 
 def _quat(axis: np.ndarray, angle: float) -> np.ndarray:

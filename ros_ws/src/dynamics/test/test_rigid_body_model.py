@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 from acds_common import units
+from acds_common.attitude import dcm_to_quat, quat_to_dcm
 from acds_common.environment import (
     EarthFieldConfig,
     Orbit,
@@ -25,12 +26,10 @@ from dynamics.rigid_body_model import (
     HEAO_A_INERTIA_SLUG_FT2,
     HEAO_B_INERTIA_SLUG_FT2,
     RigidBodyModel,
-    dcm_to_quat,
     gravity_gradient_torque_nm,
     heao_inertia_kg_m2,
     inertia_tensor,
     magnetic_torque_nm,
-    quat_to_dcm,
 )
 from hypothesis import given, settings
 from hypothesis import strategies as st

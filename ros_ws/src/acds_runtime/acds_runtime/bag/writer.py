@@ -16,9 +16,9 @@ chunk and flushes the file (sqlite3: commits) on the first message after the
 period elapsed, when a chunk reaches 1 MiB, every :data:`FLUSH_MESSAGES`
 messages, and on :meth:`BagWriter.flush`. A killed recorder therefore loses
 at most the last second of messages; the bag it leaves has no index and no
-``metadata.yaml``: :func:`acds_cli.bag.reader.open_bag` reads it, without
+``metadata.yaml``: :func:`.reader.open_bag` reads it, without
 changing it, up to its last complete chunk, and
-:func:`acds_cli.bag.recover.recover_bag` writes a repaired copy (the
+:func:`.recover.recover_bag` writes a repaired copy (the
 ``ros2 bag reindex`` equivalent). While it is open, the writer holds the bag
 folder's recording lock (:mod:`acds_runtime.bag.recording`).
 """
@@ -203,6 +203,18 @@ def run_info(scenario: Any, steps: int, params: dict[str, Any] | None = None,
     return info
 
 
+def replace_file(path: Path, text: str) -> None:
+    """Replace ``path`` with ``text`` atomically (through ``<name>.tmp`` beside it: a crash never leaves half of it);
+    when the temporary cannot be written (disk full) it is removed and the OSError raised."""
+    tmp = path.with_name(f'{path.name}.tmp')
+    try:
+        tmp.write_text(text)
+        tmp.replace(path)
+    except OSError:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
 def _jazzy(metadata_yaml: str) -> str:
     """rosbags' serialized bag metadata with ``ros_distro`` set to :data:`ROS_DISTRO`."""
     info = yaml.safe_load(metadata_yaml)
@@ -275,13 +287,16 @@ class _LockedWriter(Writer):
             raise
 
     def close(self) -> None:
-        """Close the storage and write ``metadata.yaml`` (atomically replaced, with ros_distro jazzy)."""
-        super().close()
+        """Close the storage and write ``metadata.yaml`` (atomically replaced, with ros_distro jazzy); on a write
+        failure (disk full) no ``metadata.yaml.tmp`` is left (rosbags writes its metadata through that temporary)."""
+        try:
+            super().close()
+        except OSError:
+            self.metapath.with_name(f'{self.metapath.name}.tmp').unlink(missing_ok=True)
+            raise
         data = yaml.safe_load(self.metapath.read_text())
         data['rosbag2_bagfile_information']['ros_distro'] = ROS_DISTRO
-        tmp = self.metapath.with_suffix('.yaml.tmp')
-        tmp.write_text(yaml.safe_dump(data, sort_keys=False))
-        tmp.replace(self.metapath)
+        replace_file(self.metapath, yaml.safe_dump(data, sort_keys=False))
 
     def release(self) -> None:
         """Drop the recording lock (the recording is over, closed or not)."""
@@ -338,10 +353,9 @@ class BagWriter:
         info = dict(self.info)
         if self.publishers:
             info['publishers'] = self._publishers_yaml()
-        tmp = self.path / f'{RUN_INFO_FILE}.tmp'
-        tmp.write_text(yaml.safe_dump({'storage': self.storage, 'compression': self.compression,
-                                       'flush_period_s': self.flush_period_s, **info}, sort_keys=False))
-        tmp.replace(self.path / RUN_INFO_FILE)
+        replace_file(self.path / RUN_INFO_FILE, yaml.safe_dump({'storage': self.storage, 'compression': self.compression,
+                                                                'flush_period_s': self.flush_period_s, **info},
+                                                               sort_keys=False))
 
     # ---- writing ------------------------------------------------------------------------------------
     def write(self, topic: str, data: bytes, *, msgtype: str | None = None, qos: list[Qos] | None = None,

@@ -25,8 +25,8 @@ from typing import Any
 
 import numpy as np
 from acds_common import topics
+from acds_common.attitude import quat_to_dcm
 from acds_common.inertia import inertia_tensor
-from acds_common.rotations import quat_to_dcm
 from acds_controller.formation_array import linear_array_rate_rad_s, mission_efficiency
 from acds_controller.formation_control import steady_spin_dipole_product_am4
 

@@ -32,11 +32,11 @@ from typing import Any
 
 import numpy as np
 from acds_common import topics
+from acds_common.attitude import quat_to_dcm
 from acds_common.inertia import inertia_tensor
 from acds_common.units import nm_to_dyne_cm, rad_s_to_rpm, tesla_to_gauss
 from ascs_mode_manager.spin_mechanizations import MECHANIZATIONS, Mechanization, ripple_pct, simulate_rotating_field
 from ascs_mode_manager.sss_ascs import PassAccumulator
-from dynamics.rigid_body_model import quat_to_dcm
 
 KEYS = ('on_time_min', 'avg_torque_dyne_cm', 'peak_torque_dyne_cm', 'ripple_pct', 'spin_rate_change_rpm',
         'precession_deg', 'energy_j', 'mode')

@@ -1,0 +1,123 @@
+"""``acds`` (``./scripts/acds`` in a checkout): one user entry, one verb per job. Every verb has ``--help``.
+
+The verbs are the modules of :mod:`acds_cli.verbs` (each with ``register(subparsers)``), beside the few
+small ones here (scenarios, test, setup, bench).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import subprocess
+import sys
+
+from acds_common.scenario import ScenarioError, list_scenarios
+
+from .arguments import OneLineParser, UsageError, positive_int, step_count
+from .workspace import workspace
+
+
+def cmd_scenarios(_args: argparse.Namespace) -> int:
+    """List the shipped scenarios."""
+    for name, description in list_scenarios():
+        print(f'{name:32s} {description}')
+    return 0
+
+
+def cmd_test(args: argparse.Namespace) -> int:
+    """Lint, then run the whole test suite."""
+    env = dict(os.environ)
+    root = workspace()
+    lint = subprocess.run([sys.executable, '-m', 'ruff', 'check', '--output-format', 'concise', str(root)],
+                          cwd=root, check=False)
+    if lint.returncode != 0:
+        print('[acds] lint failed (ruff): fix the findings above', file=sys.stderr)
+        return lint.returncode
+    cmd = [sys.executable, '-m', 'pytest', '-q', '-n', str(args.jobs), *args.pytest_args]
+    return subprocess.run(cmd, cwd=root, env=env, check=False).returncode
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    """Benchmark: graph lockstep steps/s, a bare rclpy chain with the same hops, core-only steps/s."""
+    from .bench import main as bench_main
+    return bench_main(args)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command-line surface (later verbs register here too)."""
+    parser = OneLineParser(prog='acds', description='ACDS emulator: HEAO wheels+magnetics, SSS magnetic control.')
+    sub = parser.add_subparsers(dest='verb', metavar='VERB', required=True)
+
+    p = sub.add_parser('scenarios', help='list the shipped scenarios', description='List the shipped scenarios.')
+    p.set_defaults(func=cmd_scenarios)
+
+    p = sub.add_parser('test', help='run the whole test suite (lint + pytest)',
+                       description='Lint (ruff) and run every test (pytest). Extra args go to pytest.')
+    p.add_argument('--jobs', '-j', type=positive_int, default=2, help='parallel test workers (default 2)')
+    p.add_argument('pytest_args', nargs=argparse.REMAINDER, help='passed to pytest')
+    p.set_defaults(func=cmd_test)
+
+    p = sub.add_parser('setup', help='only set up the virtual environment (idempotent)',
+                       description='Create or refresh .venv (done by scripts/acds before any verb).')
+    p.set_defaults(func=lambda _a: 0)
+
+    p = sub.add_parser('bench', help='benchmark the lockstep graph against a bare rclpy chain',
+                       description='Print graph lockstep steps/s, a bare rclpy chain with the same hops, their ratio, '
+                                   'and core-only dynamics steps/s.')
+    p.add_argument('--json', action='store_true', help='last line: one JSON object')
+    p.add_argument('--steps', type=step_count, default=2000, help='steps per measurement (default 2000)')
+    p.set_defaults(func=cmd_bench)
+    for module in _verb_modules():
+        module.register(sub)
+    return parser
+
+
+def _verb_modules() -> list:
+    """Verb groups in ``acds_cli/verbs/`` (one module each, with ``register(subparsers)``)."""
+    import importlib
+    import pkgutil
+
+    from . import verbs
+    return [importlib.import_module(f'{verbs.__name__}.{m.name}') for m in sorted(pkgutil.iter_modules(verbs.__path__),
+                                                                                  key=lambda m: m.name)]
+
+
+class Stopped(KeyboardInterrupt):
+    """SIGTERM or SIGHUP (a closed terminal), raised in the main thread and handled like Ctrl-C."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(f'signal {signum}')
+        self.signum = signum
+
+
+def _terminate(signum: int, _frame: object) -> None:
+    raise Stopped(signum)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Parse the verb and run it; usage and scenario errors are one line, exit 2.
+
+    SIGTERM and SIGHUP stop like Ctrl-C; a stopped verb exits 128 + the signal number
+    (130 SIGINT, 143 SIGTERM, 129 SIGHUP), the shell convention.
+    """
+    signal.signal(signal.SIGTERM, _terminate)
+    signal.signal(signal.SIGHUP, _terminate)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except ScenarioError as exc:
+        print(f'acds: scenario error: {exc}', file=sys.stderr)
+        return 2
+    except UsageError as exc:
+        print(f'acds {args.verb}: error: {exc}', file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as exc:
+        signum = getattr(exc, 'signum', signal.SIGINT)
+        print(f'\n[acds] stopped by {signal.Signals(signum).name}', file=sys.stderr)
+        return 128 + signum
+
+
+if __name__ == '__main__':
+    sys.exit(main())

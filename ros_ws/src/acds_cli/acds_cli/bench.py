@@ -1,0 +1,185 @@
+"""``acds bench``: measured speed of what users run, printed (never asserted in tests), one run.
+
+1. graph: the six-node ``heao_b_acquisition`` (every node its own process, recording on),
+   steady-state lockstep steps/s after the first 10 % of the steps, CPU ms per step of
+   every node process and of the launcher (its run monitor and recorder), and the
+   deliveries per step (each message published × the subscriptions that receive it);
+2. bare ring: as many plain rclpy processes as the graph has nodes, passing one message
+   around (same QoS, same EventsExecutor) — cycles/s, the ceiling a lockstep could reach;
+3. direct engine: the same scenario's steppers in one process (``--engine direct``);
+4. kernel: the rigid body + environment (``RigidBodyModel.advance`` + ``truth``) alone at
+   the scenario's control period and substeps;
+5. dispersion: a fixed 20-sample study of the same scenario (case 1), samples 0–19 of seed
+   :data:`DISPERSION_SEED` with the default draws, each run to acquisition capture on the direct engine,
+   one after the other in this process (``montecarlo --jobs 1``): samples/s.
+
+The direct engine and the dispersion are also given per second of this process's CPU time: on a machine
+shared with other work, the wall rate measures the load as much as the code.
+
+``--json`` prints one object with the keys ``graph_steps_per_s``, ``bare_chain_steps_per_s``,
+``ratio``, ``hops``, ``deliveries_per_step``, ``direct_steps_per_s``, ``direct_steps_per_cpu_s``,
+``core_steps_per_s``, ``dispersion_samples_per_s``, ``dispersion_samples_per_cpu_s``, ``cores`` (and
+``cpu_ms_per_step``, ``load_average``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+SCENARIO = 'heao_b_acquisition'
+#: The dispersion line's study: samples 0…DISPERSION_SAMPLES − 1 of this seed.
+DISPERSION_SEED, DISPERSION_SAMPLES = 1, 20
+
+
+def _cpu_s(pid: int) -> float:
+    """User + system CPU seconds of a live process (from /proc)."""
+    fields = Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def _self_cpu_s() -> float:
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+def graph_rate(steps: int) -> dict[str, Any]:
+    """Steady-state steps/s, CPU ms/step per process and deliveries/step of the recorded six-node graph."""
+    from acds_common import topics
+    from acds_common.scenario import load_scenario
+    from acds_runtime.launcher import GraphRun
+
+    sc = load_scenario(SCENARIO)
+    skip = steps // 10
+    marks: dict[str, Any] = {}
+    work = Path(tempfile.mkdtemp(prefix='acds_bench_'))
+    graph = GraphRun(sc, work / 'run', steps=steps, echo=lambda _l: None, record=work / 'bag')
+
+    def sample() -> dict[str, float]:
+        cpu = {name: _cpu_s(p.popen.pid) for name, p in graph.processes.items()}
+        cpu['launcher (monitor + recorder)'] = _self_cpu_s()
+        return cpu
+
+    def progress(k: int, _total: int, wall: float) -> None:
+        if k == skip:
+            marks['t0'], marks['cpu0'] = wall, sample()
+        elif k == steps - 1 and 't1' not in marks:
+            marks['t1'], marks['cpu1'] = wall, sample()
+            mon = graph.monitor
+            assert mon is not None
+            subs = {name: mon.node.count_subscribers(name) for name in [*mon.topics, topics.CLOCK]}
+            marks['deliveries'] = sum(mon.count(name) * n for name, n in subs.items()) / max(1, k)
+
+    graph.progress = progress
+    with graph:
+        graph.wait()
+    span = steps - 1 - skip
+    wall = marks['t1'] - marks['t0']
+    cpu = {name: 1e3 * (marks['cpu1'][name] - marks['cpu0'][name]) / span for name in marks['cpu0']}
+    return {'steps_per_s': span / wall, 'cpu_ms_per_step': cpu, 'deliveries_per_step': marks['deliveries'],
+            'hops': len(graph.processes)}
+
+
+def bare_chain_rate(hops: int, cycles: int) -> float:
+    """Cycles/s of a ring of ``hops`` rclpy processes relaying one message (the graph's QoS and executor)."""
+    from acds_runtime.launcher import FASTDDS_PROFILE, DomainLease
+
+    lease = DomainLease()
+    env = dict(os.environ, ROS_DOMAIN_ID=str(lease.domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
+               FASTRTPS_DEFAULT_PROFILES_FILE=str(FASTDDS_PROFILE))
+    procs = [subprocess.Popen([sys.executable, '-m', 'acds_cli.bare_chain', str(i), str(hops), str(cycles)],
+                              env=env, stdout=subprocess.PIPE, text=True) for i in range(hops)]
+    try:
+        out, _ = procs[0].communicate(timeout=600)
+        for p in procs[1:]:
+            p.wait(timeout=30)
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+        lease.close()
+    return float(out.strip().splitlines()[-1])
+
+
+def direct_rate(steps: int) -> tuple[float, float]:
+    """Steps per wall second and per CPU second of the direct engine on the scenario (no recording)."""
+    from acds_common.scenario import load_scenario
+    from acds_runtime.direct import DirectRun
+
+    run = DirectRun(load_scenario(SCENARIO), steps=steps)
+    cpu0 = time.process_time()
+    result = run.run()
+    return result.steps / result.wall_seconds, result.steps / (time.process_time() - cpu0)
+
+
+def dispersion_rate() -> tuple[float, float]:
+    """Samples per wall second and per CPU second of the fixed case-1 study (module doc, item 5)."""
+    from acds_common.scenario import load_scenario
+    from acds_runtime.montecarlo import run_samples
+    from acds_runtime.sampling import Sampler
+
+    sampler = Sampler(load_scenario(SCENARIO), DISPERSION_SEED)
+    texts = [sampler.draw(i).text for i in range(DISPERSION_SAMPLES)]
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    summaries, _ = run_samples(texts, progress=False)
+    failed = [s['error'] for s in summaries if 'error' in s]
+    if failed:
+        raise RuntimeError(f'dispersion benchmark: a sample failed: {failed[0]}')
+    return DISPERSION_SAMPLES / (time.perf_counter() - wall0), DISPERSION_SAMPLES / (time.process_time() - cpu0)
+
+
+def core_rate(steps: int) -> float:
+    """Steps/s of the rigid body + environment kernel alone (the scenario's body, orbit, field, substeps)."""
+    import numpy as np
+    from acds_common.scenario import load_scenario
+    from dynamics.configuration import RIGID_BODY_SECTIONS, build_rigid_body
+
+    sc = load_scenario(SCENARIO)
+    model = build_rigid_body(*(sc.values[s] for s in RIGID_BODY_SECTIONS))
+    dipole, zero = np.array([100.0, -50.0, 20.0]), np.zeros(3)
+    dt = sc.control_period_s
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        model.advance(dt, dipole, zero, zero)
+        model.truth(zero)
+    return steps / (time.perf_counter() - t0)
+
+
+def main(args: argparse.Namespace) -> int:
+    """Run the measurements and print them (``--json``: last line one JSON object)."""
+    graph = graph_rate(args.steps)
+    bare = bare_chain_rate(graph['hops'], args.steps)
+    direct, direct_cpu = direct_rate(max(args.steps, 5000))
+    core = core_rate(max(args.steps, 5000))
+    dispersion, dispersion_cpu = dispersion_rate()
+    result = {'graph_steps_per_s': round(graph['steps_per_s'], 1), 'bare_chain_steps_per_s': round(bare, 1),
+              'ratio': round(graph['steps_per_s'] / bare, 3), 'hops': graph['hops'],
+              'deliveries_per_step': round(graph['deliveries_per_step'], 2),
+              'direct_steps_per_s': round(direct, 1), 'direct_steps_per_cpu_s': round(direct_cpu, 1),
+              'core_steps_per_s': round(core, 1), 'dispersion_samples_per_s': round(dispersion, 3),
+              'dispersion_samples_per_cpu_s': round(dispersion_cpu, 3), 'cores': os.cpu_count(),
+              'cpu_ms_per_step': {k: round(v, 3) for k, v in graph['cpu_ms_per_step'].items()},
+              'load_average': [round(x, 2) for x in os.getloadavg()]}
+    print(f'six-node graph ({SCENARIO}, recording on):    {graph["steps_per_s"]:10.1f} steps/s')
+    for name, ms in graph['cpu_ms_per_step'].items():
+        print(f'    CPU {name:34s} {ms:8.3f} ms/step')
+    print(f'deliveries per step:                              {graph["deliveries_per_step"]:10.2f}')
+    print(f'bare rclpy ring ({graph["hops"]} processes):                 {bare:10.1f} cycles/s')
+    print(f'ratio graph / bare ring:                          {graph["steps_per_s"] / bare:10.3f}')
+    print(f'direct engine (one process, no DDS):              {direct:10.1f} steps/s  ({direct_cpu:.1f} per CPU s)')
+    print(f'rigid body + environment kernel:                  {core:10.1f} steps/s')
+    print(f'dispersion ({DISPERSION_SAMPLES} case-1 samples to capture, direct): {dispersion:10.3f} samples/s '
+          f'({dispersion_cpu:.3f} per CPU s)')
+    print(f'machine: {os.cpu_count()} cores, load average {", ".join(f"{x:.2f}" for x in os.getloadavg())}')
+    if args.json:
+        print(json.dumps(result))
+    return 0

@@ -1,0 +1,174 @@
+"""``acds run``: a scenario through the full process graph (or the direct engine), its summary, its bag and plots."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import time
+from pathlib import Path
+
+from acds_common.scenario import MAX_STEPS, load_scenario
+
+from ..arguments import (
+    UsageError,
+    add_foxglove_options,
+    check_output_dir,
+    check_output_file,
+    positive_minutes,
+    real_time_factor,
+    step_count,
+)
+from ..workspace import new_run_dir, workspace
+from .montecarlo import add_sample_options, sample_for_run
+
+DEFAULT_SCENARIO = 'heao_b_acquisition'
+
+
+class Progress:
+    """One progress line: sim time / total and the real-time factor (in place on a TTY, else every 10 % or 5 s)."""
+
+    def __init__(self, dt_s: float) -> None:
+        self.dt_s = dt_s
+        self.tty = sys.stderr.isatty()
+        self.last_pct = -10
+        self.last_print = 0.0
+
+    def __call__(self, k: int, total: int, wall_s: float) -> None:
+        pct = 100.0 * k / total
+        now = time.monotonic()
+        if self.tty and now - self.last_print < 0.2 and k < total:
+            return
+        if not self.tty and pct < self.last_pct + 10 and now - self.last_print < 5.0 and k < total:
+            return
+        self.last_print, self.last_pct = now, pct
+        sim_min = k * self.dt_s / 60
+        rtf = k * self.dt_s / wall_s if wall_s > 0 else 0.0
+        line = (f'[progress] sim {sim_min:7.1f} / {total * self.dt_s / 60:.1f} min ({pct:5.1f} %)  '
+                f'step {k}/{total}  real-time factor {rtf:,.0f}x')
+        print(('\r' + line) if self.tty else line, end='' if self.tty and k < total else '\n',
+              file=sys.stderr, flush=True)
+
+
+def _announce_live(port: int, host: str) -> None:
+    print(f'[acds] Foxglove live view on ws://{host}:{port} (Foxglove: Open connection → Foxglove WebSocket; '
+          f'layout {workspace() / "foxglove" / "acds_layout.json"})', file=sys.stderr, flush=True)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    """Run a scenario through the full process graph (or the direct engine) and print its summary."""
+    from acds_runtime.direct import DirectRun
+    from acds_runtime.launcher import GraphRun, LaunchError
+    from acds_runtime.preflight import preflight
+    from acds_runtime.report import format_summary
+    from acds_runtime.summary import print_tables, write_summary_json
+
+    scenario, sample_text = sample_for_run(load_scenario(args.scenario or DEFAULT_SCENARIO), args)
+    preflight(scenario)
+    steps = args.steps
+    if args.until_min is not None:
+        steps = max(1, round(args.until_min * 60 / scenario.control_period_s))
+        if steps > MAX_STEPS:
+            raise UsageError(f'--until-min {args.until_min:g}: {steps:,} steps of {scenario.control_period_s} s, '
+                             f'more than the {MAX_STEPS:,} a run may have')
+    direct = args.engine == 'direct'
+    if direct and args.rtf:
+        raise UsageError('--rtf paces the process graph\'s clock; the direct engine has none (use --engine graph)')
+    check_output_dir('--run-dir' if args.run_dir else 'run folder', Path(args.run_dir or workspace() / 'runs'))
+    if args.summary_json:
+        check_output_file('--summary-json', Path(args.summary_json))
+    # The default folder is created exclusively (a run started in the same second gets its own).
+    run_dir = Path(args.run_dir) if args.run_dir else new_run_dir(scenario.name)
+    if sample_text is not None:  # the drawn scenario with how it was drawn (the launcher adds scenario.yaml)
+        run_dir.mkdir(parents=True, exist_ok=True)
+        (run_dir / 'sample.yaml').write_text(sample_text)
+    echo = (lambda line: None) if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+    bag = None if args.no_record else Path(args.record) if args.record else run_dir / 'bag'
+    if bag is not None:
+        from acds_runtime.bag.writer import BagError, check_target
+        try:
+            check_target(bag, args.storage, args.compression)
+        except BagError as exc:
+            raise UsageError(str(exc)) from None
+    live = None
+    if args.foxglove is not None:
+        if scenario.formation:
+            raise UsageError('--foxglove: the live view serves one spacecraft; a formation is not served yet (record '
+                             'it and open the bag in Foxglove)')
+        from acds_runtime.foxglove_bridge import live_view
+        live = live_view(args.foxglove, args.foxglove_host)
+    progress = Progress(scenario.control_period_s)
+    options = dict(record=bag, record_storage=args.storage, record_compression=args.compression, live=live)
+    if direct:
+        run_dir.mkdir(parents=True, exist_ok=True)
+        engine = DirectRun(scenario, steps=steps, echo=echo, progress=progress, **options)
+    else:
+        engine = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=progress, **options)
+    print(f'[acds] scenario {scenario.name}: {engine.steps} steps of {scenario.control_period_s} s '
+          f'({engine.steps * scenario.control_period_s / 60:.1f} min sim), '
+          + ('direct engine (one process, no DDS)' if direct else f'nodes {", ".join(scenario.get("", "nodes"))}')
+          + f'; run folder {run_dir}', file=sys.stderr, flush=True)
+    try:
+        if direct:
+            if engine.live_sink is not None:
+                _announce_live(engine.live_sink.port, args.foxglove_host)
+            summary = engine.run().summary
+        else:
+            with engine:
+                print(f'[acds] ROS domain {engine.lease.domain_id}' + (f'; recording into {bag}' if bag else ''),
+                      file=sys.stderr, flush=True)
+                if engine.live_sink is not None:
+                    _announce_live(engine.live_sink.port, args.foxglove_host)
+                result = engine.wait()
+                for warning in result.warnings:
+                    print(f'[acds] WARNING: {warning}', file=sys.stderr)
+                summary = result.summary
+    except LaunchError as exc:
+        print(f'[acds] run failed: {exc}', file=sys.stderr)
+        return 1
+    except KeyboardInterrupt as exc:
+        signum = getattr(exc, 'signum', signal.SIGINT)
+        stopped = 'the run stopped' if direct else 'all nodes stopped'
+        print(f'\n[acds] stopped by {signal.Signals(signum).name}: {stopped}', file=sys.stderr)
+        return 128 + signum
+    print('\n' + format_summary(summary))
+    print_tables(summary)
+    if args.summary_json:
+        write_summary_json(Path(args.summary_json), summary)
+    if bag is not None:
+        from ..bag.plots import make_plots
+        plot_dir = run_dir / 'plots'  # the run's own folder: never shared with another run recorded beside the bag
+        plots = make_plots(bag, plot_dir)
+        print(f'[acds] bag {bag} (./scripts/acds info {bag}); {len(plots)} plots in {plot_dir}', file=sys.stderr)
+    return 0
+
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``run`` verb."""
+    p = sub.add_parser('run', help='run a scenario through the full node graph (default: the main job)',
+                       description='Run SCENARIO (a shipped name or a YAML path) through the full process graph '
+                                   '(or --engine direct).')
+    p.add_argument('scenario', nargs='?', help=f'scenario name or path (default {DEFAULT_SCENARIO})')
+    g = p.add_mutually_exclusive_group()
+    g.add_argument('--steps', type=step_count, help='number of control steps (default: the scenario duration)')
+    g.add_argument('--until-min', type=positive_minutes, help='run until this sim time, minutes (> 0)')
+    p.add_argument('--summary-json', metavar='PATH',
+                   help='write the summary as one JSON object (non-finite numbers as null)')
+    g = p.add_mutually_exclusive_group()
+    g.add_argument('--record', metavar='PATH', help='record the run into this rosbag2 bag (default RUN_DIR/bag; '
+                   'the plots go to RUN_DIR/plots either way)')
+    g.add_argument('--no-record', action='store_true', help="don't record a bag (nor plot it)")
+    from .bag import add_bag_options
+    add_bag_options(p)
+    p.add_argument('--rtf', type=real_time_factor, default=0.0,
+                   help='pace at this real-time factor (default 0: as fast as possible)')
+    p.add_argument('--run-dir', help='run folder (default runs/<scenario>_<time>); checked writable before the run')
+    p.add_argument('--quiet', action='store_true', help="don't forward the nodes' output")
+    add_sample_options(p, run=True)
+    p.add_argument('--engine', choices=('graph', 'direct'), default='graph',
+                   help='graph: one process per node over DDS (default); direct: the same steppers in this process, '
+                        'no DDS — bit-identical data, faster')
+    add_foxglove_options(p, 'the running graph')
+    p.set_defaults(func=cmd_run)
+
