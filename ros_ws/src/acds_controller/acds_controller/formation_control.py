@@ -526,15 +526,22 @@ class FormationController:
         return [mu_a, mu_b]
 
     def _wheel_torque(self, k: int, m: Measurement, rot: np.ndarray, tau_body: np.ndarray) -> np.ndarray:
-        """Wanted ḣ (body, N·m): take the predicted external torque and add the attitude PD."""
-        v = self.vehicles[k]
-        err = rot.T @ self._targets[k]  # target → body; skew part ≈ −[θ×], θ the body's rotation from target
-        theta = 0.5 * np.array([err[1, 2] - err[2, 1], err[2, 0] - err[0, 2], err[0, 1] - err[1, 0]])
-        w = as_vector3(m.omega_body_rad_s, f"{v.name} omega_body_rad_s")
-        h = as_vector3(m.wheel_h_body_nms, f"{v.name} wheel_h_body_nms")
-        wn, zeta = self.attitude.natural_frequency_rad_s, self.attitude.damping_ratio
-        alpha = -wn * wn * theta - 2.0 * zeta * wn * w
-        inertia = v.inertia_kg_m2
-        if self.frame == "planar":
-            return np.array([0.0, 0.0, tau_body[2] - inertia[2, 2] * alpha[2]])
-        return tau_body - inertia @ alpha - cross3(w, inertia @ w + h)
+        """Wanted ḣ (body, N·m) of vehicle k (``wheel_torque_command``)."""
+        return wheel_torque_command(self.attitude, self.vehicles[k], self.frame == "planar", self._targets[k], m, rot,
+                                    tau_body)
+
+
+def wheel_torque_command(attitude: AttitudeLaw, v: ControlledVehicle, planar: bool, target: np.ndarray,
+                         m: Measurement, rot: np.ndarray, tau_body: np.ndarray) -> np.ndarray:
+    """Wanted ḣ (body, N·m) of vehicle ``v``: take the predicted external torque ``tau_body`` and add the
+    attitude PD toward ``target`` (body → inertial DCM); ``planar``: the yaw channel only."""
+    err = rot.T @ target  # target → body; skew part ≈ −[θ×], θ the body's rotation from target
+    theta = 0.5 * np.array([err[1, 2] - err[2, 1], err[2, 0] - err[0, 2], err[0, 1] - err[1, 0]])
+    w = as_vector3(m.omega_body_rad_s, f"{v.name} omega_body_rad_s")
+    h = as_vector3(m.wheel_h_body_nms, f"{v.name} wheel_h_body_nms")
+    wn, zeta = attitude.natural_frequency_rad_s, attitude.damping_ratio
+    alpha = -wn * wn * theta - 2.0 * zeta * wn * w
+    inertia = v.inertia_kg_m2
+    if planar:
+        return np.array([0.0, 0.0, tau_body[2] - inertia[2, 2] * alpha[2]])
+    return tau_body - inertia @ alpha - cross3(w, inertia @ w + h)

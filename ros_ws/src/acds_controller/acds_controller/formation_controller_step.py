@@ -32,6 +32,7 @@ from acds_controller.formation_control import (
     HoldLaw,
     Measurement,
     SpinUpLaw,
+    VehicleCommand,
 )
 from acds_controller.magnetic_laws import ControllerError
 
@@ -86,23 +87,34 @@ class FormationControllerStep(Stepper):
     def control(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Stage ``control``: both vehicles' commands from both vehicles' measurements; this vehicle's part."""
         frame_to_inertial = None if self.orbit is None else hill_frame(self.orbit, t_s)[0]
-        dt = self.control_period_s
-        measurements = []
-        for v in self.names:
-            odom = inp[f'{v}/odometry']
-            rot = quat_to_dcm(odom.orientation)
-            b = inp[f'{v}/b_body']
-            b_inertial = None if frame_to_inertial is None or b is None else rot @ np.array(b[0])
-            measurements.append(Measurement(
-                np.array(odom.position), np.array(odom.velocity), rot, vec(inp[f'{v}/gyro'][0]),
-                vec(inp[f'{v}/wheel_h']) + vec(inp[f'{v}/wheel_hdot']) * dt, b_inertial))
+        measurements = measurements_of(self.names, inp, self.control_period_s, frame_to_inertial)
         command = self.core.step(t_s, measurements, frame_to_inertial)[self.index]
-        out: dict[str, Any] = {'moment': vector3(command.dipole_body_am2),
-                               'wheel_torque': vector3(command.wheel_torque_body_nm)}
-        if k % TELEMETRY_EVERY == 0:
-            values: dict[str, object] = {'dumping': str(command.dumping).lower()}
-            for name, vector in (('force_command_n', command.force_command_n),
-                                 ('dipole_frame_am2', command.dipole_frame_am2)):
-                values.update({f'{name}_{a}': f'{c:.6g}' for a, c in zip('xyz', vector, strict=True)})
-            out['diagnostics'] = diagnostic(f'{self.vehicle}/{self.node}', values)
-        return out
+        return command_outputs(k, command, f'{self.vehicle}/{self.node}')
+
+
+def measurements_of(names: list[str], inp: dict[str, Any], dt_s: float,
+                    frame_to_inertial: np.ndarray | None = None) -> list[Measurement]:
+    """Every vehicle's measurement from the stage inputs: truth of step k, wheel momentum h_{k−1} + ḣ_{k−1}·Δt."""
+    measurements = []
+    for v in names:
+        odom = inp[f'{v}/odometry']
+        rot = quat_to_dcm(odom.orientation)
+        b = inp[f'{v}/b_body']
+        b_inertial = None if frame_to_inertial is None or b is None else rot @ np.array(b[0])
+        measurements.append(Measurement(
+            np.array(odom.position), np.array(odom.velocity), rot, vec(inp[f'{v}/gyro'][0]),
+            vec(inp[f'{v}/wheel_h']) + vec(inp[f'{v}/wheel_hdot']) * dt_s, b_inertial))
+    return measurements
+
+
+def command_outputs(k: int, command: VehicleCommand, source: str) -> dict[str, Any]:
+    """This vehicle's outputs: moment and wheel-torque commands, telemetry every ``TELEMETRY_EVERY`` steps."""
+    out: dict[str, Any] = {'moment': vector3(command.dipole_body_am2),
+                           'wheel_torque': vector3(command.wheel_torque_body_nm)}
+    if k % TELEMETRY_EVERY == 0:
+        values: dict[str, object] = {'dumping': str(command.dumping).lower()}
+        for name, vector in (('force_command_n', command.force_command_n),
+                             ('dipole_frame_am2', command.dipole_frame_am2)):
+            values.update({f'{name}_{a}': f'{c:.6g}' for a, c in zip('xyz', vector, strict=True)})
+        out['diagnostics'] = diagnostic(source, values)
+    return out

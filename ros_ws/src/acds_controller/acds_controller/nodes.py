@@ -106,6 +106,15 @@ def _acds_controller(params: dict[str, Any]) -> Ports:
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
+#: The formation controller's stepper for each ``formation.law`` (seed 004): each law its own variant.
+FORMATION_LAWS = {
+    'hold': 'acds_controller.formation_controller_step:FormationControllerStep',
+    'spin_up': 'acds_controller.formation_controller_step:FormationControllerStep',
+    'array_spin': 'acds_controller.formation_array_step:FormationArrayStep',
+    'lqr': 'acds_controller.formation_lqr_step:FormationLqrStep',
+}
+
+
 def _formation_controller(params: dict[str, Any]) -> Ports:
     """One vehicle's formation controller: every vehicle's truth of step k and wheel momentum of step k − 1
     (the RF link of seed 004 slide 70); it returns its own vehicle's dipole and wheel torque commands."""
@@ -117,8 +126,7 @@ def _formation_controller(params: dict[str, Any]) -> Ports:
                    Input(f'{w}/b_body', f'{ns}/{topics.TRUTH_B_BODY}', 'formation_dynamics'),
                    Input(f'{w}/wheel_h', f'{ns}/{topics.WHEEL_MOMENTUM}', f'{w}/reaction_wheels', lag=1),
                    Input(f'{w}/wheel_hdot', f'{ns}/{topics.WHEEL_TORQUE}', f'{w}/reaction_wheels', lag=1)]
-    return Ports('acds_controller.formation_controller_step:FormationControllerStep',
-                 (Stage('control', tuple(inputs)),),
+    return Ports(FORMATION_LAWS[params['formation_law']], (Stage('control', tuple(inputs)),),
                  (Output('moment', topics.MOMENT_COMMAND, BODY),
                   Output('wheel_torque', topics.WHEEL_TORQUE_COMMAND, BODY),
                   Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
@@ -131,7 +139,7 @@ PACKAGE = Package(
         Node('acds_controller', ('spacecraft', 'controller', 'magnetometer', 'wheels', 'orbit', 'earth'),
              _acds_controller),
         Node('formation_controller', ('orbit', 'formation'), _formation_controller, in_graph=False, in_vehicle=True,
-             every_vehicle=('spacecraft', 'vehicle', 'em_driver')),
+             every_vehicle=('spacecraft', 'vehicle', 'em_driver', 'wheels')),
     ),
     sections=SECTIONS,
     topics=(

@@ -88,7 +88,9 @@ SECTIONS: dict[str, dict[str, Field]] = {
         'earth_field': Field('bool', 'hill: the Earth field\'s torque and force on every dipole (orbit, earth '
                              'sections)', True),
         'law': Field('str', 'hold: keep the second vehicle at relative_position from the first; spin_up: spin '
-                     'the pair about the frame z axis', 'hold', choices=('hold', 'spin_up')),
+                     'the pair about the frame z axis; array_spin: spin N vehicles at their array_position about '
+                     'the frame z axis (PD); lqr: LQR about the steady spin of the array at spin_rate', 'hold',
+                     choices=('hold', 'spin_up', 'array_spin', 'lqr')),
         'relative_position': quantity('hold: the second vehicle\'s position relative to the first, formation frame',
                                 [2.5, 0.0, 0.0], 'm', LENGTH, length=3, lo=-1e5, hi=1e5),
         'hold_natural_frequency': quantity('hold: PD natural frequency', 0.1, 'rad_s', {'rad_s': 1.0}, lo=1e-4, hi=10.0),
@@ -107,6 +109,16 @@ SECTIONS: dict[str, dict[str, Field]] = {
                                          {'rad_s': 1.0}, lo=1e-4, hi=100.0),
         'attitude_damping_ratio': Field('float', 'attitude hold: PD damping ratio', 0.8, lo=0.05, hi=5.0),
         'max_force': quantity('limit of the commanded relative force', 0.5, 'n', {'n': 1.0}, lo=0.0, hi=1e4),
+        'array_natural_frequency': quantity('array_spin: PD natural frequency of each vehicle on its place', 0.2,
+                                            'rad_s', {'rad_s': 1.0}, lo=1e-4, hi=10.0),
+        'array_damping_ratio': Field('float', 'array_spin: PD damping ratio', 0.9, lo=0.05, hi=5.0),
+        **{f'lqr_{name}_weight': Field('float', f'lqr: dimensionless weight on {what} (normalised by its scale, '
+                                       'acds_controller.formation_lqr; > 0)', 1.0, lo=0.0, hi=1e12)
+           for name, what in (('radial', 'the relative positions along the nominal baselines (Δr)'),
+                              ('tangential', 'the relative positions across them in the spin plane (d·Δφ)'),
+                              ('normal', 'the relative positions along the spin axis (d·Δψ)'),
+                              ('attitude', 'the attitude errors'), ('rate', 'the relative velocities and body rates'),
+                              ('coil', 'the coil moments'), ('wheel', 'the wheel torques'))},
         'dump': Field('bool', 'hill with the Earth field: Earth as a momentum dump (slides 31–33)', False),
         'dump_start': quantity('dump: start dumping the vehicle whose wheels hold more than this', 0.5, 'nms', MOMENTUM,
                          lo=0.0, hi=1e6),
@@ -118,6 +130,9 @@ SECTIONS: dict[str, dict[str, Field]] = {
                                [0.0, 0.0, 0.0], 'm', LENGTH, length=3, lo=-1e7, hi=1e7),
         'initial_velocity': quantity('initial velocity, formation frame', [0.0, 0.0, 0.0], 'm_s', {'m_s': 1.0},
                                length=3, lo=-1e4, hi=1e4),
+        'array_position': quantity('array_spin, lqr: the vehicle\'s place in the spinning array at t = 0, formation '
+                                   'frame (about the array\'s centre of mass)', [0.0, 0.0, 0.0], 'm', LENGTH, length=3,
+                                   lo=-1e7, hi=1e7),
         'coil_axes': Field('floats', 'unit axes of the coils in body axes, one (x, y, z) triple per coil, '
                            'orthonormal (EMFFORCE: two vertical coils along x and y)', [1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
                            lo=-1.0, hi=1.0),
@@ -202,6 +217,35 @@ def _formation_dynamics(params: dict[str, Any]) -> Ports:
     return Ports('dynamics.formation_step:FormationDynamicsStep', (Stage('integrate', tuple(inputs)),), tuple(outputs))
 
 
+def check_formation(sc: Any) -> str:
+    """A formation's vehicles are apart, its law fits their number and frame, its LQR weights are > 0 ('' when
+    so; seed 004)."""
+    if not sc.formation:
+        return ''
+    vehicles = sc.values['vehicles']
+    f = sc.values['formation']
+    keys = [('initial_position', 'start at')] + ([('array_position', 'have their array places at')]
+                                                 if f['law'] in ('array_spin', 'lqr') else [])
+    for key, what in keys:
+        for i, a in enumerate(vehicles):
+            for b in vehicles[i + 1:]:
+                if a['vehicle'][key] == b['vehicle'][key]:
+                    return (f'vehicles.{b["name"]}.vehicle.{key}_m: vehicles {a["name"]} and {b["name"]} {what} the '
+                            f'same position {a["vehicle"][key]} m')
+    if f['law'] in ('hold', 'spin_up') and len(vehicles) != 2:
+        return f'formation.law: {f["law"]!r} flies a pair of vehicles, got {len(vehicles)} (array_spin or lqr fly N)'
+    if f['law'] in ('array_spin', 'lqr') and f['frame'] not in ('planar', 'free_space'):
+        return (f'formation.frame: law {f["law"]!r} spins the array about the frame z axis (planar or free_space), '
+                f'got {f["frame"]!r}')
+    if f['law'] == 'lqr':
+        if f['frame'] != 'free_space':
+            return f'formation.frame: law lqr is designed on the 3-D linearised array (free_space), got {f["frame"]!r}'
+        for key in sorted(k for k in f if k.startswith('lqr_')):
+            if not f[key] > 0.0:
+                return f'formation.{key}: {f[key]:g} is not a positive LQR weight'
+    return ''
+
+
 #: What the dynamics package adds to the graph.
 PACKAGE = Package(
     'dynamics',
@@ -215,4 +259,5 @@ PACKAGE = Package(
     sections=SECTIONS,
     vehicle_sections=('vehicle', 'wheels'),
     topics=TOPICS,
+    checks=(check_formation,),
 )

@@ -27,6 +27,7 @@ import numpy as np
 from acds_common import topics
 from acds_common.attitude import quat_to_dcm
 from acds_common.inertia import inertia_tensor
+from acds_controller.formation_array import linear_array_rate_rad_s, mission_efficiency
 from acds_controller.formation_control import steady_spin_dipole_product_am4
 
 #: This module summarises formations (``acds_runtime.summary``).
@@ -64,6 +65,8 @@ class _Vehicle:
         self.peak_h = 0.0
         self.final_h = 0.0
         self.final_rates = (0.0, 0.0, 0.0)
+        self.place = {'array_position': np.array(v['vehicle']['array_position']),
+                      'initial_position': np.array(v['vehicle']['initial_position'])}
 
 
 class Accumulator:
@@ -87,6 +90,9 @@ class Accumulator:
         self.final: dict[str, float] = {}
         self.l_scale = 0.0
         self.tail_products: deque[float] = deque(maxlen=max(1, round(STEADY_WINDOW_S / self.dt_s)))
+        self.tail_dipoles: deque[np.ndarray] = deque(maxlen=max(1, round(STEADY_WINDOW_S / self.dt_s)))
+        self.tail_array: deque[tuple[float, float]] = deque(maxlen=max(1, round(STEADY_WINDOW_S / self.dt_s)))
+        self.radii: np.ndarray | None = None
 
     def step(self, k: int, values: dict[str, Any]) -> None:
         """One step of every vehicle."""
@@ -118,6 +124,7 @@ class Accumulator:
                 self.p0, self.l0 = p, ang
             self.max_dp = max(self.max_dp, float(np.linalg.norm(p - self.p0)))
             self.max_dl = max(self.max_dl, float(np.linalg.norm(ang - self.l0)))
+        self._array_step(states, values)
         (_va, ra, va, _ra, _wa, _ha), (_vb, rb, vb, _rb, _wb, _hb) = states[:2]
         rho, rho_dot = rb - ra, vb - va
         d = float(np.linalg.norm(rho))
@@ -132,15 +139,64 @@ class Accumulator:
         if all(dp is not None for dp in dipoles):
             self.tail_products.append(float(np.prod([np.linalg.norm(dp) for dp in dipoles])))
 
+    def _array_step(self, states: list[tuple], values: dict[str, Any]) -> None:
+        """The array about its centre of mass: outer radius, rigid rotation rate, every vehicle's |μ|."""
+        m = np.array([s[0].mass for s in states])
+        pos = np.array([s[1] for s in states])
+        vel = np.array([s[2] for s in states])
+        rel, rel_v = pos - m @ pos / m.sum(), vel - m @ vel / m.sum()
+        inertia_z = float(m @ np.sum(rel[:, :2] ** 2, axis=1))
+        rate = float(m @ (rel[:, 0] * rel_v[:, 1] - rel[:, 1] * rel_v[:, 0])) / inertia_z if inertia_z > 0 else 0.0
+        self.radii = np.linalg.norm(rel, axis=1)
+        self.tail_array.append((float(self.radii.max()), rate))
+        dipoles = [values.get(v.dipole) for v in self.vehicles]
+        if all(dp is not None for dp in dipoles):
+            self.tail_dipoles.append(np.array([np.linalg.norm(dp) for dp in dipoles]))
+
+    def _array(self) -> dict[str, Any] | None:
+        """Steady state of a spinning array over the last STEADY_WINDOW_S and slide 64's mission efficiency."""
+        if not self.tail_array or not self.tail_dipoles or self.radii is None:
+            return None
+        radius, rate = (float(x) for x in np.mean(np.array(self.tail_array), axis=0))
+        dipoles = np.mean(np.array(self.tail_dipoles), axis=0)
+        masses = [v.mass for v in self.vehicles]
+        mu_b = float(dipoles.max())
+        out: dict[str, Any] = {'outer_radius_m': radius, 'rate_rad_s': rate,
+                               'steady_dipoles_am2': {v.name: float(d) for v, d in zip(self.vehicles, dipoles, strict=True)},
+                               'radii_m': {v.name: float(r) for v, r in zip(self.vehicles, self.radii, strict=True)},
+                               'mission_efficiency': mission_efficiency(abs(rate), sum(masses), radius, mu_b) if mu_b else None,
+                               'closed_form_mission_efficiency': None}
+        x = self._line_positions()
+        if x is not None and mu_b:
+            closed_rate = linear_array_rate_rad_s(masses, x, mu_b)
+            out.update(closed_form_rate_rad_s=closed_rate,
+                       closed_form_mission_efficiency=mission_efficiency(closed_rate, sum(masses), radius, mu_b))
+        return out
+
+    def _line_positions(self) -> list[float] | None:
+        """The vehicles' places along the array's line if it is one (array_position, else initial position)."""
+        key = 'array_position' if self.law in ('array_spin', 'lqr') else 'initial_position'
+        places = np.array([v.place[key] for v in self.vehicles])
+        m = np.array([v.mass for v in self.vehicles])
+        places -= m @ places / m.sum()
+        far = int(np.argmax(np.linalg.norm(places, axis=1)))
+        axis = places[far] / np.linalg.norm(places[far])
+        along = places @ axis
+        if np.linalg.norm(places - np.outer(along, axis)) > 1e-9 * float(np.abs(along).max()):
+            return None
+        return along.tolist()
+
     def contribute(self, summary: dict[str, Any]) -> None:
         """Add ``formation``."""
         out: dict[str, Any] = {'law': self.law, 'frame': self.frame,
                                'final_separation_m': self.final.get('separation_m')}
+        if self.law != 'hold':
+            out['array'] = self._array()
         if self.law == 'hold':
             out.update(final_position_error_m=self.final.get('position_error_m'),
                        initial_position_error_m=self.e0,
                        settling_time_s=self.settled_after if self.e0 else 0.0)
-        else:
+        elif self.law == 'spin_up':
             rate, d = self.final.get('array_rate_rad_s'), self.final.get('separation_m')
             product = float(np.mean(self.tail_products)) if self.tail_products else None
             closed = None
@@ -172,10 +228,16 @@ def print_tables(summary: dict[str, Any]) -> None:
     if not f:
         return
     print(f'\nFormation ({f["law"]}, {f["frame"]} frame): final separation {_fmt(f["final_separation_m"])} m')
+    a = f.get('array')
+    if a:
+        print(f'  array: outer radius {_fmt(a["outer_radius_m"])} m, rate {_fmt(a["rate_rad_s"])} rad/s; steady |μ| '
+              + ', '.join(f'{n} {d:.1f}' for n, d in a['steady_dipoles_am2'].items()) + ' A·m²')
+        print(f'  mission efficiency J = ω/(m_array √c_o) {_fmt(a["mission_efficiency"])}; equal-dipole linear array '
+              f'closed form {_fmt(a["closed_form_mission_efficiency"])} (rate {_fmt(a.get("closed_form_rate_rad_s"))} rad/s)')
     if f['law'] == 'hold':
         print(f'  baseline error {_fmt(f["initial_position_error_m"])} m → {_fmt(f["final_position_error_m"])} m; '
               f'within {SETTLING_BAND:.0%} of the initial error after {_fmt(f["settling_time_s"], ".1f")} s')
-    else:
+    elif f['law'] == 'spin_up':
         print(f'  array rate {_fmt(f["final_array_rate_rad_s"])} rad/s (commanded {_fmt(f["commanded_rate_rad_s"])})'
               f', separation commanded {_fmt(f["commanded_separation_m"])} m')
         print(f'  dipole product |μa||μb| {_fmt(f["steady_dipole_product_am4"])} (A·m²)² held vs closed form '
