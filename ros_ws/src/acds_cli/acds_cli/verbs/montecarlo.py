@@ -332,7 +332,7 @@ def cmd_pick_sample(args: argparse.Namespace) -> int:
         raise UsageError(f'{folder}: not a montecarlo output folder ({exc})') from None
     if spec.get('complete') is False:
         raise UsageError(f'{folder}: the study is incomplete (its report phase was interrupted: montecarlo.json says '
-                         'complete: false); run it again')
+                         f'complete: false); finish it with {spec["command"]} --resume {folder}')
     rows = rows_of(records)
     try:
         index, target = pick_sample(rows, args.quantity, args.percentile)
