@@ -40,7 +40,7 @@ def _run_folder(tmp_path: Path) -> Path:
 def _record(tmp_path: Path, steps: list[int]) -> JoinedRecording:
     """Feed the recorder's callback /clock and wheel momentum of ``steps`` (arrival order), then close the bag."""
     recording = JoinedRecording(BagWriter(tmp_path / 'bag'), None, step_coverage(_run_folder(tmp_path)))
-    clock, wheels = Codec(topics.TYPES[topics.CLOCK]), Codec(topics.TYPES[topics.WHEEL_MOMENTUM], 'body')
+    clock, wheels = Codec(topics.TYPES[topics.CLOCK]), Codec(topics.type_of(topics.WHEEL_MOMENTUM), 'body')
     for k in steps:
         recording(topics.CLOCK, clock.encode(k * DT_NS))
         recording(WHEELS, wheels.encode(k * DT_NS, (0.1 * k, 0.0, 0.0)))
