@@ -86,10 +86,15 @@ SECTIONS: dict[str, dict[str, Field]] = {
 
 
 def _acds_controller(params: dict[str, Any]) -> Ports:
-    store = ((Output('cmg_torque', topics.CMG_TORQUE, BODY), Output('sampled_momentum', topics.SAMPLED_MOMENTUM, BODY))
-             if params['wheels_kind'] == 'cmg' else (Output('volts', topics.WHEEL_VOLTS, BODY),))
+    """The HEAO transfer assembly + DPA driving wheels (spec §7), or with the CMGs (``wheels.kind: cmg``) the AAP
+    Workshop's computer (seed 000): the same inputs (the wheel ones are then the CMGs'), its own outputs."""
+    if params['wheels_kind'] == 'cmg':
+        stepper = 'workshop_step:WorkshopComputerStep'
+        store = (Output('cmg_torque', topics.CMG_TORQUE, BODY), Output('sampled_momentum', topics.SAMPLED_MOMENTUM, BODY))
+    else:
+        stepper, store = 'controller_step:DpaStep', (Output('volts', topics.WHEEL_VOLTS, BODY),)
     return Ports(
-        'acds_controller.controller_step:ControllerStep',
+        f'acds_controller.{stepper}',
         (Stage('control', (
             Input('mag_volts', topics.MAG_VOLTS, 'magnetometer_sim'),
             Input('mag_bias', topics.MAG_BIAS_VOLTS, 'magnetometer_sim'),

@@ -10,7 +10,7 @@ from acds_common.messages import WARN, diagnostic, mode_status
 from acds_common.parameters import normalize
 from acds_common.scenario import load_scenario
 from acds_controller.configuration import build_dpa
-from acds_controller.controller_step import ControllerStep, apply_command
+from acds_controller.controller_step import DpaStep, apply_command
 from acds_controller.magnetic_laws import ControllerError
 
 
@@ -66,11 +66,11 @@ def test_oresat_scenario_gain_is_the_seed_formula_on_its_design_values():
     assert np.linalg.eigvalsh(dpa.config.inertia_kg_m2)[0] == pytest.approx(c['detumble_j_min'], rel=1e-9)
 
 
-def _stepper() -> ControllerStep:
+def _stepper() -> DpaStep:
     from acds_common.parameters import node_parameters
 
     params = node_parameters(load_scenario('heao_b_acquisition'), 10, 0.0)['acds_controller']
-    return ControllerStep(normalize('acds_controller', params), log=lambda _l, _t: None)
+    return DpaStep(normalize('acds_controller', params), log=lambda _l, _t: None)
 
 
 def _inputs(**over):

@@ -15,10 +15,10 @@ from acds_common.scenario import load_scenario
 from acds_common.units import ftlbs_to_nms, nms_to_ftlbs
 from acds_controller.cmg_dump import DumpLawConfig, OrbitClock, k_to_si, min_energy_vector
 from acds_controller.cmg_hold import HoldGains
-from acds_controller.controller_step import ControllerStep
 from acds_controller.magnetic_laws import ControllerError
 from acds_controller.wheel_laws import rotate_to_body
 from acds_controller.workshop import FieldPrediction, WorkshopComputer, WorkshopConfig
+from acds_controller.workshop_step import WorkshopComputerStep
 
 ORBIT = Orbit(OrbitConfig(kind='circular', inclination_rad=math.radians(35.0), altitude_m=220 * 1852.0))
 FIELD = TiltedDipoleField(EarthFieldConfig())
@@ -120,7 +120,7 @@ def test_controller_stepper_publishes_h_s_that_changes_only_at_orbit_starts() ->
     (+ the §5 offset) at the first step of the next, and its change is the CMG momentum's change."""
     sc = load_scenario('aap_workshop_pop')
     params = normalize('acds_controller', node_parameters(sc, 10)['acds_controller'])
-    step = ControllerStep(params, log=lambda _level, _text: None)
+    step = WorkshopComputerStep(params, log=lambda _level, _text: None)
     period = step.workshop.clock.period_s
     dt = step.control_period_s
     samples, h_at = [], []
@@ -146,7 +146,7 @@ def test_controller_stepper_publishes_h_s_that_changes_only_at_orbit_starts() ->
 def test_controller_stepper_without_mode_manager_dumps_and_refuses_heao_modes() -> None:
     sc = load_scenario('aap_workshop_pop')
     params = normalize('acds_controller', node_parameters(sc, 10)['acds_controller'])
-    step = ControllerStep(params, log=lambda _level, _text: None)
+    step = WorkshopComputerStep(params, log=lambda _level, _text: None)
     out = step.control(0, 0.0, _step_inputs(sc, 0.0, np.zeros(3), mode=None))
     assert np.linalg.norm(out['moment']) > 100.0  # cmg_dump by default
     refused = step.control(1, 10.0, _step_inputs(sc, 10.0, np.zeros(3), mode='celestial_point'))

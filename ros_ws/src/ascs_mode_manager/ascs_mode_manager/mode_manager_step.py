@@ -1,28 +1,32 @@
-"""ascs_mode_manager stepper: the on-board mode logic (spec §8).
+"""ascs_mode_manager steppers: the on-board mode logic (spec §8), one stepper per system.
 
-One node; parameter ``modes_system`` selects the part that runs: ``heao`` (Mode 1A → 1B →
-cruise, :mod:`ascs_mode_manager.heao_part`, stage ``heao``), ``sss`` (perigee automatic
-turn-on, :mod:`ascs_mode_manager.sss_part`, stage ``sss``) or ``aap`` (the AAP Workshop's CMG
-hold and magnetic dump, :mod:`ascs_mode_manager.aap_part`, stage ``aap``). The stepper owns what both
-share: the ground-command intake (:mod:`ascs_mode_manager.ground_commands`: the scenario's
-schedule and the live commands the host receives on ``ground/command``) and the answers on
-``ground/ack`` (output ``ack``: every command is answered, accepted or refused with the
-reason).
+The scenario's ``modes.system`` picks the variant (``ascs_mode_manager.nodes``): HEAO (Mode 1A → 1B →
+cruise, :mod:`ascs_mode_manager.heao_part`), SSS (perigee automatic turn-on,
+:mod:`ascs_mode_manager.sss_part`) or AAP (the Workshop's CMG hold and magnetic dump,
+:mod:`ascs_mode_manager.aap_part`). Each runs its part in stage ``mode_logic``; what they share is
+:class:`ModeManagerStep`: the ground-command intake (:mod:`ascs_mode_manager.ground_commands`: the
+scenario's schedule and the live commands the host receives on ``ground/command``) and the answers on
+``ground/ack`` (output ``ack``: every command is answered, accepted or refused with the reason).
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 from acds_common.stepper import Stepper
 
+from ascs_mode_manager.aap_part import AapPart
 from ascs_mode_manager.ground_commands import MAX_PENDING, GroundCommandQueue
+from ascs_mode_manager.heao_part import HeaoPart
+from ascs_mode_manager.sss_part import SssPart
 
 
 class ModeManagerStep(Stepper):
-    """Hosts the HEAO or the SSS mode logic."""
+    """What every mode logic shares: ground commands in, answers out; ``part`` is the variant's logic."""
 
     node = 'ascs_mode_manager'
+    #: The mode logic this variant runs, built with the stepper as its host.
+    part: ClassVar[type]
 
     def __init__(self, params: dict[str, Any], log: Any = None) -> None:
         super().__init__(params, log)
@@ -30,15 +34,7 @@ class ModeManagerStep(Stepper):
         self.sss_params = self.section('sss')
         self.commands = GroundCommandQueue(self.modes['ground_commands'])
         self._acks: list[str] = []
-        if self.modes['system'] == 'sss':
-            from ascs_mode_manager.sss_part import SssPart
-            self.part: Any = SssPart(self)
-        elif self.modes['system'] == 'aap':
-            from ascs_mode_manager.aap_part import AapPart
-            self.part = AapPart(self)
-        else:
-            from ascs_mode_manager.heao_part import HeaoPart
-            self.part = HeaoPart(self)
+        self.logic = self.part(self)
 
     def receive_command(self, text: str) -> None:
         """A live ground command: applied at the next step this node computes (refused if the queue is full)."""
@@ -51,20 +47,27 @@ class ModeManagerStep(Stepper):
         self._acks.append(line)
         self.log('info' if accepted else 'warn', f'ground command {line}')
 
-    def _stage(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
-        out = self.part.step(k, t_s, inp)
+    def mode_logic(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
+        """Stage ``mode_logic``: one step of the mode logic, with the answers to the commands it took."""
+        out = self.logic.step(k, t_s, inp)
         if self._acks:
             out['ack'], self._acks = self._acks, []
         return out
 
-    def heao(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
-        """Stage ``heao`` (HEAO mode logic)."""
-        return self._stage(k, t_s, inp)
 
-    def sss(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
-        """Stage ``sss`` (SSS ASCS logic)."""
-        return self._stage(k, t_s, inp)
+class HeaoModeManagerStep(ModeManagerStep):
+    """The HEAO mode logic (``modes.system: heao``)."""
 
-    def aap(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
-        """Stage ``aap`` (AAP Workshop mode logic)."""
-        return self._stage(k, t_s, inp)
+    part = HeaoPart
+
+
+class SssModeManagerStep(ModeManagerStep):
+    """The SSS ASCS logic (``modes.system: sss``)."""
+
+    part = SssPart
+
+
+class AapModeManagerStep(ModeManagerStep):
+    """The AAP Workshop mode logic (``modes.system: aap``)."""
+
+    part = AapPart

@@ -56,23 +56,26 @@ SECTIONS: dict[str, dict[str, Field]] = {
 }
 
 
+#: Each system's stepper and the inputs of its stage ``mode_logic``.
+_SYSTEMS = {
+    'heao': ('HeaoModeManagerStep', (Input('gyro', topics.GYRO, 'rigid_body'), Input('sun', topics.SUN_SENSOR, 'rigid_body'))),
+    'sss': ('SssModeManagerStep', (Input('volts', topics.MAG_VOLTS, 'magnetometer_sim'),
+                                   Input('bias', topics.MAG_BIAS_VOLTS, 'magnetometer_sim'))),
+    'aap': ('AapModeManagerStep', ()),  # paced by /clock: the Workshop's modes change by ground command only
+}
+
+
 def _ascs_mode_manager(params: dict[str, Any]) -> Ports:
+    """The variant ``modes.system`` names; the SSS logic also commands the coils itself."""
     system = params['modes_system']
-    sss = system == 'sss'
-    if sss:
-        stage = Stage('sss', (Input('volts', topics.MAG_VOLTS, 'magnetometer_sim'),
-                              Input('bias', topics.MAG_BIAS_VOLTS, 'magnetometer_sim')))
-    elif system == 'aap':
-        stage = Stage('aap', ())  # paced by /clock: the Workshop's modes change by ground command only
-    else:
-        stage = Stage('heao', (Input('gyro', topics.GYRO, 'rigid_body'),
-                               Input('sun', topics.SUN_SENSOR, 'rigid_body')))
+    stepper, inputs = _SYSTEMS[system]
     outputs = (Output('mode', topics.MODE),
-               *((Output('moment', topics.MOMENT_COMMAND, BODY),) if sss else ()),
+               *((Output('moment', topics.MOMENT_COMMAND, BODY),) if system == 'sss' else ()),
                Output('events', topics.EVENTS, every_step=False, many=True),
                Output('diagnostics', topics.DIAGNOSTICS, every_step=False),
                Output('ack', topics.GROUND_ACK, every_step=False, lockstep=False, many=True))
-    return Ports('ascs_mode_manager.mode_manager_step:ModeManagerStep', (stage,), outputs, ground_commands=True)
+    return Ports(f'ascs_mode_manager.mode_manager_step:{stepper}', (Stage('mode_logic', inputs),), outputs,
+                 ground_commands=True)
 
 
 def check_workshop(sc: Any) -> str:

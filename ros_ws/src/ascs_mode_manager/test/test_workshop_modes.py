@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from acds_common.parameters import node_parameters, normalize
 from acds_common.scenario import load_scenario
-from ascs_mode_manager.mode_manager_step import ModeManagerStep
+from ascs_mode_manager.mode_manager_step import AapModeManagerStep
 from ascs_mode_manager.spin_mechanizations import AscsError
 from ascs_mode_manager.workshop_modes import WorkshopModeManager
 
@@ -29,10 +29,10 @@ def test_the_aap_part_publishes_the_mode_every_step_and_answers_scheduled_comman
     path.write_text('extends: aap_workshop_pop_test\nname: aap_cmd\nmodes:\n'
                     '  ground_commands: ["100: mode cmg_hold", "100: sss enable"]\n')
     params = normalize('ascs_mode_manager', node_parameters(load_scenario(str(path)), 20)['ascs_mode_manager'])
-    step = ModeManagerStep(params, log=lambda _level, _text: None)
-    first = step.aap(0, 0.0, {})
+    step = AapModeManagerStep(params, log=lambda _level, _text: None)
+    first = step.mode_logic(0, 0.0, {})
     assert first['mode'][0].message == 'cmg_dump' and 'events' not in first
-    out = step.aap(5, 100.0, {})
+    out = step.mode_logic(5, 100.0, {})
     assert out['mode'][0].message == 'cmg_hold'
     assert out['events'] == ['t=100.0 cmg_dump->cmg_hold: ground command at t=100.0']
     assert out['ack'][0].startswith('accepted t=100.0: mode cmg_hold')

@@ -180,14 +180,19 @@ def _rigid_body(_params: dict[str, Any]) -> Ports:
 
 
 def _reaction_wheels(params: dict[str, Any]) -> Ports:
-    if params['wheels_kind'] == 'cmg':  # the Workshop's CMGs: the controller's momentum-rate command (seed 000)
-        stage = Stage('gimbal', (Input('torque', topics.CMG_TORQUE, 'acds_controller'),))
-    elif params['wheels_drive'] == 'torque':  # torque-commanded wheels (a formation vehicle)
-        stage = Stage('drive', (Input('torque', topics.WHEEL_TORQUE_COMMAND, 'formation_controller'),))
+    """The momentum store the scenario names: the Workshop's CMGs (``wheels.kind: cmg``, the controller's
+    momentum-rate command, seed 000), torque-commanded wheels (``wheels.drive: torque``, a formation vehicle,
+    seed 004) or square-law wheels driven by the controller's volts (spec §4)."""
+    if params['wheels_kind'] == 'cmg':
+        stepper, stage = 'cmg_step:CmgStep', Stage('gimbal', (Input('torque', topics.CMG_TORQUE, 'acds_controller'),))
+    elif params['wheels_drive'] == 'torque':
+        stepper, stage = 'torque_wheels_step:TorqueWheelsStep', Stage(
+            'drive', (Input('torque', topics.WHEEL_TORQUE_COMMAND, 'formation_controller'),))
     else:
-        stage = Stage('drive', (Input('volts', topics.WHEEL_VOLTS, 'acds_controller'),))
+        stepper, stage = 'reaction_wheels_step:ReactionWheelsStep', Stage(
+            'drive', (Input('volts', topics.WHEEL_VOLTS, 'acds_controller'),))
     return Ports(
-        'dynamics.reaction_wheels_step:ReactionWheelsStep',
+        f'dynamics.{stepper}',
         (stage,),
         (Output('momentum', topics.WHEEL_MOMENTUM, BODY),
          Output('torque', topics.WHEEL_TORQUE, BODY),

@@ -12,8 +12,8 @@ from acds_common.parameters import node_parameters, normalize
 from acds_common.scenario import load_scenario
 from acds_common.units import ftlbs_to_nms, nms_to_ftlbs
 from dynamics.cmg_model import ControlMomentGyros
+from dynamics.cmg_step import CmgStep
 from dynamics.configuration import actuator_limits, build_disturbance, build_momentum_store
-from dynamics.reaction_wheels_step import ReactionWheelsStep
 from dynamics.rigid_body_model import RigidBodyModel
 
 ORBIT = Orbit(OrbitConfig(kind='circular', inclination_rad=math.radians(35.0), altitude_m=220 * 1852.0,
@@ -55,9 +55,9 @@ def test_rigid_body_takes_the_disturbance_momentum_over_an_orbit() -> None:
     assert np.allclose(nms_to_ftlbs(h_eci), nms_to_ftlbs(bias), rtol=0.0, atol=0.01)
 
 
-def _cmg_step(sc_name: str = 'aap_workshop_pop') -> ReactionWheelsStep:
+def _cmg_step(sc_name: str = 'aap_workshop_pop') -> CmgStep:
     params = node_parameters(load_scenario(sc_name), 10)['reaction_wheels']
-    return ReactionWheelsStep(normalize('reaction_wheels', params), log=lambda _level, _text: None)
+    return CmgStep(normalize('reaction_wheels', params), log=lambda _level, _text: None)
 
 
 def test_cmg_kind_applies_the_commanded_rate_and_stops_at_its_capacity() -> None:
