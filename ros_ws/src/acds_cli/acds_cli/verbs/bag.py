@@ -68,7 +68,8 @@ def _play(args: argparse.Namespace) -> int:
         return 2
     try:
         if live is not None:
-            print(f'[play] Foxglove live view on ws://{args.foxglove_host}:{live.port}: waiting up to {args.wait:g} s '
+            print(f'[play] Foxglove live view on ws://{args.foxglove_host}:{live.port} (subprotocol foxglove.sdk.v1): '
+                  f'waiting up to {args.wait:g} s '
                   'for a Foxglove client', file=sys.stderr, flush=True)
             if not live.wait_for_client(args.wait):
                 print(f'[play] no Foxglove client after {args.wait:g} s: playing anyway', file=sys.stderr)

@@ -51,7 +51,8 @@ class Progress:
 
 
 def _announce_live(port: int, host: str) -> None:
-    print(f'[acds] Foxglove live view on ws://{host}:{port} (Foxglove: Open connection → Foxglove WebSocket; '
+    print(f'[acds] Foxglove live view on ws://{host}:{port}, subprotocol foxglove.sdk.v1 (Foxglove: Open connection → '
+          'Foxglove WebSocket; '
           f'layout {workspace() / "foxglove" / "acds_layout.json"})', file=sys.stderr, flush=True)
 
 
