@@ -7,7 +7,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 VENV="$ROOT/.venv"
 PY="${ACDS_PYTHON:-python3}"
 STAMP="$VENV/.acds_setup_stamp"
-PKGS=(acds_common dynamics magnetometer_sim em_driver acds_controller ascs_mode_manager acds_runtime)
+PKGS=(acds_common dynamics magnetometer_sim em_driver acds_controller ascs_mode_manager cold_gas acds_runtime)
 
 want=$(cd "$ROOT" && cat requirements.lock ros_ws/src/*/setup.py ros_ws/src/*/setup.cfg | sha256sum | cut -c1-16)
 if [[ -f "$STAMP" && "$(cat "$STAMP")" == "$want" && -x "$VENV/bin/python" ]]; then

@@ -134,6 +134,7 @@ def _rigid_body(_params: dict[str, Any]) -> NodeSpec:
             Input('wheel_h', topics.WHEEL_MOMENTUM, 'reaction_wheels'),
             Input('wheel_hdot', topics.WHEEL_TORQUE, 'reaction_wheels'),
             Input('mode', topics.MODE, 'ascs_mode_manager'),
+            Input('gas_wrench', topics.COLD_GAS_WRENCH, 'cold_gas'),  # the cold-gas thrusters (node cold_gas)
         )),),
         (Output('odometry', topics.TRUTH_ODOMETRY, ECI, BODY, **truth),
          Output('b_body', topics.TRUTH_B_BODY, BODY, **truth),
@@ -202,8 +203,12 @@ def _em_driver(params: dict[str, Any]) -> NodeSpec:
 def _acds_controller(params: dict[str, Any]) -> NodeSpec:
     store = ((Output('cmg_torque', topics.CMG_TORQUE, BODY), Output('sampled_momentum', topics.SAMPLED_MOMENTUM, BODY))
              if _cmg(params) else (Output('volts', topics.WHEEL_VOLTS, BODY),))
+    stepper, gas = 'acds_controller.controller_step:ControllerStep', ()
+    if _cold_gas_in_graph(params):  # the variant that also flies the cold-gas acquisition (seed 002 §3.1)
+        stepper = 'acds_controller.cold_gas_controller_step:ColdGasControllerStep'
+        gas = (Output('gas_on_time', topics.GAS_ON_TIME, BODY),)
     return NodeSpec(
-        'acds_controller', 'acds_controller', 'acds_controller.controller_step:ControllerStep',
+        'acds_controller', 'acds_controller', stepper,
         (Stage('control', (
             Input('mag_volts', topics.MAG_VOLTS, 'magnetometer_sim'),
             Input('mag_bias', topics.MAG_BIAS_VOLTS, 'magnetometer_sim'),
@@ -217,6 +222,7 @@ def _acds_controller(params: dict[str, Any]) -> NodeSpec:
         )),),
         (Output('moment', topics.MOMENT_COMMAND, BODY),
          *store,
+         *gas,
          Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
@@ -283,6 +289,25 @@ def _formation_controller(params: dict[str, Any]) -> NodeSpec:
                      Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
+# ---- cold_gas (seed 002 §5): the whole declaration of the node, and how the others see it --------------------
+def _cold_gas_in_graph(params: dict[str, Any]) -> bool:
+    """Whether the graph flies the cold-gas reaction control subsystem (node ``cold_gas`` in the scenario's nodes)."""
+    return 'cold_gas' in _param(params, 'graph_nodes', [])
+
+
+def _cold_gas(_params: dict[str, Any]) -> NodeSpec:
+    """The cold-gas subsystem: the controller's on-time requests and the mode (forwarded ground commands) of step k
+    in; the thrusters' step-average wrench (to the rigid body), the subsystem state every step, telemetry out."""
+    return NodeSpec(
+        'cold_gas', 'cold_gas', 'cold_gas.cold_gas_step:ColdGasStep',
+        (Stage('fire', (Input('pulse', topics.GAS_ON_TIME, 'acds_controller'),
+                        Input('mode', topics.MODE, 'ascs_mode_manager'))),),
+        (Output('wrench', topics.COLD_GAS_WRENCH, BODY),
+         Output('state', topics.COLD_GAS_STATE),
+         Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
+# ---- end cold_gas ----------------------------------------------------------------------------------------------
+
+
 #: Every node the graph knows, by name: params → its declaration.
 NODES: dict[str, Callable[[dict[str, Any]], NodeSpec]] = {
     'rigid_body': _rigid_body,
@@ -293,6 +318,7 @@ NODES: dict[str, Callable[[dict[str, Any]], NodeSpec]] = {
     'ascs_mode_manager': _ascs_mode_manager,
     'formation_dynamics': _formation_dynamics,
     'formation_controller': _formation_controller,
+    'cold_gas': _cold_gas,
 }
 
 

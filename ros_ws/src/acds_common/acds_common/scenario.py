@@ -42,6 +42,7 @@ import yaml
 from acds_common import units as u
 from acds_common.environment import IGRF_LAST_YEAR, decimal_year_datetime
 from acds_common.graph import TIME_OWNER
+from acds_common.thrusters import COLD_GAS_FAULTS, GAS_MODES, HEAO_B_DIRECTIONS, HEAO_B_POSITIONS_M, MAX_CROSS_COUPLING
 
 
 class ScenarioError(ValueError):
@@ -115,7 +116,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'nodes': Field('strs', 'nodes of the graph (a formation: its time owner formation_dynamics; each '
                        "vehicle's nodes are listed under vehicles)", ['rigid_body', 'reaction_wheels'],
                        choices=('rigid_body', 'reaction_wheels', 'magnetometer_sim', 'em_driver',
-                                'acds_controller', 'ascs_mode_manager', 'formation_dynamics'), unique=True),
+                                'acds_controller', 'ascs_mode_manager', 'formation_dynamics', 'cold_gas'), unique=True),
         'input_timeout': _q('wall time a node may wait for an input', 30.0, 's', TIME, lo=0.5, hi=3600.0),
     },
     'spacecraft': {
@@ -272,6 +273,52 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'telemetry_every': Field('int', 'diagnostics telemetry every N steps (and at every event)', 10,
                                  lo=1, hi=10**6),
     },
+    # ---- cold-gas reaction control subsystem (seed 002 §3.2, §5; cold_gas.rcs) -----------------------------
+    'cold_gas': {
+        'thrust': _q('thrust of each thruster at the regulator set point (§3.2: "nominal thrust in the 0.1 to 1 pound '
+                     'range"; 0.5 lbf taken)', 0.5 * u.LBF_N, 'n', {'lbf': u.LBF_N, 'n': 1.0}, lo=1e-4, hi=1e3),
+        'isp': _q('cold-nitrogen specific impulse (Table 5-3: every tank\'s impulse over its gas capacity is 65 s)',
+                  65.0, 's', {'s': 1.0}, lo=1.0, hi=400.0),
+        'valve_open_delay': _q('thruster valve opening delay (command to thrust; not in the seed)', 0.005, 's',
+                               {'ms': 1e-3, 's': 1.0}, lo=0.0, hi=0.1),
+        'valve_close_delay': _q('thruster valve closing delay (command end to thrust end; not in the seed)', 0.003,
+                                's', {'ms': 1e-3, 's': 1.0}, lo=0.0, hi=0.1),
+        'min_on_time': _q('minimum valve on-time: the minimum impulse bit (not in the seed)', 0.020, 's',
+                          {'ms': 1e-3, 's': 1.0}, lo=1e-4, hi=1.0),
+        'max_open_valves': Field('int', 'valves powered at once (Table 5-2: "maximum of two valves operating at one '
+                                 'time", 12 W each)', 2, lo=1, hi=6),
+        'tank_diameter': _q('inner diameter of each spherical tank (§3.2: 7.6 in)', 7.6 * u.INCH_M, 'm',
+                            {'in': u.INCH_M, 'm': 1.0}, lo=0.01, hi=3.0),
+        'tank_count': Field('int', 'tanks (§3.2: two)', 2, lo=1, hi=8),
+        'load_mass': _q('GN₂ loaded in all tanks (§3.2: 4.6 lb)', 4.6 * u.LB_KG, 'kg', {'lb': u.LB_KG, 'kg': 1.0},
+                        lo=1e-4, hi=1e3),
+        'gas_temperature': _q('gas temperature (isothermal blowdown)', 293.0, 'k', {'k': 1.0}, lo=50.0, hi=500.0),
+        'regulator_set_pressure': _q('regulator set point, absolute (not in the seed)', 150 * u.PSI_PA, 'pa',
+                                     {'psia': u.PSI_PA, 'pa': 1.0}, lo=1e3, hi=1e8),
+        'pressure_switch_pressure': _q('over-pressure switch set point, absolute (not in the seed)', 200 * u.PSI_PA,
+                                       'pa', {'psia': u.PSI_PA, 'pa': 1.0}, lo=1e3, hi=1e8),
+        'relief_pressure': _q('relief valve crack pressure, absolute (not in the seed)', 250 * u.PSI_PA, 'pa',
+                              {'psia': u.PSI_PA, 'pa': 1.0}, lo=1e3, hi=1e8),
+        'manifold_volume': _q('low-pressure manifold volume, regulators to thruster valves', 50e-6, 'm3',
+                              {'cm3': 1e-6, 'm3': 1.0}, lo=1e-7, hi=1e-2),
+        'regulator_seat_area': _q('flow area of a failed-open regulator seat (fault regulator_fail_open)', 0.05e-6,
+                                  'm2', {'mm2': 1e-6, 'm2': 1.0}, lo=0.0, hi=1e-3),
+        'isolation_close_delay': _q('latching isolation valve closing time after the pressure switch trips', 0.030,
+                                    's', {'ms': 1e-3, 's': 1.0}, lo=0.0, hi=1.0),
+        'thruster_positions': _q('T1…T6 positions from the centre of mass, body axes, (x, y, z) each (default: the '
+                                 'HEAO-B arrangement of acds_common.thrusters)', list(HEAO_B_POSITIONS_M), 'm',
+                                 {'m': 1.0, 'ft': u.FOOT_M}, length=18, lo=-100.0, hi=100.0),
+        'thruster_directions': Field('floats', 'T1…T6 thrust directions (force on the spacecraft), body axes',
+                                     list(HEAO_B_DIRECTIONS), length=18, lo=-1.0, hi=1.0),
+        'max_cross_coupling': Field('float', 'largest off-axis torque of a thruster, fraction of its on-axis torque',
+                                    MAX_CROSS_COUPLING, lo=0.0, hi=1.0),
+        'isolation_valves_open': Field('bool', 'both isolation valves open at t0', True),
+        'bank_power': Field('bool', 'thruster bank power on at t0', True),
+        'fault': Field('str', 'fault injected at fault_time', 'none', choices=COLD_GAS_FAULTS),
+        'fault_index': Field('int', 'the thruster (1–6) or regulator (1–2) the fault hits', 1, lo=1, hi=6),
+        'fault_time': _q('when the fault appears', 0.0, 's', TIME, lo=0.0, hi=1e7),
+        'telemetry_every': Field('int', 'diagnostics telemetry every N steps (and at every event)', 20, lo=1, hi=10**6),
+    },
     # ---- flight laws and modes (spec §7, §8) ----------------------------------------------------
     'controller': {
         'acquisition_law': Field('str', 'Mode 1A magnetic law (b_cross_omega: the CubeSat detumble law '
@@ -325,13 +372,21 @@ SCHEMA: dict[str, dict[str, Field]] = {
                                  RATE, lo=1e-6, hi=10.0),
         'cmg_hold_damping': Field('float', 'CMG attitude-hold damping ratio ζ (not in the seed)', 0.7,
                                   lo=0.0, hi=10.0),
+        # ---- cold-gas acquisition law (seed 002 §3.1; acds_controller.cold_gas_law), with node cold_gas
+        'gas_rate_deadband': _q('gas law: no pulse while every |ω_i − ω_ref,i| is within this', 0.02 * _DEG, 'rad_s',
+                                RATE, lo=0.0, hi=0.1),
+        'gas_position_gain': _q('gas law: rate reference per radian of sun-line error, ω_ref = −K·θ', 0.02, 'per_s',
+                                {'per_s': 1.0}, lo=0.0, hi=10.0),
+        'gas_slew_rate': _q('gas law: limit of |ω_ref| (the sun acquisition slew rate)', 0.5 * _DEG, 'rad_s', RATE,
+                            lo=1e-5, hi=0.2),
     },
     'modes': {
-        'system': Field('str', 'which mode logic runs: heao, sss or aap (the AAP Workshop CMG hold and magnetic '
-                        'dump, seed 000)', 'heao', choices=('heao', 'sss', 'aap')),
-        'initial_mode': Field('str', 'mode at separation (aap: cmg_hold or cmg_dump)', 'mode_1a',
-                              choices=('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point',
-                                       'cmg_hold', 'cmg_dump')),
+        'system': Field('str', 'which mode logic runs: heao, heao_cold_gas (the study\'s recommended design: cold-gas '
+                        'acquisition, wheels + magnetics cruise, seed 002 §3.1), sss or aap (the AAP Workshop CMG hold '
+                        'and magnetic dump, seed 000)', 'heao', choices=('heao', 'heao_cold_gas', 'sss', 'aap')),
+        'initial_mode': Field('str', 'mode at separation (aap: cmg_hold or cmg_dump; heao_cold_gas: a gas mode)',
+                              'mode_1a', choices=('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point',
+                                                  'cmg_hold', 'cmg_dump', *GAS_MODES)),
         'rate_thresholds': _q('Mode 1A→1B body-rate thresholds |ω_x|, |ω_y|, |ω_z|',
                               [0.573 * _DEG, 0.115 * _DEG, 0.115 * _DEG], 'rad_s', RATE, length=3, lo=0.0, hi=1.0),
         'capture_cone': _q('acquisition capture: z within this angle of the sun', 10 * _DEG, 'rad', ANGLE,
@@ -343,6 +398,12 @@ SCHEMA: dict[str, dict[str, Field]] = {
         'auto_cruise': Field('bool', 'enter cruise automatically at capture (else by ground command)', False),
         'stop_at_capture': Field('bool', 'end the run at acquisition capture', False),
         'ground_commands': Field('strs', 'scheduled ground commands, "T_S: command"', []),
+        'gas_damped_rate': _q('heao_cold_gas: gas rate damping → gas sun acquisition when every |ω_i| is below this',
+                              0.05 * _DEG, 'rad_s', RATE, lo=0.0, hi=0.1),
+        'gas_handover_cone': _q('heao_cold_gas: gas sun acquisition → Mode 1B (wheels) when z is within this of the '
+                                'sun line …', 5 * _DEG, 'rad', ANGLE, lo=0.0, hi=math.pi),
+        'gas_handover_rate': _q('heao_cold_gas: … and every |ω_i| is below this', 0.05 * _DEG, 'rad_s', RATE,
+                                lo=0.0, hi=0.1),
     },
     'sss': {
         'polarity_level': _q('polarity-sensing level of the spin-plane magnetometer channel', 0.075 * u.GAUSS_T,
@@ -418,10 +479,11 @@ NODE_SECTIONS: dict[str, tuple[str, ...]] = {
     'reaction_wheels': ('wheels',),
     'magnetometer_sim': ('magnetometer',),
     'em_driver': ('em_driver',),
-    'acds_controller': ('spacecraft', 'controller', 'magnetometer', 'wheels', 'orbit', 'earth'),
+    'acds_controller': ('spacecraft', 'controller', 'magnetometer', 'wheels', 'orbit', 'earth', 'cold_gas'),
     'ascs_mode_manager': ('modes', 'sss'),
     'formation_dynamics': ('orbit', 'earth', 'sun', 'dynamics', 'formation'),
     'formation_controller': ('orbit', 'formation'),
+    'cold_gas': ('cold_gas',),
 }
 #: Sections every vehicle of a formation has of its own (given under ``vehicles:``; a top-level
 #: section of the same name gives the defaults all vehicles share).
@@ -773,6 +835,11 @@ def _check_graph(path: Path, sc: Scenario) -> None:
         raise ScenarioError(f'{path}: nodes: formation_dynamics needs a vehicles list')
     if not sc.formation:
         _check_workshop(path, sc)
+        nodes = sc.get('', 'nodes')
+        if 'ascs_mode_manager' in nodes and ('cold_gas' in nodes) != (sc.get('modes', 'system') == 'heao_cold_gas'):
+            raise ScenarioError(f'{path}: modes.system: {sc.get("modes", "system")!r} with node cold_gas '
+                                f'{"in" if "cold_gas" in nodes else "not in"} the graph (the heao_cold_gas mode logic '
+                                'acquires on the cold-gas thrusters, and only it flies them)')
     if sc.get('earth', 'model') == 'igrf':
         end = decimal_year_datetime(sc.get('earth', 'epoch')) + datetime.timedelta(seconds=sc.duration_s())
         if end > decimal_year_datetime(IGRF_LAST_YEAR):

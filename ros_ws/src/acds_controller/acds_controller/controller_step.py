@@ -98,11 +98,7 @@ class ControllerStep(Stepper):
             return self._workshop_control(k, t_s, inp)
         warnings: list[tuple[str, dict[str, str]]] = []
         mode, commands = mode_status(inp['mode'], self.node)
-        for text in commands:
-            try:
-                self.log('info', f'step {k}: {apply_command(self.dpa, text)}')
-            except ControllerError as exc:
-                warnings.append((f'command refused: {text!r}: {exc}', {'command': text, 'reason': str(exc)}))
+        self._apply_commands(k, commands, warnings)
         mode = _resolve_mode(mode, 'mode_1a', MODES, warnings, f'unknown mode {mode!r} from the mode manager')
         try:
             result = self._dpa_step(k, mode, inp)
@@ -110,6 +106,14 @@ class ControllerStep(Stepper):
             warnings.append((f'input rejected, zero commands this step: {exc}', {}))
             result = {'moment': _ZERO, 'volts': _ZERO}
         return self._warned(k, result, warnings)
+
+    def _apply_commands(self, k: int, commands: list[str], warnings: list[tuple[str, dict[str, str]]]) -> None:
+        """Apply the forwarded law/gain commands to the DPA; a refusal becomes a warning."""
+        for text in commands:
+            try:
+                self.log('info', f'step {k}: {apply_command(self.dpa, text)}')
+            except ControllerError as exc:
+                warnings.append((f'command refused: {text!r}: {exc}', {'command': text, 'reason': str(exc)}))
 
     def _warned(self, k: int, result: dict[str, Any], warnings: list[tuple[str, dict[str, str]]]) -> dict[str, Any]:
         """The step's outputs with its warnings logged and put first on ``diagnostics``."""

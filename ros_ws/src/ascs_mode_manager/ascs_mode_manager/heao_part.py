@@ -30,8 +30,10 @@ from typing import Any
 from acds_common.cdr import Status
 from acds_common.dpa_commands import GAIN_LIMITS, LAW_CHOICES
 from acds_common.messages import MODE_STATUS, OK, WARN, diagnostic, xyz
+from acds_common.thrusters import GAS_MODES
 from acds_common.validation import all_finite, scenario_key
 
+from ascs_mode_manager.cold_gas_modes import ColdGasModeManager, GasHandover
 from ascs_mode_manager.heao_modes import CRUISE_MODES, HeaoModeConfig, HeaoModeManager, Transition
 from ascs_mode_manager.spin_mechanizations import AscsError
 
@@ -44,20 +46,29 @@ def event_text(tr: Transition) -> str:
 
 
 def build_core(m: dict[str, Any]) -> HeaoModeManager:
-    """The HEAO mode manager core from the scenario's ``modes`` section (SI values).
+    """The HEAO mode manager core from the scenario's ``modes`` section (SI values); with ``system: heao_cold_gas``
+    the cold-gas acquisition in front (:class:`~ascs_mode_manager.cold_gas_modes.ColdGasModeManager`).
 
     ``initial_mode`` mode_1b is Table 4-7 case 6 (wheels on from separation); a cruise mode
     starts a normal-mode run (§4.3.2) in cruise, already captured (the acquisition is not
     simulated).
     """
     initial = m['initial_mode']
-    core = HeaoModeManager(HeaoModeConfig(
+    gas = m['system'] == 'heao_cold_gas'
+    if (initial in GAS_MODES) != gas:
+        raise AscsError(f'initial_mode {initial!r} with system {m["system"]!r}: the gas modes '
+                        f'({", ".join(GAS_MODES)}) start, and only start, a heao_cold_gas acquisition')
+    config = HeaoModeConfig(
         rate_thresholds_rad_s=tuple(m['rate_thresholds']),
         capture_cone_rad=m['capture_cone'], capture_rate_rad_s=m['capture_rate'],
         cruise_target=m['cruise_target'], auto_cruise=m['auto_cruise'],
         wheels_on_from_separation=initial == 'mode_1b',
         initial_mode='standby' if initial == 'standby' else 'mode_1a',
-        gain_limits=GAIN_LIMITS, law_choices=LAW_CHOICES))
+        gain_limits=GAIN_LIMITS, law_choices=LAW_CHOICES)
+    if gas:
+        return ColdGasModeManager(config, GasHandover(m['gas_damped_rate'], m['gas_handover_cone'],
+                                                      m['gas_handover_rate']), initial)
+    core = HeaoModeManager(config)
     if initial in CRUISE_MODES:
         core.mode = initial
         core.captured = True
