@@ -12,7 +12,7 @@ the reading that makes "the switch activates both isolation valves to the closed
 subsequently be opened by ground command to diagnose the problem" work: ground reopens the healthy branch.
 
 **Gas.** Nitrogen as an ideal gas (R = 296.8 J/(kg·K)), isothermal at the loading temperature: the tank
-blowdown is p = m·R·T/V. At 4.6 lb in two 7.6-in spheres and 293 K that is 24.2 MPa (3510 psia), within the
+blowdown is p = m·R·T/V. At 4.6 lb in two 7.6-in spheres and 293 K that is 24.1 MPa (3494 psia), within the
 6000-psi loading cart of §13.2.3; nitrogen's compressibility there (Z ≈ 1.05) is not modelled. Isothermal:
 an acquisition draws ~1/3 of the load over minutes in millisecond pulses, and the tank walls hold the gas near
 their temperature (adiabatic blowdown would cool it and lower both pressure and Isp; stated, not modelled).
