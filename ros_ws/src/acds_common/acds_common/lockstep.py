@@ -176,7 +176,10 @@ class LockstepNode(Node):
         self.dt_ns = round(self.params['control_period_s'] * 1e9)
         self.graph_nodes: list[str] = self.params['graph_nodes']
         self.input_timeout_s: float = self.params['input_timeout_s']
-        self.stepper = stepper_cls(self.params, log=self._log)
+        # The stepper the graph declares for these parameters (a variant, e.g. the controller with the cold-gas
+        # acquisition, is a class of its own); the node's entry point names the node.
+        module, _, cls_name = self.spec.stepper.partition(':')
+        self.stepper = getattr(importlib.import_module(module), cls_name)(self.params, log=self._log)
         self.failure: str | None = None
         self.done = False
         self._ports: dict[str, _Port] = {}

@@ -118,6 +118,14 @@ def arrangement(positions_m: Sequence[float], directions: Sequence[float],
                        tuple(abs(torques[serves_one[a]][SIGNED_AXES[a][0]]) for a in range(6)))
 
 
+def arrangement_from_section(c: dict) -> Arrangement:
+    """The arrangement of a scenario ``cold_gas`` section (SI); an :class:`ArrangementError` names the keys."""
+    try:
+        return arrangement(c['thruster_positions'], c['thruster_directions'], c['max_cross_coupling'])
+    except ArrangementError as exc:
+        raise ArrangementError(f'cold_gas.thruster_positions_m / thruster_directions: {exc}') from None
+
+
 #: Modes in which the cold-gas thrusters fly the spacecraft (seed 002 §3.1: sun acquisition and reacquisition on
 #: gas): rate damping on the gyros, then sun acquisition on the sun sensor and gyros. The mode manager sequences
 #: them and hands over to the wheels (Mode 1B); the controller's gas law runs in them.

@@ -9,7 +9,7 @@ on-times (``gas_on_time``, s per body axis, sign = torque direction); wheels and
 reference, sun-line error, on-times) on ``diagnostics`` every ``controller.telemetry_every`` steps in a gas mode.
 
 The law knows its actuators as a flight program does: the thrust, valve timing and the arrangement
-(:func:`acds_common.thrusters.arrangement`) of the scenario's ``cold_gas`` section give the torque of each
+(:func:`acds_common.thrusters.arrangement_from_section`) of the scenario's ``cold_gas`` section give the torque of each
 signed axis; the inertia diagonal comes from ``spacecraft``.
 """
 
@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from acds_common.inertia import inertia_tensor
 from acds_common.messages import diagnostic, mode_status, xyz
-from acds_common.thrusters import GAS_MODES, arrangement
+from acds_common.thrusters import GAS_MODES, arrangement_from_section
 from acds_common.units import deg
 from acds_common.validation import all_finite, scenario_key
 
@@ -33,7 +33,7 @@ _ZERO = (0.0, 0.0, 0.0)
 
 def gas_law_config(sc: dict[str, Any], c: dict[str, Any], gas: dict[str, Any]) -> GasLawConfig:
     """The gas law from the spacecraft, controller and cold_gas sections (SI)."""
-    arr = arrangement(gas['thruster_positions'], gas['thruster_directions'], gas['max_cross_coupling'])
+    arr = arrangement_from_section(gas)
     inertia = np.diag(inertia_tensor(*sc['inertia']) * sc['inertia_scale'])
     with scenario_key('controller', ControllerError):
         return GasLawConfig(

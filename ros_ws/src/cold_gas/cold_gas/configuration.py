@@ -10,18 +10,16 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from acds_common.thrusters import ArrangementError, arrangement
+from acds_common.thrusters import arrangement_from_section
 from acds_common.validation import scenario_key
 
 from cold_gas.rcs import ColdGasError, ColdGasRcs, Fault, RcsConfig
 
 
 def rcs_config(c: dict[str, Any]) -> RcsConfig:
-    """The hardware of a ``cold_gas`` section; raises :class:`ColdGasError` naming the key."""
-    try:
-        arr = arrangement(c['thruster_positions'], c['thruster_directions'], c['max_cross_coupling'])
-    except ArrangementError as exc:
-        raise ColdGasError(f'cold_gas.thruster_positions_m / thruster_directions: {exc}') from None
+    """The hardware of a ``cold_gas`` section; raises :class:`ColdGasError` (or the arrangement's error) naming the
+    key."""
+    arr = arrangement_from_section(c)
     with scenario_key('cold_gas', ColdGasError):
         return RcsConfig(
             arrangement=arr, thrust_n=c['thrust'], isp_s=c['isp'], valve_open_delay_s=c['valve_open_delay'],
