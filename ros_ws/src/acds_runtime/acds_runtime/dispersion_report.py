@@ -121,6 +121,7 @@ def make_row(index: int, name: str, drawn: dict[str, Any], geometry: dict[str, A
         'final_mode': summary.get('final_mode'),
         'truth_digest': summary.get('truth_digest'),
         'wall_seconds': summary.get('wall_seconds'),
+        **{k: v for k, v in summary.items() if k.startswith('gas_')},  # a cold-gas acquisition's (summaries.cold_gas)
     })
     return row
 
