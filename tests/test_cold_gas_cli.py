@@ -52,3 +52,16 @@ def test_trade_gas_budget_counts_acquisitions_at_the_90th_percentile():
     assert g['acquisitions_at_p90_regulated'] == 4  # (4.6 − 0.198) // 0.99
     text = gas_table({'scenario': 'heao_b_acquisition_cold_gas', 'cold_gas': g})
     assert 'the 4.60 lb load supports 4 acquisitions at the 90th percentile' in text
+
+
+def test_a_gas_acquisition_row_has_no_magnetics_only_phase():
+    """A cold-gas sample is not 'censored on magnetics only': it has no such phase; it reaches Mode 1B at the hand-over."""
+    from acds_runtime.dispersion_report import QUANTITIES, make_row, percentiles, values_of
+
+    summary = {'time_magnetics_only_min': None, 'time_wheels_magnetics_min': 3.0, 'acquisition_time_min': 8.0,
+               'sim_minutes': 8.0, 'gas_handover_min': 5.0, 'gas_used_lb': 1.0}
+    row = make_row(0, 's', {}, {}, summary)
+    assert 'time_magnetics_only_min' not in row and row['mode_1b_reached'] and row['gas_used_lb'] == 1.0
+    assert 'time_magnetics_only_min' not in percentiles([row])
+    wheels = next(q for q in QUANTITIES if q.key == 'time_wheels_magnetics_min')
+    assert list(values_of([row], wheels)[0]) == [3.0]
