@@ -44,3 +44,33 @@ def test_short_cold_gas_acquisition_reaches_capture_on_both_engines_with_identic
     for topic in (topics.GAS_ON_TIME, topics.COLD_GAS_WRENCH, topics.COLD_GAS_STATE, topics.TRUTH_ODOMETRY):
         name = topics.resolve(topic)
         assert recorded[name] == kept[name], f'{name}: the direct bag differs from the graph'
+
+
+def test_gas_ground_commands_are_acknowledged_applied_and_reacquire_goes_back_to_gas(tmp_path):
+    """Direct engine: 'gas isolation 1 close' and 'gas bank off/on' are acknowledged by the mode manager and applied
+    by cold_gas at the same step; 'mode reacquire' after capture goes back to gas rate damping."""
+    sc = load_scenario('heao_b_acquisition_cold_gas_short')
+    sc.values['modes'].update(stop_at_capture=False, ground_commands=[
+        '5: gas isolation 1 close', '6: gas bank off', '7: gas bank on', '300: mode reacquire'])
+    run = DirectRun(sc, steps=310, record=tmp_path / 'bag').run()
+    transitions = run.summary['mode_transitions']
+    assert [(t['from'], t['to']) for t in transitions][2] == ('mode_1b', 'capture')
+    again = next(t for t in transitions if 'mode reacquire' in (t['cause'] or ''))
+    # at rest after capture the rates are already damped: gas rate damping → gas sun acquisition in that same step
+    assert again['t_min'] == 5.0 and again['to'] == 'gas_sun_acquisition' and 'rates damped on gas' in again['cause']
+    assert (transitions[-1]['from'], transitions[-1]['to']) == ('gas_sun_acquisition', 'mode_1b')
+    from acds_cli.bag.reader import open_bag
+    from acds_common.cdr import Codec
+
+    bag = open_bag(tmp_path / 'bag')
+    acks = [Codec(topics.TYPES[topics.GROUND_ACK]).decode(d)[1] for _t, _s, d in
+            bag.messages({topics.resolve(topics.GROUND_ACK)})]
+    assert any('accepted t=5.0: isolation 1 close: routed to cold_gas' in a for a in acks), acks
+    assert any('accepted t=300.0: mode reacquire' in a for a in acks), acks
+    state = {}
+    codec = Codec(topics.TYPES[topics.COLD_GAS_STATE])
+    for _topic, t_ns, data in bag.messages({topics.resolve(topics.COLD_GAS_STATE)}):
+        state[round(t_ns / 1e9)] = dict(codec.decode(data)[1][0].values)
+    assert state[4]['isolation_valve_1'] == 'open' and state[5]['isolation_valve_1'] == 'closed'
+    assert state[6]['bank_power'] == 'off' and state[7]['bank_power'] == 'on'
+    assert state[5]['isolation_valve_2'] == 'open'  # the other branch keeps the feed regulated
