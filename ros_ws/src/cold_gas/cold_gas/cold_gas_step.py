@@ -8,9 +8,9 @@ frame), runs one frame [t_k, t_k+1] and returns:
 * ``wrench`` (every step): the thrusters' frame-average force (N) and torque (N·m), body axes: the rigid
   body integrates the torque (the force is stated, not flown: :mod:`acds_common.thrusters`);
 * ``state`` (every step): status ``cold_gas`` with the frame's thrust level and per-thruster thrust and
-  command times, the most valves open at once, the gas left, tank and feed pressures, the totals (gas used,
-  vented, impulse), valve positions, pressure switch and bank power: full float precision, for the plots and
-  the propellant bookkeeping;
+  command times, the most valves open at once, the requests deferred to the next frame, the gas left, tank and
+  feed pressures, the totals (gas used, vented, impulse), valve positions, pressure switch and bank power: full
+  float precision, for the plots and the propellant bookkeeping;
 * ``diagnostics``: Table 5-2 telemetry every ``cold_gas.telemetry_every`` steps and at once on an event
   (a fault, the pressure switch, a ground command applied or refused), WARN while a fault or the switch is on.
 
@@ -48,7 +48,7 @@ class ColdGasStep(Stepper):
         notes: list[str] = []
         _mode, commands = mode_status(inp['mode'], self.node)
         for text in commands:
-            accepted, what = rcs.command(text, t_s)
+            accepted, what = rcs.command(text)
             notes.append(f'command {text!r} at t={t_s:.1f} s: {what}' if accepted
                          else f'command {text!r} refused at t={t_s:.1f} s: {what}')
         try:
@@ -61,7 +61,8 @@ class ColdGasStep(Stepper):
         values = [('thrust_n', repr(frame.thrust_n)),
                   *((f'thrust_time_T{j + 1}_s', repr(t)) for j, t in enumerate(frame.thrust_time_s)),
                   *((f'command_T{j + 1}_s', repr(t)) for j, t in enumerate(frame.command_s)),
-                  ('open_valves_max', str(frame.max_open)), ('propellant_kg', repr(rcs.propellant_kg)),
+                  ('open_valves_max', str(frame.max_open)),
+                  ('deferred', ' '.join(f'T{j + 1}' for j in frame.deferred)), ('propellant_kg', repr(rcs.propellant_kg)),
                   ('tank_pressure_pa', repr(rcs.tank_pa)), ('feed_pressure_pa', repr(rcs.feed_pa)),
                   ('used_kg', repr(rcs.used_kg)), ('vented_kg', repr(rcs.vented_kg)),
                   ('impulse_ns', repr(rcs.impulse_ns)), ('valve_cycles', str(sum(rcs.valve_cycles))),

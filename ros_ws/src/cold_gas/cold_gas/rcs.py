@@ -189,6 +189,7 @@ class FrameResult:
     vented_kg: float  # through the relief valve this frame
     max_open: int  # most valves open at one instant in the frame
     pulses: tuple[Pulse, ...]
+    deferred: tuple[int, ...]  # thrusters whose request did not fit in the frame (the controller asks again)
     events: tuple[str, ...]
 
 
@@ -264,7 +265,7 @@ class ColdGasRcs:
         return self.tank_kg + self.manifold_kg
 
     # --------------------------------------------------------------- commands
-    def command(self, text: str, t_s: float) -> tuple[bool, str]:
+    def command(self, text: str) -> tuple[bool, str]:
         """Apply a ground command (Table 5-2): 'isolation <1|2> <open|close>', 'bank <on|off>', 'transducer <on|off>'.
 
         Returns (accepted, what was done or why not). An isolation valve is not opened while the pressure switch
@@ -297,7 +298,7 @@ class ColdGasRcs:
                     raise ColdGasError(f'on-time request {list(request_xyz)} is not finite')
                 if r != 0.0:
                     requests.append((arr.thruster_of_axis[2 * i + (0 if r > 0.0 else 1)], abs(r)))
-        pulses, _deferred = schedule(requests, dt, cfg)
+        pulses, deferred = schedule(requests, dt, cfg)
         command = [0.0] * 6
         thrust_time = [0.0] * 6
         intervals = []
@@ -334,7 +335,7 @@ class ColdGasRcs:
         self.impulse_ns += sum(impulses)
         return FrameResult(thrust, tuple(thrust_time), tuple(command), (torque[0], torque[1], torque[2]),
                            (force[0], force[1], force[2]), used, vented, most_open(intervals), tuple(pulses),
-                           tuple(events))
+                           tuple(deferred), tuple(events))
 
     def _inject(self, t_s: float, events: list[str]) -> None:
         f = self.fault
