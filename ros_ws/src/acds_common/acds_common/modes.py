@@ -11,10 +11,14 @@ from __future__ import annotations
 HEAO_MODES = ('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point')
 #: The HEAO cruise modes (after acquisition capture).
 HEAO_CRUISE_MODES = ('celestial_scan', 'celestial_point')
+#: Modes in which the cold-gas thrusters fly the spacecraft (seed 002 §3.1: sun acquisition and reacquisition on
+#: gas): rate damping on the gyros, then sun acquisition on the sun sensor and gyros. The heao_cold_gas mode logic
+#: sequences them and hands over to the wheels (Mode 1B); the controller's gas law runs in them.
+GAS_MODES = ('gas_rate_damping', 'gas_sun_acquisition')
 #: AAP Workshop computer modes (seed 000): CMG attitude hold, hold with the magnetic momentum dump, standby.
 WORKSHOP_MODES = ('standby', 'cmg_hold', 'cmg_dump')
 #: The Workshop modes a run may start in (``modes.initial_mode`` of ``modes.system: aap``): standby is a
 #: mode the ground commands, not one the Workshop is launched into (and the HEAO logic starts in it too).
 WORKSHOP_INITIAL_MODES = ('cmg_hold', 'cmg_dump')
 #: Every ``modes.initial_mode`` a scenario may give.
-INITIAL_MODES = (*HEAO_MODES, *WORKSHOP_INITIAL_MODES)
+INITIAL_MODES = (*HEAO_MODES, *WORKSHOP_INITIAL_MODES, *GAS_MODES)

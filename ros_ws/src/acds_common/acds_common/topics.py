@@ -46,6 +46,11 @@ WHEEL_VOLTS = 'controller/wheel_volts'          #: geometry_msgs/Vector3Stamped:
 WHEEL_TORQUE_COMMAND = 'controller/wheel_torque'  #: geometry_msgs/Vector3Stamped: wanted ḣ of torque-driven wheels, body, N·m
 CMG_TORQUE = 'controller/cmg_torque'            #: geometry_msgs/Vector3Stamped: commanded CMG momentum rate ḣ, body, N·m
 SAMPLED_MOMENTUM = 'controller/sampled_momentum'  #: geometry_msgs/Vector3Stamped: H_s the dump law uses (step k), body, N·m·s
+GAS_ON_TIME = 'controller/gas_on_time'          #: geometry_msgs/Vector3Stamped: valve on-time per body axis, s (sign: torque)
+
+# cold_gas (step k, over [t_k, t_k+1])
+COLD_GAS_WRENCH = 'cold_gas/wrench'             #: geometry_msgs/WrenchStamped: thrust force N, torque N·m, step average, body
+COLD_GAS_STATE = 'cold_gas/state'               #: diagnostic_msgs/DiagnosticArray: thrust times, gas, pressures, valves
 
 # em_driver (step k)
 DIPOLE_AVG = 'em_driver/dipole_avg'             #: geometry_msgs/Vector3Stamped: achieved dipole averaged over the step, A·m²

@@ -33,6 +33,12 @@ LB_KG = 0.45359237
 INCH_M = 0.0254
 #: 1 foot in m.
 FOOT_M = 0.3048
+#: 1 pound-force in N (seed 002 §5: thrust in lb, impulse in "lb/sec", i.e. lbf·s).
+LBF_N = 4.4482216152605
+#: 1 psi in Pa (cold-gas pressures, seed 002 §5).
+PSI_PA = 6894.757293168361
+#: Standard gravity g0, m/s² (specific impulse in s: v_e = Isp·g0).
+STANDARD_GRAVITY_M_S2 = 9.80665
 #: Mean equatorial Earth radius, m.
 EARTH_RADIUS_M = 6378137.0
 #: Earth gravitational parameter μ, m³/s².

@@ -16,9 +16,10 @@ mode manager → ``mode_1a`` (magnetics-only rate reduction); no wheels → zero
 A non-finite input is rejected with a diagnostic and the step commands zero moment and zero
 wheel volts.
 
-The node's other variant, chosen by the scenario (``wheels.kind`` cmg, ``acds_controller.nodes``),
-is the AAP Workshop's computer (:mod:`acds_controller.workshop_step`); both use :func:`warned` and
-:func:`store_momentum`.
+The node's other variants, chosen by the scenario (``acds_controller.nodes``): the AAP Workshop's
+computer (``wheels.kind`` cmg, :mod:`acds_controller.workshop_step`), which uses :func:`warned` and
+:func:`store_momentum`, and this DPA with the cold-gas acquisition law (node ``cold_gas`` in the graph,
+:mod:`acds_controller.cold_gas_controller_step`).
 """
 
 from __future__ import annotations
@@ -83,11 +84,7 @@ class DpaStep(Stepper):
         """Stage ``control``: one DPA control period (commands applied first, inputs checked)."""
         warnings: list[tuple[str, dict[str, str]]] = []
         mode, commands = mode_status(inp['mode'], self.node)
-        for text in commands:
-            try:
-                self.log('info', f'step {k}: {apply_command(self.dpa, text)}')
-            except ControllerError as exc:
-                warnings.append((f'command refused: {text!r}: {exc}', {'command': text, 'reason': str(exc)}))
+        self.apply_commands(k, commands, warnings)
         mode = resolve_mode(mode, 'mode_1a', HEAO_MODES, warnings, f'unknown mode {mode!r} from the mode manager')
         try:
             result = self._dpa_step(k, mode, inp)
@@ -95,6 +92,14 @@ class DpaStep(Stepper):
             warnings.append((f'input rejected, zero commands this step: {exc}', {}))
             result = {'moment': ZERO, 'volts': ZERO}
         return warned(self, k, result, warnings)
+
+    def apply_commands(self, k: int, commands: list[str], warnings: list[tuple[str, dict[str, str]]]) -> None:
+        """Apply the forwarded law/gain commands to the DPA; a refusal becomes a warning."""
+        for text in commands:
+            try:
+                self.log('info', f'step {k}: {apply_command(self.dpa, text)}')
+            except ControllerError as exc:
+                warnings.append((f'command refused: {text!r}: {exc}', {'command': text, 'reason': str(exc)}))
 
     def _dpa_step(self, k: int, mode: str, inp: dict[str, Any]) -> dict[str, Any]:
         volts = xyz(inp['mag_volts'], MID_SCALE_V)

@@ -14,7 +14,7 @@ from acds_common import topics
 from acds_common import units as u
 from acds_common.frames import BODY
 from acds_common.graph import Input, Node, Output, Package, Ports, Stage, Topic
-from acds_common.schema import ANGLE, DUMP_GAIN, MOMENT_OF_INERTIA, MOMENTUM, RATE, TIME, Field, quantity
+from acds_common.schema import ANGLE, DEG, DUMP_GAIN, MOMENT_OF_INERTIA, MOMENTUM, RATE, TIME, Field, quantity
 
 VECTOR3 = 'geometry_msgs/msg/Vector3Stamped'
 #: The scenario section this package defines.
@@ -81,16 +81,28 @@ SECTIONS: dict[str, dict[str, Field]] = {
                                  RATE, lo=1e-6, hi=10.0),
         'cmg_hold_damping': Field('float', 'CMG attitude-hold damping ratio ζ (not in the seed)', 0.7,
                                   lo=0.0, hi=10.0),
+        # ---- cold-gas acquisition law (seed 002 §3.1; acds_controller.cold_gas_law), with node cold_gas
+        'gas_rate_deadband': quantity('gas law: no pulse while every |ω_i − ω_ref,i| is within this', 0.02 * DEG,
+                                      'rad_s', RATE, lo=0.0, hi=0.1),
+        'gas_position_gain': quantity('gas law: rate reference per radian of sun-line error, ω_ref = −K·θ', 0.02,
+                                      'per_s', {'per_s': 1.0}, lo=0.0, hi=10.0),
+        'gas_slew_rate': quantity('gas law: limit of |ω_ref| (the sun acquisition slew rate)', 0.5 * DEG, 'rad_s', RATE,
+                                  lo=1e-5, hi=0.2),
     },
 }
 
 
 def _acds_controller(params: dict[str, Any]) -> Ports:
     """The HEAO transfer assembly + DPA driving wheels (spec §7), or with the CMGs (``wheels.kind: cmg``) the AAP
-    Workshop's computer (seed 000): the same inputs (the wheel ones are then the CMGs'), its own outputs."""
+    Workshop's computer (seed 000), or with node ``cold_gas`` in the graph the DPA that also flies the cold-gas
+    acquisition (seed 002 §3.1; it asks the thrusters for valve on-times): the same inputs (the wheel ones are
+    then the CMGs'), each its own outputs."""
     if params['wheels_kind'] == 'cmg':
         stepper = 'workshop_step:WorkshopComputerStep'
         store = (Output('cmg_torque', topics.CMG_TORQUE, BODY), Output('sampled_momentum', topics.SAMPLED_MOMENTUM, BODY))
+    elif 'cold_gas' in params['graph_nodes']:
+        stepper = 'cold_gas_controller_step:ColdGasControllerStep'
+        store = (Output('volts', topics.WHEEL_VOLTS, BODY), Output('gas_on_time', topics.GAS_ON_TIME, BODY))
     else:
         stepper, store = 'controller_step:DpaStep', (Output('volts', topics.WHEEL_VOLTS, BODY),)
     return Ports(
@@ -141,7 +153,7 @@ def _formation_controller(params: dict[str, Any]) -> Ports:
 PACKAGE = Package(
     'acds_controller',
     nodes=(
-        Node('acds_controller', ('spacecraft', 'controller', 'magnetometer', 'wheels', 'orbit', 'earth'),
+        Node('acds_controller', ('spacecraft', 'controller', 'magnetometer', 'wheels', 'orbit', 'earth', 'cold_gas'),
              _acds_controller),
         Node('formation_controller', ('orbit', 'formation'), _formation_controller, in_graph=False, in_vehicle=True,
              every_vehicle=('spacecraft', 'vehicle', 'em_driver', 'wheels')),
@@ -153,5 +165,6 @@ PACKAGE = Package(
         Topic(topics.WHEEL_TORQUE_COMMAND, VECTOR3, 'N·m', 'wanted ḣ of torque-driven wheels, body'),
         Topic(topics.CMG_TORQUE, VECTOR3, 'N·m', 'commanded CMG momentum rate ḣ, body'),
         Topic(topics.SAMPLED_MOMENTUM, VECTOR3, 'N·m·s', 'H_s the dump law uses (step k), body'),
+        Topic(topics.GAS_ON_TIME, VECTOR3, 's', 'cold-gas valve on-time per body axis (sign: torque direction)'),
     ),
 )

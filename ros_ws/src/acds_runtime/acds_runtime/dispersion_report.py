@@ -118,11 +118,12 @@ def make_row(index: int, name: str, drawn: dict[str, Any], geometry: dict[str, A
         return row
     peak_h = summary.get('peak_wheel_momentum_ftlbs') or {}
     peak_m = summary.get('peak_moment_am2') or {}
+    gas = 'gas_used_lb' in summary  # a cold-gas acquisition: no magnetics-only phase; Mode 1B from the hand-over
     row.update({
-        'time_magnetics_only_min': summary.get('time_magnetics_only_min'),
+        **({} if gas else {'time_magnetics_only_min': summary.get('time_magnetics_only_min')}),
         'time_wheels_magnetics_min': summary.get('time_wheels_magnetics_min'),
         'acquisition_time_min': summary.get('acquisition_time_min'),
-        'mode_1b_reached': summary.get('time_magnetics_only_min') is not None,
+        'mode_1b_reached': summary.get('gas_handover_min' if gas else 'time_magnetics_only_min') is not None,
         'captured': summary.get('acquisition_time_min') is not None,
         'sim_minutes': summary.get('sim_minutes'),
         'final_wheel_momentum_ftlbs': summary.get('final_wheel_momentum_ftlbs'),
@@ -132,6 +133,7 @@ def make_row(index: int, name: str, drawn: dict[str, Any], geometry: dict[str, A
         'wheel_saturation_time_min': summary.get('wheel_saturation_time_min'),
         'final_mode': summary.get('final_mode'),
         'truth_digest': summary.get('truth_digest'),
+        **{k: v for k, v in summary.items() if k.startswith('gas_')},  # a cold-gas acquisition's (summaries.cold_gas)
     })
     return row
 
@@ -145,7 +147,7 @@ def values_of(rows: Sequence[dict[str, Any]], q: Quantity) -> tuple[np.ndarray, 
             continue
         if q.when == 'captured' and not row.get('captured'):
             continue
-        if q.when == 'mode_1b' and row.get('time_magnetics_only_min') is None:
+        if q.when == 'mode_1b' and not row.get('mode_1b_reached'):
             continue
         v = row.get(q.key)
         if v is None and q.censored:

@@ -44,6 +44,18 @@ def event_text(tr: Transition) -> str:
     return f't={tr.t_s:.1f} {tr.from_mode}->{tr.to_mode}: {tr.cause}'
 
 
+def heao_config(m: dict[str, Any]) -> HeaoModeConfig:
+    """The HEAO mode logic's configuration from the scenario's ``modes`` section (SI values)."""
+    initial = m['initial_mode']
+    return HeaoModeConfig(
+        rate_thresholds_rad_s=tuple(m['rate_thresholds']),
+        capture_cone_rad=m['capture_cone'], capture_rate_rad_s=m['capture_rate'],
+        cruise_target=m['cruise_target'], auto_cruise=m['auto_cruise'],
+        wheels_on_from_separation=initial == 'mode_1b',
+        initial_mode='standby' if initial == 'standby' else 'mode_1a',
+        gain_limits=GAIN_LIMITS, law_choices=LAW_CHOICES)
+
+
 def build_core(m: dict[str, Any]) -> HeaoModeManager:
     """The HEAO mode manager core from the scenario's ``modes`` section (SI values).
 
@@ -52,13 +64,7 @@ def build_core(m: dict[str, Any]) -> HeaoModeManager:
     simulated).
     """
     initial = m['initial_mode']
-    core = HeaoModeManager(HeaoModeConfig(
-        rate_thresholds_rad_s=tuple(m['rate_thresholds']),
-        capture_cone_rad=m['capture_cone'], capture_rate_rad_s=m['capture_rate'],
-        cruise_target=m['cruise_target'], auto_cruise=m['auto_cruise'],
-        wheels_on_from_separation=initial == 'mode_1b',
-        initial_mode='standby' if initial == 'standby' else 'mode_1a',
-        gain_limits=GAIN_LIMITS, law_choices=LAW_CHOICES))
+    core = HeaoModeManager(heao_config(m))
     if initial in HEAO_CRUISE_MODES:
         core.mode = initial
         core.captured = True
@@ -68,11 +74,14 @@ def build_core(m: dict[str, Any]) -> HeaoModeManager:
 class HeaoPart:
     """The HEAO mode logic of the mode-manager stepper (module docstring)."""
 
+    #: The core from the ``modes`` section (a variant's part, e.g. the cold-gas acquisition's, builds its own).
+    build_core = staticmethod(build_core)
+
     def __init__(self, host: Any) -> None:
         self.host = host
         m = host.modes
         with scenario_key('modes', AscsError):
-            self.core = build_core(m)
+            self.core = self.build_core(m)
         self.stop_at_capture = m['stop_at_capture']
         self.run_complete = False
 

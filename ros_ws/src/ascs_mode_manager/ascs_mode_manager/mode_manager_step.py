@@ -1,7 +1,8 @@
 """ascs_mode_manager steppers: the on-board mode logic (spec §8), one stepper per system.
 
 The scenario's ``modes.system`` picks the variant (``ascs_mode_manager.nodes``): HEAO (Mode 1A → 1B →
-cruise, :mod:`ascs_mode_manager.heao_part`), SSS (perigee automatic turn-on,
+cruise, :mod:`ascs_mode_manager.heao_part`; with the cold-gas acquisition in front,
+:mod:`ascs_mode_manager.cold_gas_part`), SSS (perigee automatic turn-on,
 :mod:`ascs_mode_manager.sss_part`) or AAP (the Workshop's CMG hold and magnetic dump,
 :mod:`ascs_mode_manager.aap_part`). Each runs its part in stage ``mode_logic``; what they share is
 :class:`ModeManagerStep`: the ground-command intake (:mod:`ascs_mode_manager.ground_commands`: the
@@ -16,6 +17,7 @@ from typing import Any, ClassVar
 from acds_common.stepper import Stepper
 
 from ascs_mode_manager.aap_part import AapPart
+from ascs_mode_manager.cold_gas_part import ColdGasPart
 from ascs_mode_manager.ground_commands import MAX_PENDING, GroundCommandQueue
 from ascs_mode_manager.heao_part import HeaoPart
 from ascs_mode_manager.sss_part import SssPart
@@ -59,6 +61,12 @@ class HeaoModeManagerStep(ModeManagerStep):
     """The HEAO mode logic (``modes.system: heao``)."""
 
     part = HeaoPart
+
+
+class ColdGasModeManagerStep(ModeManagerStep):
+    """The HEAO mode logic with the cold-gas acquisition (``modes.system: heao_cold_gas``, seed 002 §3.1)."""
+
+    part = ColdGasPart
 
 
 class SssModeManagerStep(ModeManagerStep):

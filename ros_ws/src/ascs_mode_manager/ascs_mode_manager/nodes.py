@@ -1,6 +1,7 @@
 """The ascs_mode_manager node, as its package declares it to the graph (spec §8; seeds 000, 001; issue 19).
 
-The on-board mode logic: HEAO (Mode 1A → 1B → cruise, on the gyros and the sun sensor), SSS (the
+The on-board mode logic: HEAO (Mode 1A → 1B → cruise, on the gyros and the sun sensor; heao_cold_gas: with
+the cold-gas acquisition in front, seed 002 §3.1), SSS (the
 perigee automatic turn-on, on the spin-plane magnetometer channel; it commands the coils itself) or
 the AAP Workshop's (CMG hold and magnetic dump, by ground command only); ``modes.system`` picks it.
 Every system takes the ground commands and answers them on ``ground/ack``. Named in the
@@ -16,16 +17,17 @@ from acds_common import topics
 from acds_common import units as u
 from acds_common.frames import BODY
 from acds_common.graph import Input, Node, Output, Package, Ports, Stage, Topic
-from acds_common.modes import HEAO_CRUISE_MODES, INITIAL_MODES, WORKSHOP_INITIAL_MODES
+from acds_common.modes import GAS_MODES, HEAO_CRUISE_MODES, INITIAL_MODES, WORKSHOP_INITIAL_MODES
 from acds_common.schema import ANGLE, DEG, FIELD, RATE, Field, quantity
 
 #: The scenario sections this package defines.
 SECTIONS: dict[str, dict[str, Field]] = {
     'modes': {
-        'system': Field('str', 'which mode logic runs: heao, sss or aap (the AAP Workshop CMG hold and magnetic '
-                        'dump, seed 000)', 'heao', choices=('heao', 'sss', 'aap')),
-        'initial_mode': Field('str', 'mode at separation (aap: cmg_hold or cmg_dump)', 'mode_1a',
-                              choices=INITIAL_MODES),
+        'system': Field('str', 'which mode logic runs: heao, heao_cold_gas (the study\'s recommended design: cold-gas '
+                        'acquisition, wheels + magnetics cruise, seed 002 §3.1), sss or aap (the AAP Workshop CMG hold '
+                        'and magnetic dump, seed 000)', 'heao', choices=('heao', 'heao_cold_gas', 'sss', 'aap')),
+        'initial_mode': Field('str', 'mode at separation (aap: cmg_hold or cmg_dump; heao_cold_gas: a gas mode)',
+                              'mode_1a', choices=INITIAL_MODES),
         'rate_thresholds': quantity('Mode 1A→1B body-rate thresholds |ω_x|, |ω_y|, |ω_z|',
                               [0.573 * DEG, 0.115 * DEG, 0.115 * DEG], 'rad_s', RATE, length=3, lo=0.0, hi=1.0),
         'capture_cone': quantity('acquisition capture: z within this angle of the sun', 10 * DEG, 'rad', ANGLE,
@@ -36,6 +38,12 @@ SECTIONS: dict[str, dict[str, Field]] = {
         'auto_cruise': Field('bool', 'enter cruise automatically at capture (else by ground command)', False),
         'stop_at_capture': Field('bool', 'end the run at acquisition capture', False),
         'ground_commands': Field('strs', 'scheduled ground commands, "T_S: command"', []),
+        'gas_damped_rate': quantity('heao_cold_gas: gas rate damping → gas sun acquisition when every |ω_i| is below '
+                                    'this', 0.05 * DEG, 'rad_s', RATE, lo=0.0, hi=0.1),
+        'gas_handover_cone': quantity('heao_cold_gas: gas sun acquisition → Mode 1B (wheels) when z is within this of '
+                                      'the sun line …', 5 * DEG, 'rad', ANGLE, lo=0.0, hi=math.pi),
+        'gas_handover_rate': quantity('heao_cold_gas: … and every |ω_i| is below this', 0.05 * DEG, 'rad_s', RATE,
+                                      lo=0.0, hi=0.1),
     },
     'sss': {
         'polarity_level': quantity('polarity-sensing level of the spin-plane magnetometer channel', 0.075 * u.GAUSS_T,
@@ -56,9 +64,11 @@ SECTIONS: dict[str, dict[str, Field]] = {
 }
 
 
+_HEAO_INPUTS = (Input('gyro', topics.GYRO, 'rigid_body'), Input('sun', topics.SUN_SENSOR, 'rigid_body'))
 #: Each system's stepper and the inputs of its stage ``mode_logic``.
 _SYSTEMS = {
-    'heao': ('HeaoModeManagerStep', (Input('gyro', topics.GYRO, 'rigid_body'), Input('sun', topics.SUN_SENSOR, 'rigid_body'))),
+    'heao': ('HeaoModeManagerStep', _HEAO_INPUTS),
+    'heao_cold_gas': ('ColdGasModeManagerStep', _HEAO_INPUTS),
     'sss': ('SssModeManagerStep', (Input('volts', topics.MAG_VOLTS, 'magnetometer_sim'),
                                    Input('bias', topics.MAG_BIAS_VOLTS, 'magnetometer_sim'))),
     'aap': ('AapModeManagerStep', ()),  # paced by /clock: the Workshop's modes change by ground command only
@@ -92,6 +102,17 @@ def check_workshop(sc: Any) -> str:
     return ''
 
 
+def check_gas_modes(sc: Any) -> str:
+    """The gas modes start, and only start, a heao_cold_gas acquisition ('' when so; seed 002 §3.1)."""
+    if sc.formation:
+        return ''
+    system, initial = sc.get('modes', 'system'), sc.get('modes', 'initial_mode')
+    if (system == 'heao_cold_gas') != (initial in GAS_MODES):
+        return (f'modes.initial_mode: {initial!r} with modes.system {system!r} (the gas modes, '
+                f'{" or ".join(GAS_MODES)}, start a heao_cold_gas acquisition, and only they do)')
+    return ''
+
+
 #: What the ascs_mode_manager package adds to the graph.
 PACKAGE = Package(
     'ascs_mode_manager',
@@ -102,5 +123,5 @@ PACKAGE = Package(
         Topic(topics.GROUND_ACK, 'std_msgs/msg/String', '', 'acknowledgements and refusals with reasons'),
         Topic(topics.EVENTS, 'std_msgs/msg/String', '', 'mode transitions, automatic turn-on/off, with sim time'),
     ),
-    checks=(check_workshop,),
+    checks=(check_workshop, check_gas_modes),
 )

@@ -168,6 +168,7 @@ def _rigid_body(_params: dict[str, Any]) -> Ports:
             Input('wheel_h', topics.WHEEL_MOMENTUM, 'reaction_wheels'),
             Input('wheel_hdot', topics.WHEEL_TORQUE, 'reaction_wheels'),
             Input('mode', topics.MODE, 'ascs_mode_manager'),
+            Input('gas_wrench', topics.COLD_GAS_WRENCH, 'cold_gas'),  # the cold-gas thrusters (seed 002 §5)
         )),),
         (Output('odometry', topics.TRUTH_ODOMETRY, ECI, BODY, **truth),
          Output('b_body', topics.TRUTH_B_BODY, BODY, **truth),

@@ -274,14 +274,15 @@ class RigidBodyModel:
         return env
 
     def advance(self, dt_s: float, dipole_body_am2: Sequence[float], wheel_h_body_nms: Sequence[float],
-                wheel_hdot_body_nm: Sequence[float]) -> None:
+                wheel_hdot_body_nm: Sequence[float], thruster_torque_body_nm: Sequence[float] | None = None) -> None:
         """Integrate from t to t + ``dt_s`` (s).
 
         ``dipole_body_am2`` (A·m², constant over the step: the driver's time-averaged achieved
         dipole); wheel momentum h(τ) = ``wheel_h_body_nms`` + ``wheel_hdot_body_nm``·(τ − t) (N·m·s,
         N·m, body axes), 3-vectors as arrays or float triples; the disturbance torque at its exact mean
-        over the step. Records the step-average magnetic and gravity-gradient torques (RK4 stage weights,
-        i.e. Simpson's rule per substep).
+        over the step; ``thruster_torque_body_nm``: the cold-gas thrusters' step-average torque (N·m, body;
+        None: no thrusters), added to the disturbance term. Records the step-average magnetic and
+        gravity-gradient torques (RK4 stage weights, i.e. Simpson's rule per substep).
         """
         dt = finite_float("dt_s", dt_s)
         if dt <= 0.0:
@@ -295,6 +296,9 @@ class RigidBodyModel:
         tdx = tdy = tdz = 0.0
         if self.disturbance is not None:
             tdx, tdy, tdz = finite_xyz("disturbance torque", self.disturbance.momentum_nms(t0, t0 + dt) / dt)
+        if thruster_torque_body_nm is not None:
+            gx, gy, gz = finite_xyz("thruster_torque_body_nm", thruster_torque_body_nm)
+            tdx, tdy, tdz = tdx + gx, tdy + gy, tdz + gz
         need_field = mx != 0.0 or my != 0.0 or mz != 0.0
         gg = self.gravity_gradient
         env = self._stage_environment(t0, dt, need_field or gg, need_field)

@@ -3,7 +3,8 @@
 Step 0's truth is published at start. Stage ``integrate`` of step k takes the actuator
 outputs of step k (the em_driver's step-average achieved dipole, the wheels' momentum
 h(t_k) and rate ḣ over [t_k, t_k+1]; absent nodes mean zero) and the step's ``mode``,
-integrates t_k → t_k+1 and returns the truth of step k + 1. The run ends after step k
+integrates t_k → t_k+1 and returns the truth of step k + 1. With the cold-gas subsystem in the graph its
+step-average thruster torque (``cold_gas/wrench``, step k) is applied as well. The run ends after step k
 when the total step count is reached or when the ``mode`` of step k carries
 ``run_complete: true`` (stop at acquisition capture). A non-finite actuator input, or one
 beyond what the hardware can produce (:func:`~dynamics.configuration.actuator_limits`),
@@ -162,17 +163,21 @@ class RigidBodyStep(Stepper):
         if not (math.isfinite(h[0] + h[1] + h[2] + hdot[0] + hdot[1] + hdot[2] + dipole[0] + dipole[1] + dipole[2])
                 and _within(dipole, dipole_bound) and _within(h, wheel_bound) and _within(h_end, wheel_bound)):
             self._refuse(k, h, hdot, dipole, h_end)
+        gas = None if inp['gas_wrench'] is None else inp['gas_wrench'][1]
+        if gas is not None and not all(math.isfinite(x) for x in gas):
+            raise StepError(f'non-finite {topics.resolve(topics.COLD_GAS_WRENCH)} torque at step {k}: {list(gas)}; '
+                            'the physics cannot go on')
         wall0 = time.perf_counter()
         if self._h0_eci is None:  # the constants of the motion at t_0, with the wheels' momentum h(t_0)
             truth0 = self.model.truth(h)
             self._h0_eci, self._e0_j = truth0.h_total_eci_nms, truth0.rotational_energy_j
-        self.model.advance(dt, dipole, h, hdot)
+        self.model.advance(dt, dipole, h, hdot, gas)
         self._wheel_h = h_end
         truth = self.model.truth(h_end)
         out = truth_outputs(truth)
         w = truth.omega_xyz
         self._check_step(math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), k)
-        if self.torque_free and (any(dipole) or any(hdot)):
+        if self.torque_free and (any(dipole) or any(hdot) or (gas is not None and any(gas))):
             self.torque_free = False
         wall = time.perf_counter() - wall0
         self._wall_s += wall

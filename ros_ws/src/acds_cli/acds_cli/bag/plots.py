@@ -8,7 +8,8 @@ sun angle (body z to the sun line, with the capture cone), plus the mode
 timeline. SSS (seed 001): spin rate (rpm) and the magnetic torque about the
 spin axis (dyne-cm). Torque-rod runs (seed 003, the bag holds ``em_driver/power``):
 body rates and |ω| (deg/s, with the summary's 0.1°/s threshold), dipole commands (A·m²)
-and rod currents (mA). Formations (seed 004): ``formation_plots``. A figure whose topics
+and rod currents (mA). Cold-gas acquisitions (seed 002 §5): ``cold_gas_plots``. Formations (seed 004):
+``formation_plots``. A figure whose topics
 are absent is skipped.
 
 What an ACS engineer reads at a glance: every time plot marks the mode
@@ -38,7 +39,7 @@ from acds_runtime.bag.reader import Bag, open_bag
 from acds_runtime.bag.writer import BagError, check_out_dir, typestore
 from acds_runtime.summaries.heao import transitions
 
-from . import FORMATS, formation_plots
+from . import FORMATS, cold_gas_plots, formation_plots
 
 AXES = (('x', 'roll'), ('y', 'pitch'), ('z', 'yaw'))
 #: The sun-angle plot's sections of the time owner's parameters (the rigid body's environment).
@@ -217,6 +218,9 @@ def figures(bag: Bag) -> list[tuple[str, Any]]:
         vectors[topics.COIL_CURRENT] = lambda m: _v3(m.vector)
     formation = formation_plots.vehicles(bag)
     vectors.update(formation_plots.formation_vectors(formation))
+    gas = bag.has(topics.COLD_GAS_STATE)
+    if gas:
+        vectors[topics.COLD_GAS_STATE] = cold_gas_plots.state_vector
 
     def mode_of(m: Any) -> tuple[str, str, bool]:
         kv = {v.key: v.value for v in m.status[0].values} if m.status else {}
@@ -372,6 +376,11 @@ def figures(bag: Bag) -> list[tuple[str, Any]]:
             ax.legend(fontsize=8, loc='upper right')
             ax.grid(alpha=0.3)
         finish(fig, list(axs), 'torque_rod_detumble', 'Torque-rod detumble: rates, |ω|, dipole commands, rod currents')
+
+    if gas:
+        cold_gas_plots.plot(lambda topic, width: _series(data, topic, width), (t_w, w),
+                            sun_angle_deg(quat, sun) if len(quat) and sun is not None else None,
+                            (bag.control_period_ns or 0) / 1e9, ctx.section('cold_gas', 'cold_gas'), plt, finish)
 
     if formation:  # no mode stream: no event lines
         formation_plots.plot_formation(formation, lambda topic: _series(data, topic), plt,

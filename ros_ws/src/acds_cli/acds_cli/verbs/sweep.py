@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import subprocess
 import sys
@@ -51,6 +52,8 @@ GROUPS = {
     'table-4-7': ['heao_b_acquisition', 'heao_a_acquisition', *(f'heao_b_case{i}' for i in range(3, 12))],
     'normal-mode': ['heao_a_scan_no_unloading', 'heao_a_scan_unloading',
                     'heao_b_point_no_unloading', 'heao_b_point_unloading'],
+    # seed 002 §3.1: magnetic against cold-gas sun acquisition of HEAO-B on the same separations (paired: --runs N)
+    'acquisition-trade': ['heao_b_acquisition', 'heao_b_acquisition_cold_gas'],
 }
 
 
@@ -58,6 +61,8 @@ GROUPS = {
 CASE_VARY = {'heao_b_case4': ['spacecraft.initial_quaternion_xyzw=h_parallel_b()']}
 #: The paired study's quantities: (row key, column title).
 PAIRED = (('time_magnetics_only_min', 'time on magnetics only'), ('acquisition_time_min', 'acquisition time'))
+#: ... when a case acquires on gas (no magnetics-only phase): the acquisition time only.
+PAIRED_GAS = (('acquisition_time_min', 'acquisition time'),)
 
 
 def expand(names: list[str]) -> list[str]:
@@ -159,7 +164,8 @@ def _case_vary(case: Any, reference: Any, vary: list[str]) -> tuple[list[str], l
     return kept, skipped
 
 
-def paired_table(cases: list[dict[str, Any]], runs: int, seed: int) -> str:
+def paired_table(cases: list[dict[str, Any]], runs: int, seed: int,
+                 paired: tuple[tuple[str, str], ...] = PAIRED) -> str:
     """The paired study's table (study units: minutes)."""
     def cell(c: dict[str, Any]) -> str:
         def fmt(v: float | None) -> str:
@@ -170,17 +176,17 @@ def paired_table(cases: list[dict[str, Any]], runs: int, seed: int) -> str:
         ci = c['ratio_ci90']
         interval = f'[{rfmt(ci[0])}, {rfmt(ci[1])}]'
         return (f'{c["censored"]:>4d} {fmt(c["median"]):>7s} {fmt(c["p10"]):>7s}–{fmt(c["p90"]):<7s} '
-                f'{rfmt(c["ratio_median"]):>5s} {interval:<14s}')
+                f'{fmt(c["worst"]):>7s} {rfmt(c["ratio_median"]):>5s} {interval:<14s}')
     lines = [f'paired perturbation study: {runs} draws of the open conditions (seed {seed}); sample i of every case '
              'is the same draw; times in minutes; ratio = paired median ratio to the first case, [bootstrap 90 %]; '
              '>T = censored (not reached when the runs ended), ∞ = a ratio among censored pairs']
-    head = f'{"case":28s} {"n":>3s} ' + ' '.join(f'| {t:^49s}' for _k, t in PAIRED)
-    sub = f'{"":28s} {"":>3s} ' + ' '.join(f'| {"cens":>4s} {"median":>7s} {"p10–p90":^15s} {"ratio [90 %]":<20s}'
-                                            for _ in PAIRED)
+    head = f'{"case":28s} {"n":>3s} ' + ' '.join(f'| {t:^57s}' for _k, t in paired)
+    sub = f'{"":28s} {"":>3s} ' + ' '.join(f'| {"cens":>4s} {"median":>7s} {"p10–p90":^15s} {"worst":>7s} '
+                                            f'{"ratio [90 %]":<20s}' for _ in paired)
     lines += [head, sub, '-' * len(sub)]
     for case in cases:
         lines.append(f'{case["scenario"]:28s} {case["n"]:>3d} ' +
-                     ' '.join(f'| {cell(case["quantities"][k])}' for k, _t in PAIRED))
+                     ' '.join(f'| {cell(case["quantities"][k])}' for k, _t in paired))
         if case['failed']:
             lines.append(f'{"":28s} {case["failed"]} sample(s) FAILED (see --out samples.csv)')
     return '\n'.join(lines)
@@ -194,6 +200,8 @@ def cmd_paired(args: argparse.Namespace) -> int:
 
     names = expand(args.scenarios)
     scenarios = [load_scenario(n) for n in names]
+    gas = [sc for sc in scenarios if 'cold_gas' in sc.get('', 'nodes')]
+    paired = PAIRED_GAS if gas else PAIRED
     out = study_folder('sweep', names[0] if len(names) == 1 else f'{len(names)}cases', args)
     if args.json:
         check_output_file('--json', Path(args.json))
@@ -227,17 +235,24 @@ def cmd_paired(args: argparse.Namespace) -> int:
     for name, rows in zip(names, rows_by_case, strict=True):
         both = [i for i in range(args.runs) if 'error' not in rows[i] and 'error' not in ref_rows[i]]
         quantities = {}
-        for key, title in PAIRED:
+        for key, title in paired:
             quantity = dr.Quantity(key, title, 'min', 'all', True)
             vals, censor_at = dr.values_of(rows, quantity)
             q = {'median': dr.percentile(vals, 50), 'p10': dr.percentile(vals, 10), 'p90': dr.percentile(vals, 90),
+                 'worst': dr.percentile(vals, 100),
                  'censored': len(censor_at), 'censored_above': min(censor_at) if censor_at else None}
             q.update(dr.paired_ratio(dr.values_of([rows[i] for i in both], quantity)[0],
                                      dr.values_of([ref_rows[i] for i in both], quantity)[0], args.seed))
             quantities[key] = q
         failed = sum('error' in r for r in rows)
-        cases.append({'scenario': name, 'n': len(rows) - failed, 'failed': failed, 'quantities': quantities})
-    print(paired_table(cases, args.runs, args.seed))
+        case = {'scenario': name, 'n': len(rows) - failed, 'failed': failed, 'quantities': quantities}
+        sc = scenarios[names.index(name)]
+        if sc in gas:
+            case['cold_gas'] = gas_budget(rows, sc)
+        cases.append(case)
+    text = paired_table(cases, args.runs, args.seed, paired) + ''.join(
+        '\n\n' + gas_table(c) for c in cases if 'cold_gas' in c)
+    print(text)
     print(f'\n[sweep] {len(names)} case(s) × {args.runs} draws in {wall:.0f} s wall ({_execution(execution)})',
           file=sys.stderr)
     result = {'command': command, 'seed': args.seed, 'runs': args.runs,
@@ -250,9 +265,67 @@ def cmd_paired(args: argparse.Namespace) -> int:
     all_records = [{'case': name, **rec} for i, name in enumerate(names)
                    for rec in records_of(samples_by_case[i], by_case[i])]
     dr.write_rows(out, all_rows, all_records)
-    (out / 'report.md').write_text(f'# Paired perturbation study\n\n`{result["command"]}`\n\n```\n'
-                                   f'{paired_table(cases, args.runs, args.seed)}\n```\n')
+    (out / 'report.md').write_text(f'# Paired perturbation study\n\n`{result["command"]}`\n\n```\n{text}\n```\n')
     return 0 if all(c['failed'] == 0 for c in cases) else 1
+
+
+def gas_budget(rows: list[dict[str, Any]], sc: Any) -> dict[str, Any]:
+    """A cold-gas case's propellant and valve use over its draws, and how many acquisitions its load supports.
+
+    Per acquisition (the run ends at capture): the time on gas (start → hand-over to the wheels, min; not reached:
+    +∞), GN₂ used (lb) and valve cycles, median, 10–90 % and worst, with the
+    draw of the worst; the acquisitions the load supports at the 90th percentile of the GN₂ used, counting the whole
+    load and counting only the gas above the regulator's set point (below it the regulator drops out and the thrust
+    falls with the tank: blowdown, seed 002 §5.2.1 regulation lost).
+    """
+    import numpy as np
+    from acds_common.units import LB_KG
+    from acds_runtime import dispersion_report as dr
+
+    done = [r for r in rows if 'error' not in r and r.get('gas_used_lb') is not None]
+    out: dict[str, Any] = {'n': len(done)}
+    for key in ('gas_handover_min', 'gas_used_lb', 'gas_valve_cycles'):
+        vals = np.array([math.inf if r[key] is None else float(r[key]) for r in done])
+        worst = max(done, key=lambda r: math.inf if r[key] is None else r[key]) if done else None
+        out[key] = {'median': dr.percentile(vals, 50), 'p10': dr.percentile(vals, 10), 'p90': dr.percentile(vals, 90),
+                    'worst': dr.percentile(vals, 100), 'worst_index': None if worst is None else worst['index']}
+    c = sc.values['cold_gas']
+    load_lb = c['load_mass'] / LB_KG
+    residual_lb = load_lb * c['regulator_set_pressure'] / _tank_pressure_pa(c)
+    p90 = out['gas_used_lb']['p90']
+    out.update(load_lb=load_lb, residual_at_set_point_lb=residual_lb,
+               acquisitions_at_p90=None if not p90 else int(load_lb // p90),
+               acquisitions_at_p90_regulated=None if not p90 else int((load_lb - residual_lb) // p90))
+    return out
+
+
+def _tank_pressure_pa(c: dict[str, Any]) -> float:
+    """The loaded tanks' pressure at t0 (the cold_gas core's isothermal ideal gas, :mod:`cold_gas.rcs`)."""
+    from cold_gas.configuration import rcs_config
+
+    cfg = rcs_config(c)
+    return cfg.tank_pressure_pa(cfg.load_mass_kg)
+
+
+def gas_table(case: dict[str, Any]) -> str:
+    """The cold-gas case's propellant lines (:func:`gas_budget`)."""
+    g = case['cold_gas']
+
+    def line(key: str, title: str, spec: str) -> str:
+        q = g[key]
+
+        def f(v: float | None) -> str:
+            return '—' if v is None else format(v, spec)
+        return (f'  {title:34s} median {f(q["median"]):>7s}   p10–p90 {f(q["p10"])}–{f(q["p90"])}   worst '
+                f'{f(q["worst"])} (sample {q["worst_index"]})')
+    at = g['acquisitions_at_p90']
+    return '\n'.join([
+        f'{case["scenario"]}: cold gas per acquisition ({g["n"]} draws)',
+        line('gas_handover_min', 'on gas: start → hand-over, min', '.2f'),
+        line('gas_used_lb', 'GN₂ used, lb', '.3f'), line('gas_valve_cycles', 'valve cycles (all six valves)', '.0f'),
+        f'  the {g["load_lb"]:.2f} lb load supports {"—" if at is None else at} acquisitions at the 90th percentile '
+        f'({g["acquisitions_at_p90_regulated"]} on the gas above the regulator set point; '
+        f'{g["residual_at_set_point_lb"]:.3f} lb is left when the tanks reach it)'])
 
 
 def _execution(execution: Any) -> str:

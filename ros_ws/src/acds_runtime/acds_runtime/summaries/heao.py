@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 from acds_common import topics
+from acds_common.modes import GAS_MODES
 from acds_common.units import nms_to_ftlbs
 
 _MODE, _WHEEL_MOMENTUM, _WHEEL_TORQUE, _MOMENT_COMMAND = (
@@ -49,10 +50,10 @@ def acquisition_times(history: list[tuple[float, str, str, bool]]) -> dict[str, 
     t0, mode0 = history[0][0], history[0][1]
     t_1b = t0 if mode0 == 'mode_1b' else next((t for t, m, _, _ in history if m == 'mode_1b'), None)
     t_cap = next((t for t, m, _, c in history if c and m == 'mode_1b'), None)
-    if mode0 not in ('mode_1a', 'mode_1b'):  # a normal-mode run: no acquisition
+    if mode0 not in ('mode_1a', 'mode_1b', *GAS_MODES):  # a normal-mode run: no acquisition
         t_1b = t_cap = None
-    return {
-        'time_magnetics_only_min': None if t_1b is None else (t_1b - t0) / 60,
+    return {  # an acquisition on gas (seed 002 §3.1) has no magnetics-only phase; its gas phases: summaries.cold_gas
+        'time_magnetics_only_min': None if t_1b is None or mode0 in GAS_MODES else (t_1b - t0) / 60,
         'time_wheels_magnetics_min': None if t_1b is None or t_cap is None else (t_cap - t_1b) / 60,
         'acquisition_time_min': None if t_cap is None else (t_cap - t0) / 60,
     }
@@ -65,7 +66,7 @@ def saturated(h_nms: np.ndarray, capacity_nms: np.ndarray) -> bool:
 
 def applies(scenario: Any) -> bool:
     """The HEAO keys come from runs of the HEAO mode manager."""
-    return scenario.get('modes', 'system') == 'heao' and 'ascs_mode_manager' in scenario.get('', 'nodes')
+    return scenario.get('modes', 'system') in ('heao', 'heao_cold_gas') and 'ascs_mode_manager' in scenario.get('', 'nodes')
 
 
 def null_keys(summary: dict[str, Any]) -> None:

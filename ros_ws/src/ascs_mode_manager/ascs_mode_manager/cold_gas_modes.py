@@ -1,0 +1,112 @@
+"""HEAO mode sequencing with the cold-gas acquisition: the study's recommended design (seed 002 §2, §3.1, §5.1).
+
+``modes.system: heao_cold_gas``. The acquisition runs on gas, the cruise on wheels + magnetics:
+
+* ``gas_rate_damping`` (from separation): the thrusters null the tip-off rates on the gyros; →
+* ``gas_sun_acquisition`` when every |ω_i| ≤ ``gas_damped_rate``: the thrusters turn body z to the sun line
+  (sun sensor + gyros); →
+* ``mode_1b`` (hand-over to the wheels, magnetics unloading, as in the all-magnetic design) when the sun is
+  present, z is within ``gas_handover_cone`` of it and every |ω_i| ≤ ``gas_handover_rate``; then acquisition
+  capture in Mode 1B and the cruise mode exactly as :class:`~ascs_mode_manager.heao_modes.HeaoModeManager`.
+
+Sun reacquisition (§3.1: "Sun reacquisitions … would be effected with the cold gas system") is the ground
+command ``mode reacquire``: from any mode that is not already a gas mode, back to ``gas_rate_damping``. Cold-gas
+hardware commands (Table 5-2) are ``gas isolation <1|2> <open|close>``, ``gas bank <on|off>`` and ``gas
+transducer <on|off>``, routed to the ``cold_gas`` node (which applies them, or refuses with the reason on
+``/diagnostics``). Every other command is the HEAO grammar.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from acds_common.modes import GAS_MODES
+from acds_common.units import deg
+
+from ascs_mode_manager.heao_modes import CommandResult, HeaoModeConfig, HeaoModeManager, Transition, _refuse
+from ascs_mode_manager.spin_mechanizations import AscsError
+
+_GAS_USAGE = 'usage: gas isolation <1|2> <open|close> | gas bank <on|off> | gas transducer <on|off>'
+
+
+@dataclass(frozen=True)
+class GasHandover:
+    """The gas phases' transition conditions (rad/s, rad): rates damped; hand-over cone and rate."""
+
+    damped_rate_rad_s: float
+    handover_cone_rad: float
+    handover_rate_rad_s: float
+
+    def __post_init__(self) -> None:
+        for name in ('damped_rate_rad_s', 'handover_cone_rad', 'handover_rate_rad_s'):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0.0):
+                raise AscsError(f'{name} = {getattr(self, name)!r} must be > 0')
+
+
+class ColdGasModeManager(HeaoModeManager):
+    """HEAO mode logic with the gas acquisition phases in front (module docstring)."""
+
+    def __init__(self, config: HeaoModeConfig, gas: GasHandover, initial_mode: str = 'gas_rate_damping') -> None:
+        super().__init__(config)
+        if initial_mode not in GAS_MODES:
+            raise AscsError(f'initial_mode {initial_mode!r}: a heao_cold_gas acquisition starts in a gas mode '
+                            f'({", ".join(GAS_MODES)})')
+        self.gas = gas
+        self.mode = initial_mode
+        #: Sim time of the latest hand-over from gas to the wheels (s), None until it happens.
+        self.handover_t_s: float | None = None
+
+    def step(self, t_s: float, omega_rad_s: Sequence[float], sun_body_unit: Sequence[float],
+             sun_present: bool) -> list[Transition]:
+        """The HEAO step (queued commands, Mode 1A/1B logic), then the gas phases' transfers."""
+        out = super().step(t_s, omega_rad_s, sun_body_unit, sun_present)
+        t = float(t_s)
+        w = [abs(float(x)) for x in omega_rad_s]
+        rates = ', '.join(f'|ω{a}|={deg(x):.4f}' for a, x in zip('xyz', w, strict=True))
+        if self.mode == 'gas_rate_damping' and max(w) <= self.gas.damped_rate_rad_s:
+            out.append(self._enter(t, 'gas_sun_acquisition', f'rates damped on gas ({rates} ≤ '
+                                   f'{deg(self.gas.damped_rate_rad_s):.4f} deg/s)'))
+        elif self.mode == 'gas_sun_acquisition':
+            s = [float(x) for x in sun_body_unit]
+            norm = math.sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2])
+            if sun_present and norm > 0.0:
+                angle = math.acos(max(-1.0, min(1.0, s[2] / norm)))
+                if angle <= self.gas.handover_cone_rad and max(w) <= self.gas.handover_rate_rad_s:
+                    self.handover_t_s = t
+                    out.append(self._enter(t, 'mode_1b', f'hand-over to the wheels: z {deg(angle):.2f}° from the sun '
+                                           f'line, {rates} ≤ {deg(self.gas.handover_rate_rad_s):.4f} deg/s'))
+        return out
+
+    def _enter(self, t: float, to_mode: str, cause: str) -> Transition:
+        tr = super()._enter(t, to_mode, cause)
+        if to_mode in GAS_MODES:
+            self.captured = False
+            self._capture_since_t_s = None
+        return tr
+
+    def command(self, text: str, t_s: float) -> CommandResult:
+        """``mode reacquire`` and ``gas …`` here; every other command as in the HEAO grammar."""
+        words = str(text).split()
+        if len(words) == 2 and words[0].lower() == 'mode' and words[1].lower() == 'reacquire':
+            current = self._effective_mode()
+            if current in GAS_MODES:
+                return _refuse(f'wrong mode: already acquiring on gas ({current})')
+            self._pending.append(('gas_rate_damping', float(t_s), 'mode reacquire'))
+            return CommandResult(True, f'{current} → gas_rate_damping (sun reacquisition on gas) at the next step',
+                                 None, 'mode reacquire')
+        if words and words[0].lower() == 'gas':
+            args = [w.lower() for w in words[1:]]
+            ok = (len(args) == 3 and args[0] == 'isolation' and args[1] in ('1', '2') and args[2] in ('open', 'close')) \
+                or (len(args) == 2 and args[0] in ('bank', 'transducer') and args[1] in ('on', 'off'))
+            if not ok:
+                return _refuse(_GAS_USAGE)
+            return CommandResult(True, 'routed to cold_gas', 'cold_gas', ' '.join(args))
+        if len(words) == 2 and words[0].lower() == 'mode' and words[1].lower() in GAS_MODES:
+            return _refuse('wrong mode: the gas modes are entered by the acquisition sequence or by "mode reacquire"')
+        return super().command(text, t_s)
+
+    def status(self) -> dict[str, str]:
+        """The HEAO status and the hand-over time (s, '' before it)."""
+        return {**super().status(), 'handover_t_s': '' if self.handover_t_s is None else f'{self.handover_t_s:.3f}'}
