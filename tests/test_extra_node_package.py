@@ -38,7 +38,7 @@ RUN_BOTH = textwrap.dedent('''
     from acds_common.scenario import load_scenario
     from acds_runtime.direct import DirectRun
     from acds_runtime.launcher import GraphRun
-    from acds_cli.bag.reader import open_bag
+    from acds_runtime.bag.reader import open_bag
 
     extended, core, out, steps = sys.argv[1], sys.argv[2], Path(sys.argv[3]), int(sys.argv[4])
     gyro, truth_gyro = topics.resolve('sensors/rate_gyro'), topics.resolve(topics.GYRO)

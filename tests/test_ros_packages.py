@@ -58,11 +58,13 @@ def _imports(package: str) -> set[str]:
 
 def variant_parameters(node: str) -> list[dict]:
     """Parameters of ``node`` that reach each of its variants: its sections' defaults, then each choice of each
-    of their string keys in turn (a variant is picked by one key: ``wheels.kind``, ``modes.system``, ...)."""
+    of their string keys in turn (a variant is picked by one key: ``wheels.kind``, ``modes.system``, ...), and
+    every declared node in the graph (the controller's cold-gas variant flies with node ``cold_gas``)."""
     _pkg, decl = declared_nodes()[node]
     fields = {f.param_name(s, k): f for s in decl.sections for k, f in SCHEMA[s].items()}
-    base = {name: f.default for name, f in fields.items()} | {'formation_vehicles': ['a', 'b']}
-    return [base] + [{**base, name: choice} for name, f in fields.items() if f.kind == 'str' for choice in f.choices]
+    base = {name: f.default for name, f in fields.items()} | {'formation_vehicles': ['a', 'b'], 'graph_nodes': []}
+    return [base, {**base, 'graph_nodes': list(declared_nodes())}] + [
+        {**base, name: choice} for name, f in fields.items() if f.kind == 'str' for choice in f.choices]
 
 
 def _node_message_packages(package: str) -> set[str]:
