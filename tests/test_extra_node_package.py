@@ -38,7 +38,7 @@ RUN_BOTH = textwrap.dedent('''
     from acds_common.scenario import load_scenario
     from acds_runtime.direct import DirectRun
     from acds_runtime.launcher import GraphRun
-    from acds_cli.bag.reader import open_bag
+    from acds_runtime.bag.reader import open_bag
 
     extended, core, out, steps = sys.argv[1], sys.argv[2], Path(sys.argv[3]), int(sys.argv[4])
     gyro, truth_gyro = topics.resolve('sensors/rate_gyro'), topics.resolve(topics.GYRO)
@@ -97,7 +97,7 @@ def test_a_node_package_installed_outside_the_workspace_joins_both_engines(insta
           bias_deg_h: {BIAS_DEG_H}
           angle_random_walk_deg_rth: {ARW_DEG_RTH}
     '''))
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(site), str(ROOT / 'scripts')]),
+    env = dict(os.environ, PYTHONPATH=str(site),
                PATH=os.pathsep.join([str(bin_dir), os.environ.get('PATH', '')]), ROS_LOG_DIR=str(tmp_path / 'ros_log'))
     proc = subprocess.run([sys.executable, '-c', RUN_BOTH, str(scenario), 'heao_b_acquisition_short', str(tmp_path),
                            str(STEPS)], env=env, capture_output=True, text=True, timeout=600, check=False)
