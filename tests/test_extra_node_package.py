@@ -97,7 +97,7 @@ def test_a_node_package_installed_outside_the_workspace_joins_both_engines(insta
           bias_deg_h: {BIAS_DEG_H}
           angle_random_walk_deg_rth: {ARW_DEG_RTH}
     '''))
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(site), str(ROOT / 'scripts')]),
+    env = dict(os.environ, PYTHONPATH=str(site),
                PATH=os.pathsep.join([str(bin_dir), os.environ.get('PATH', '')]), ROS_LOG_DIR=str(tmp_path / 'ros_log'))
     proc = subprocess.run([sys.executable, '-c', RUN_BOTH, str(scenario), 'heao_b_acquisition_short', str(tmp_path),
                            str(STEPS)], env=env, capture_output=True, text=True, timeout=600, check=False)
