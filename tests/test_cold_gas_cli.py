@@ -65,3 +65,22 @@ def test_a_gas_acquisition_row_has_no_magnetics_only_phase():
     assert 'time_magnetics_only_min' not in percentiles([row], seed=1)
     wheels = next(q for q in QUANTITIES if q.key == 'time_wheels_magnetics_min')
     assert list(values_of([row], wheels)[0]) == [3.0]
+
+
+@pytest.mark.parametrize(('text', 'message'), [
+    ('extends: heao_b_acquisition_short\nmodes:\n  initial_mode: gas_rate_damping\n',
+     "modes.initial_mode: 'gas_rate_damping' with modes.system 'heao' (the gas modes"),
+    ('extends: heao_b_acquisition_cold_gas_short\n'
+     'nodes: [rigid_body, reaction_wheels, magnetometer_sim, em_driver, acds_controller, ascs_mode_manager]\n',
+     "modes.system: 'heao_cold_gas' with node cold_gas not in the graph"),
+])
+def test_gas_modes_and_the_cold_gas_node_go_together(tmp_path, text, message):
+    """The packages' cross-key checks (ascs_mode_manager.nodes, cold_gas.nodes): the gas modes start only a
+    heao_cold_gas acquisition, and that mode logic flies only with node cold_gas."""
+    from acds_common.scenario import ScenarioError, load_scenario
+
+    path = tmp_path / 'bad.yaml'
+    path.write_text('name: bad\n' + text)
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(str(path))
+    assert message in str(err.value)
