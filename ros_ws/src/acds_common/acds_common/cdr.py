@@ -337,3 +337,21 @@ _TYPES = {
     'nav_msgs/msg/Odometry': _odometry,
     'diagnostic_msgs/msg/DiagnosticArray': _diagnostic_array,
 }
+
+#: The fields that carry data in each message type (what :class:`Codec` writes and reads; everything else is
+#: written as a constant): the contract an outside node reads or fills (``acds contract``). Units: the topic's.
+DATA_FIELDS: dict[str, str] = {
+    'rosgraph_msgs/msg/Clock': 'clock (the step time)',
+    'std_msgs/msg/String': 'data (text)',
+    'geometry_msgs/msg/Vector3Stamped': 'vector.x, vector.y, vector.z',
+    'geometry_msgs/msg/WrenchStamped': 'wrench.force.{x,y,z} (N), wrench.torque.{x,y,z} (N·m)',
+    'sensor_msgs/msg/MagneticField': 'magnetic_field.{x,y,z}, magnetic_field_covariance (row-major 3×3, unit², '
+                                     'zeros = unknown)',
+    'sensor_msgs/msg/Imu': 'angular_velocity.{x,y,z}, angular_velocity_covariance (row-major 3×3); orientation and '
+                           'linear acceleration not provided (covariance[0] = −1, REP-145)',
+    'nav_msgs/msg/Odometry': 'pose.pose.position (ECI, m), pose.pose.orientation (q body→ECI, x y z w), '
+                             'twist.twist.linear (ECI velocity, m/s), twist.twist.angular (ω body, rad/s); '
+                             'covariances zero',
+    'diagnostic_msgs/msg/DiagnosticArray': 'status[]: level, name (the node), message, hardware_id, values '
+                                           '(key/value strings)',
+}

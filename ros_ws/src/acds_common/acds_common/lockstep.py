@@ -57,6 +57,7 @@ from acds_common.parameters import (
     normalize,
 )
 from acds_common.stepper import StepError, load_stepper
+from acds_common.timing import DEADLINE_FAILURE, StepTimes
 
 #: QoS of every lockstep data topic: nothing is dropped between matched endpoints, late joiners
 #: get the history, and the history is deep enough for an observer (recorder) that runs up to
@@ -149,6 +150,8 @@ class _Port:
     publisher: Any
     stamp_offset: int = 0
     sent: int = 0
+    #: The node's /diagnostics: its own status carries the step timing (wall-clock keys).
+    diagnostics: bool = False
 
 
 @dataclass
@@ -192,7 +195,7 @@ class LockstepNode(Node):
             qos = LOCKSTEP_QOS if out.lockstep else COMMAND_QOS
             self._ports[out.key] = _Port(out, Codec(out.msg_type, out.frame_id, out.child_frame_id),
                                          self.create_publisher(message_class(out.msg_type), out.topic, qos),
-                                         out.stamp_offset)
+                                         out.stamp_offset, diagnostics=out.topic == topics.DIAGNOSTICS)
         self._inputs: dict[str, _InputTopic] = {}
         self._stages: list[_Stage] = []
         for st in self.spec.stages:
@@ -215,6 +218,9 @@ class LockstepNode(Node):
         self._last_intruder_check = 0.0
         self._unnamed_since: dict[str, float] = {}
         self._max_lag = max((i.lag for s in self._stages for i in s.inputs), default=0)
+        #: Wall time per step (issue 20 §4): each stage from ready to published, summed over the step's stages.
+        self.timing = StepTimes(self.params['deadline_ms'] / 1e3)
+        self._step_wall = 0.0
         if self.time_owner:
             self.total_steps: int = self.params['total_steps']
             self.real_time_factor: float = self.params['real_time_factor']
@@ -289,9 +295,17 @@ class LockstepNode(Node):
             if port is None:
                 raise LockstepError(f'{self.get_name()}: stepper returned undeclared output {key!r}')
             t_ns = (k + (0 if initial else port.stamp_offset)) * self.dt_ns
+            if port.diagnostics:
+                value = self._with_timing(value)
             for item in (value if port.output.many else (value,)):
                 port.publisher.publish(port.codec.encode(t_ns, item))
                 port.sent += 1
+
+    def _with_timing(self, statuses: Any) -> Any:
+        """The node's diagnostics with its step timing added to its own status (wall-clock keys)."""
+        own = next((i for i, st in enumerate(statuses) if st.name == self.spec.name), 0)
+        return tuple(st._replace(values=st.values + self.timing.diagnostic_values()) if i == own else st
+                     for i, st in enumerate(statuses))
 
     def _publish_clock(self, k: int) -> None:
         """Time owner only: announce step k on ``/clock`` (paced at ``real_time_factor``, on a timer)."""
@@ -399,8 +413,11 @@ class LockstepNode(Node):
                         break
                 else:
                     stage.next_step += 1
-                    self._last_progress = time.monotonic()
+                    self._last_progress = ready = time.monotonic()
                     self._run_stage(stage, k, values)
+                    self._step_wall += time.monotonic() - ready
+                    if stage is self._stages[-1]:
+                        self._step_done(k)
                     self._prune()
                     progressed = True
                     if self.done or self.failure:
@@ -423,6 +440,13 @@ class LockstepNode(Node):
             self.last_step = k
         elif self.time_owner and stage is self._stages[-1]:
             self._publish_clock(k + 1)
+
+    def _step_done(self, k: int) -> None:
+        """Step k's stages have all fired: record its wall time; over the deadline with ``deadline_strict``: fail."""
+        wall, self._step_wall = self._step_wall, 0.0
+        if self.timing.add(k, wall) and self.params['deadline_strict']:
+            self.fail(f'step {k} took {wall * 1e3:.3f} ms from its last input to its outputs, {DEADLINE_FAILURE} '
+                      f'{self.params["deadline_ms"]:g} ms (--deadline-strict)')
 
     def _prune(self) -> None:
         oldest = min(s.next_step for s in self._stages) - self._max_lag
@@ -648,6 +672,7 @@ def run_node(name: str, args: list[str] | None = None) -> int:
             code = EXIT_LOCKSTEP
         else:  # completed, or stopped by a signal: deliver what was published before leaving
             node.flush(timeout_s=2.0 if stop['signal'] is not None else 5.0)
+            print(f'[{name}] {node.timing.line()}', flush=True)
             if node.time_owner and node.done:
                 print(f'[{name}] {COMPLETE_PREFIX}{node.last_step}', flush=True)
     except (ConfigError, ValueError) as exc:

@@ -53,6 +53,9 @@ LOCKSTEP: tuple[ParamSpec, ...] = (
     ParamSpec('input_timeout_s', 'float', 30.0, 'wall seconds a stage may wait for an input before the run '
               'fails', 's', 0.1, 3600.0),
     ParamSpec('seed', 'int', 1, 'scenario random seed (deterministic noise streams)', '', 0, 2**31 - 1),
+    ParamSpec('deadline_ms', 'float', 0.0, 'wall-time budget of one step, from its last input to its published '
+              'outputs (0: none); steps over it are counted (issue 20 §4)', 'ms', 0.0, 3.6e6),
+    ParamSpec('deadline_strict', 'bool', False, 'fail the run at the first step over deadline_ms'),
     ParamSpec('vehicle', 'str', '', 'the formation vehicle this node belongs to (its namespace /acds/<vehicle>); '
               "'' in a single-vehicle graph"),
 )

@@ -31,6 +31,7 @@ from acds_common.graph import Graph, build_graph
 from acds_common.lockstep import LAUNCHER_PID_ENV, STOP_GRACE_S, completed_step
 from acds_common.parameters import node_parameters, parameters_yaml
 from acds_common.scenario import Scenario
+from acds_common.timing import DEADLINE_FAILURE, parse_line
 
 from . import shm
 from .monitor import RunMonitor
@@ -62,6 +63,8 @@ class NodeProcess:
     killed_after_s: float | None = None
     #: The last step of the run, as the time owner announced it on leaving a completed run.
     completed_step: int | None = None
+    #: The node's step timing, as it announced it on leaving (:mod:`acds_common.timing`); None until then.
+    timing: dict[str, Any] | None = None
 
 
 @dataclass
@@ -78,6 +81,9 @@ class RunResult:
     monitor: RunMonitor | None = None
     #: What went wrong without costing the run anything (a node that hung on its way out).
     warnings: list[str] = field(default_factory=list)
+    #: Each node's step wall times (p50/p99/max ms, steps over its deadline), by instance: the machine's, never
+    #: the data's, so kept out of the summary (and of its truth digest); None for a node that left no report.
+    timing: dict[str, dict[str, Any] | None] = field(default_factory=dict)
 
 
 class DomainLease:
@@ -282,6 +288,10 @@ class GraphRun:
         for line in stream:
             line = line.rstrip('\n')
             proc.completed_step = completed_step(line) if proc.completed_step is None else proc.completed_step
+            timing = parse_line(line)
+            if timing is not None:
+                proc.timing = timing
+                continue
             proc.tail.append(line)
             self.echo(f'[{proc.name}] {line}')
 
@@ -337,7 +347,8 @@ class GraphRun:
             head = f'node {proc.name} did not stop within {proc.killed_after_s:g} s of SIGINT (the launcher killed it)'
         if failure:
             head += f': {failure[-1]}'
-        blame = self.monitor.blame() if self.monitor is not None and code == 3 else None
+        over_deadline = any(DEADLINE_FAILURE in line for line in failure)
+        blame = self.monitor.blame() if self.monitor is not None and code == 3 and not over_deadline else None
         if blame:
             head = f'{blame} (the graph stopped waiting for it); ' + head
         return f'{head}\n  last lines of {proc.name}:\n{lines}'
@@ -364,7 +375,11 @@ class GraphRun:
             raise LaunchError(self._death_report(self.processes[name], bad[name]))
         self._check_health()
         summary = self.observer.summary(final, wall)
-        return RunResult(self.scenario, final, wall, summary, codes, self.record, self.monitor, warnings)
+        for proc in self.processes.values():  # each node's last line (its timing) is read once its output closes
+            if proc.reader is not None:
+                proc.reader.join(timeout=2.0)
+        timing = {name: proc.timing for name, proc in self.processes.items()}
+        return RunResult(self.scenario, final, wall, summary, codes, self.record, self.monitor, warnings, timing)
 
     def _drain(self, final: int) -> None:
         """Wait until the monitor holds every step 0…``final`` of /clock and of every per-step topic, as long as it

@@ -119,6 +119,18 @@ def _own(data: bytes, node: str) -> bool:
     return bool(m.status) and m.status[0].name == node
 
 
+def _without_wall_clock(data: bytes) -> bytes:
+    """A raw DiagnosticArray with its wall-clock keys (:data:`acds_common.messages.WALL_CLOCK_PREFIX`: the
+    host's step timing) left out: they describe the machine the bag was recorded on, not the node's data."""
+    from acds_common.cdr import Codec
+    from acds_common.messages import WALL_CLOCK_PREFIX
+
+    codec = Codec(topics.TYPES[topics.DIAGNOSTICS])
+    t_ns, statuses = codec.decode(data)
+    return codec.encode(t_ns, tuple(st._replace(values=tuple(kv for kv in st.values if not kv[0].startswith(
+        WALL_CLOCK_PREFIX))) for st in statuses))
+
+
 def _diff(rec: Any, new: Any, tol: float, where: str) -> tuple[str | None, float, str]:
     """(first field differing beyond tol or None, largest float difference, where it is) of two messages."""
     a, b = list(iter_fields(rec)), list(iter_fields(new))
@@ -158,8 +170,10 @@ def compare_outputs(bag: Bag, node: str, outputs: list[str], new: dict[str, list
     first: tuple[tuple[int, bool, str], str] | None = None
     top: tuple[float, tuple[int, bool, str], str] | None = None
     for topic, t, rec_raw in bag.messages(outputs):
-        if topic == DIAGNOSTICS and not _own(rec_raw, node):
-            continue
+        if topic == DIAGNOSTICS:
+            if not _own(rec_raw, node):
+                continue
+            rec_raw = _without_wall_clock(rec_raw)
         if keyed[topic]:
             k = t // dt_ns
         else:
@@ -168,6 +182,8 @@ def compare_outputs(bag: Bag, node: str, outputs: list[str], new: dict[str, list
         result.compared[topic] = result.compared.get(topic, 0) + 1
         where = f'topic {topic} step {k}' if keyed[topic] else f'topic {topic} message #{k}'
         new_raw = now[topic].get(k)
+        if new_raw is not None and topic == DIAGNOSTICS:
+            new_raw = _without_wall_clock(new_raw)
         if new_raw is None:
             text: str | None = f'{where}: recorded, but the node published nothing for it'
         elif new_raw == rec_raw:

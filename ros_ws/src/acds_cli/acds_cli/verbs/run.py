@@ -73,6 +73,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             raise UsageError(f'--until-min {args.until_min:g}: {steps:,} steps of {scenario.control_period_s} s, '
                              f'more than the {MAX_STEPS:,} a run may have')
     direct = args.engine == 'direct'
+    overrides = _deadlines(args, scenario, direct)
     if direct and args.rtf:
         raise UsageError('--rtf paces the process graph\'s clock; the direct engine has none (use --engine graph)')
     check_output_dir('--run-dir' if args.run_dir else 'run folder', Path(args.run_dir or workspace() / 'runs'))
@@ -104,7 +105,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         run_dir.mkdir(parents=True, exist_ok=True)
         engine = DirectRun(scenario, steps=steps, echo=echo, progress=progress, **options)
     else:
-        engine = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=progress, **options)
+        engine = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=progress,
+                          overrides=overrides, **options)
     print(f'[acds] scenario {scenario.name}: {engine.steps} steps of {scenario.control_period_s} s '
           f'({engine.steps * scenario.control_period_s / 60:.1f} min sim), '
           + ('direct engine (one process, no DDS)' if direct else f'nodes {", ".join(scenario.get("", "nodes"))}')
@@ -113,7 +115,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         if direct:
             if engine.live_sink is not None:
                 _announce_live(engine.live_sink.port, args.foxglove_host)
-            summary = engine.run().summary
+            summary, timing = engine.run().summary, None
         else:
             with engine:
                 print(f'[acds] ROS domain {engine.lease.domain_id}' + (f'; recording into {bag}' if bag else ''),
@@ -123,7 +125,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                 result = engine.wait()
                 for warning in result.warnings:
                     print(f'[acds] WARNING: {warning}', file=sys.stderr)
-                summary = result.summary
+                summary, timing = result.summary, result.timing
     except LaunchError as exc:
         print(f'[acds] run failed: {exc}', file=sys.stderr)
         return 1
@@ -134,15 +136,56 @@ def cmd_run(args: argparse.Namespace) -> int:
         return 128 + signum
     print('\n' + format_summary(summary))
     print_tables(summary)
+    if timing is not None:
+        from acds_common.timing import deadline_warnings, table
+        print('\nStep wall time per node (last input of step k → its outputs published; the machine\'s, not the data\'s):')
+        print('\n'.join(table(timing)))
     if args.summary_json:
-        write_summary_json(Path(args.summary_json), summary)
+        write_summary_json(Path(args.summary_json), summary if timing is None else {**summary, 'timing': timing})
     if bag is not None:
         from ..bag.plots import make_plots
         plot_dir = run_dir / 'plots'  # the run's own folder: never shared with another run recorded beside the bag
         plots = make_plots(bag, plot_dir)
         print(f'[acds] bag {bag} (./scripts/acds info {bag}); {len(plots)} plots in {plot_dir}', file=sys.stderr)
+    if timing is not None:
+        for warning in deadline_warnings(timing):
+            print(f'[acds] WARNING: deadline: {warning}', file=sys.stderr)
     return 0
 
+
+def deadline(text: str) -> tuple[str, float]:
+    """``NODE=MS`` of ``--deadline-ms``: a node and a finite budget > 0, milliseconds."""
+    import math
+
+    node, sep, ms = text.partition('=')
+    try:
+        value = float(ms)
+    except ValueError:
+        value = math.nan
+    if not sep or not node or not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f'expected NODE=MS with a finite MS > 0, got {text!r}')
+    return node, value
+
+
+def _deadlines(args: argparse.Namespace, scenario, direct: bool) -> dict[str, dict[str, object]] | None:
+    """The node parameter overrides of ``--deadline-ms`` / ``--deadline-strict`` (checked before anything starts)."""
+    if not args.deadline_ms:
+        if args.deadline_strict:
+            raise UsageError('--deadline-strict needs at least one --deadline-ms NODE=MS')
+        return None
+    if direct:
+        raise UsageError('--deadline-ms: step wall times are measured per node process (the graph engine); the direct '
+                         'engine has none (use --engine graph)')
+    from acds_common.parameters import node_parameters
+
+    nodes = list(node_parameters(scenario, 1))
+    out: dict[str, dict[str, object]] = {}
+    for node, ms in args.deadline_ms:
+        if node not in nodes:
+            raise UsageError(f'--deadline-ms {node}={ms:g}: scenario {scenario.name} runs no such node '
+                             f'(its nodes: {", ".join(nodes)})')
+        out[node] = {'deadline_ms': ms, 'deadline_strict': args.deadline_strict}
+    return out
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -171,5 +214,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help='graph: one process per node over DDS (default); direct: the same steppers in this process, '
                         'no DDS — bit-identical data, faster')
     add_foxglove_options(p, 'the running graph')
+    p.add_argument('--deadline-ms', type=deadline, action='append', metavar='NODE=MS',
+                   help="a node's wall-time budget per step, ms (repeatable): steps over it are counted and reported "
+                        'as a warning at the end')
+    p.add_argument('--deadline-strict', action='store_true', help='fail the run at the first step over a deadline')
     p.set_defaults(func=cmd_run)
 

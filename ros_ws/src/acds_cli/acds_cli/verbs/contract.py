@@ -1,0 +1,165 @@
+"""``acds contract SCENARIO --node NODE [--format md|yaml]``: what a node of a scenario's graph reads and publishes.
+
+The contract a replacement for the node implements (issue 20 §2): every input topic (its source node, lag,
+message type, QoS, the step/stamp rule), every output (type, frame, unit, per step or not, QoS), the fields
+that carry data, the rate, and the node's ROS parameters (type, unit, range, value) as a parameters file.
+Everything comes from the declarations the graph is built from (:func:`acds_common.graph.build_graph` of
+:func:`acds_common.parameters.node_parameters`, the packages' :class:`~acds_common.graph.Topic` s, the
+lockstep host's QoS profiles), so the contract cannot disagree with the graph that runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+import yaml
+
+from ..arguments import UsageError
+from .run import DEFAULT_SCENARIO
+
+
+def _qos(profile: Any) -> dict[str, Any]:
+    return {'reliability': profile.reliability.name.lower(), 'durability': profile.durability.name.lower(),
+            'history': profile.history.name.lower(), 'depth': profile.depth}
+
+
+def _topic_info(name: str) -> dict[str, Any]:
+    """Type, unit, meaning and data fields of a topic, as its package (or the mechanism) declares it."""
+    from acds_common import topics
+    from acds_common.cdr import DATA_FIELDS
+    from acds_common.graph import declared_topics
+
+    msg_type = topics.type_of(name)
+    decl = declared_topics().get(topics.relative(name))
+    if decl is None:  # a formation vehicle's topic: the single-vehicle declaration under its namespace
+        decl = declared_topics().get(topics.relative(name).partition('/')[2])
+    return {'type': msg_type, 'unit': decl.unit if decl else '', 'meaning': decl.doc if decl else '',
+            'data_fields': DATA_FIELDS[msg_type]}
+
+
+def node_contract(scenario: Any, node: str, steps: int | None = None) -> dict[str, Any]:
+    """The contract of instance ``node`` in ``scenario``'s graph (UsageError when the graph has no such node)."""
+    from acds_common import topics
+    from acds_common.graph import build_graph
+    from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS
+    from acds_common.parameters import node_param_specs, node_parameters, parameters_yaml
+
+    steps = steps if steps is not None else scenario.total_steps()
+    params = node_parameters(scenario, steps)
+    if node not in params:
+        raise UsageError(f'--node {node}: scenario {scenario.name} runs no such node (its nodes: {", ".join(params)})')
+    graph = build_graph(params)
+    spec = graph.nodes[node]
+    dt = scenario.control_period_s
+    lockstep_qos, command_qos = _qos(LOCKSTEP_QOS), _qos(COMMAND_QOS)
+    inputs = []
+    for stage in spec.stages:
+        for inp in stage.inputs:
+            present = graph.present(inp.source)
+            rule = (f"step k reads the source's step k−{inp.lag} message (stamp (k−{inp.lag})·Δt; none for k < {inp.lag})"
+                    if inp.lag else "step k reads the source's step k message (stamp k·Δt)")
+            inputs.append({'topic': spec.topic(inp.topic), **_topic_info(spec.topic(inp.topic)), 'source': inp.source,
+                           'present': present, 'stage': stage.name, 'lag': inp.lag, 'qos': lockstep_qos,
+                           'rule': rule if present else 'source not in this graph: the input is absent (not subscribed)'})
+    clock = (not spec.time_owner and
+             any(not any(i.lag == 0 and graph.present(i.source) for i in st.inputs) for st in spec.stages))
+    outputs = []
+    for out in spec.outputs:
+        name = spec.topic(out.topic)
+        when = 'one message per step' if out.every_step else 'only when the node has something to say'
+        if out.many:
+            when += ' (several messages of one step possible)'
+        outputs.append({'topic': name, **_topic_info(name), 'frame_id': out.frame_id,
+                        'child_frame_id': out.child_frame_id, 'every_step': out.every_step,
+                        'stamp_offset': out.stamp_offset, 'qos': lockstep_qos if out.lockstep else command_qos,
+                        'rule': f'{when}, the output of step k stamped (k+{out.stamp_offset})·Δt'
+                        if out.stamp_offset else f'{when}, the output of step k stamped k·Δt'})
+    if spec.time_owner:
+        outputs.append({'topic': topics.CLOCK, **_topic_info(topics.CLOCK), 'frame_id': '', 'child_frame_id': '',
+                        'every_step': True, 'stamp_offset': 0, 'qos': lockstep_qos,
+                        'rule': 'announces step k (clock k·Δt) once the outputs of step k are published'})
+    rules = ['an output for step k is stamped k·Δt plus its declared stamp_offset (integer nanoseconds, exactly)',
+             "a lag-L input of step k is the source's step k−L message; an input whose source is not in the graph "
+             'is absent',
+             "the node fires its stages in order, once per step, each when it holds all of that step's inputs"]
+    if clock:
+        rules.append(f'a stage without a lag-0 input from a present node follows {topics.CLOCK} '
+                     f'({topics.TYPES[topics.CLOCK]}, {lockstep_qos["reliability"]}): step k exists once /clock says k·Δt')
+    if not spec.time_owner:
+        rules.append(f'once every present input has a publisher, the node publishes its name once on {topics.READY} '
+                     f'({topics.TYPES[topics.READY]}, lockstep QoS): the time owner starts step 0 when every node has')
+    specs = {s.name: s for s in node_param_specs(spec.name, params[node].get('formation_vehicles') or ())}
+    parameters = [{'name': name, 'type': specs[name].kind, 'unit': specs[name].unit,
+                   'range': [specs[name].lo, specs[name].hi] if specs[name].lo is not None or specs[name].hi is not None
+                   else None, 'choices': list(specs[name].choices) or None, 'value': value}
+                  for name, value in sorted(params[node].items())]
+    return {'node': node, 'package': spec.package, 'scenario': scenario.name, 'stepper': spec.stepper,
+            'namespace': spec.namespace, 'control_period_s': dt, 'rate_hz': 1.0 / dt, 'time_owner': spec.time_owner,
+            'follows_clock': clock, 'ground_commands': spec.ground_commands, 'rules': rules,
+            'inputs': inputs, 'outputs': outputs, 'parameters': parameters,
+            'parameters_file': parameters_yaml({node: params[node]})}
+
+
+def _cell(value: Any) -> str:
+    return str(value).replace('|', '\\|') if value not in (None, '') else '—'
+
+
+def markdown(c: dict[str, Any]) -> str:
+    """The contract as Markdown (tables of inputs, outputs and parameters; the parameters file)."""
+    lines = [f'# Contract of `{c["node"]}` in `{c["scenario"]}`', '',
+             f'Package `{c["package"]}`, stepper `{c["stepper"]}`, namespace `{c["namespace"]}`. '
+             f'Rate: Δt = {c["control_period_s"]:g} s ({c["rate_hz"]:g} Hz)'
+             + ('; time owner' if c['time_owner'] else '') + ('; follows /clock' if c['follows_clock'] else '')
+             + ('; takes ground commands (ground/command, command QoS)' if c['ground_commands'] else '') + '.', '',
+             '## Step and stamp rules', '', *(f'- {r}' for r in c['rules']), '',
+             '## Inputs', '',
+             '| topic | type | unit | source | lag | stage | QoS | data fields | rule |',
+             '| --- | --- | --- | --- | --- | --- | --- | --- | --- |']
+    for i in c['inputs']:
+        qos = f'{i["qos"]["reliability"]}, {i["qos"]["durability"]}, {i["qos"]["history"]} {i["qos"]["depth"]}'
+        lines.append(f'| `{i["topic"]}` | {i["type"]} | {_cell(i["unit"])} | {i["source"]}'
+                     f'{"" if i["present"] else " (absent)"} | {i["lag"]} | {i["stage"]} | {qos} | '
+                     f'{_cell(i["data_fields"])} | {i["rule"]} |')
+    lines += ['', '## Outputs', '',
+              '| topic | type | unit | frame | every step | stamp | QoS | data fields |',
+              '| --- | --- | --- | --- | --- | --- | --- | --- |']
+    for o in c['outputs']:
+        qos = f'{o["qos"]["reliability"]}, {o["qos"]["durability"]}, {o["qos"]["history"]} {o["qos"]["depth"]}'
+        frame = o['frame_id'] + (f' → {o["child_frame_id"]}' if o['child_frame_id'] else '')
+        lines.append(f'| `{o["topic"]}` | {o["type"]} | {_cell(o["unit"])} | {_cell(frame)} | '
+                     f'{"yes" if o["every_step"] else "no"} | (k+{o["stamp_offset"]})·Δt | {qos} | '
+                     f'{_cell(o["data_fields"])} |')
+    lines += ['', '## Parameters', '', '| name | type | unit | range | value |', '| --- | --- | --- | --- | --- |']
+    for p in c['parameters']:
+        rng = p['range'] and f'[{_cell(p["range"][0])}, {_cell(p["range"][1])}]'
+        lines.append(f'| {p["name"]} | {p["type"]} | {_cell(p["unit"])} | {_cell(rng or p["choices"])} | '
+                     f'{_cell(p["value"])} |')
+    lines += ['', 'Parameters file (`--ros-args --params-file FILE`):', '', '```yaml', c['parameters_file'].rstrip(),
+              '```', '']
+    return '\n'.join(lines)
+
+
+def _contract(args: argparse.Namespace) -> int:
+    from acds_common.scenario import load_scenario
+
+    c = node_contract(load_scenario(args.scenario or DEFAULT_SCENARIO), args.node)
+    if args.format == 'yaml':
+        sys.stdout.write(yaml.safe_dump(c, sort_keys=False, allow_unicode=True))
+    else:
+        sys.stdout.write(markdown(c))
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``contract`` verb."""
+    p = sub.add_parser('contract', help="print a node's contract: its topics, QoS, stamp rules, parameters",
+                       description='Print what NODE reads and publishes in SCENARIO\'s graph: every input (source, '
+                                   'lag, type, QoS, stamp rule), every output (type, frame, unit, per step or not, '
+                                   'QoS), the data fields, the rate and its ROS parameters, from the declarations '
+                                   'the graph is built from.')
+    p.add_argument('scenario', nargs='?', help=f'scenario name or path (default {DEFAULT_SCENARIO})')
+    p.add_argument('--node', required=True, help='the node (e.g. acds_controller; <vehicle>/<node> in a formation)')
+    p.add_argument('--format', choices=('md', 'yaml'), default='md', help='Markdown (default) or YAML')
+    p.set_defaults(func=_contract)
