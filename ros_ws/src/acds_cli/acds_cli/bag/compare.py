@@ -206,7 +206,7 @@ def run_compare(bag_path: Path | str, node: str, *, tolerance: float = 0.0, scen
                 sets: dict[str, Any] | None = None, log: Any = None) -> CompareResult:
     """Replay ``bag_path``'s inputs into ``node``'s stepper and compare its outputs (raises BagError on set-up)."""
     from acds_common.cdr import Codec
-    from acds_common.graph import node_spec
+    from acds_common.graph import declared_node, node_spec
     from acds_common.parameters import ConfigError, normalize
     from acds_common.stepper import load_stepper
 
@@ -216,14 +216,14 @@ def run_compare(bag_path: Path | str, node: str, *, tolerance: float = 0.0, scen
     dt_ns = bag.control_period_ns
     if not dt_ns or not bag.has(topics.CLOCK):
         raise BagError(f'bag {bag.path}: no /clock messages: nothing to step the node with')
-    try:
+    try:  # the time owner is refused by its declaration, before its parameters (it has no replayable inputs)
+        if declared_node(node)[1].time_owner:
+            raise BagError(f'{node} is the time owner: compare replays the truth into a non-owner node')
         params = normalize(node, node_parameters(bag, node, scenario, sets))
         spec = node_spec(node, params)
         stepper = load_stepper(spec.stepper)(params, log=lambda level, text: log(f'[{node}] [{level}] {text}'))
     except (ConfigError, KeyError, ValueError) as exc:
         raise BagError(f'node {node}: {exc}') from None
-    if spec.time_owner:
-        raise BagError(f'{node} is the time owner: compare replays the truth into a non-owner node')
     ports = {topics.resolve(o.topic): o for o in spec.outputs}
     outputs = sorted(t for t in ports if bag.has(t))
     if not [t for t in outputs if t != DIAGNOSTICS]:
