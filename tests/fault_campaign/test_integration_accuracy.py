@@ -108,7 +108,7 @@ def test_the_running_check_stops_a_run_whose_rates_outgrow_the_step() -> None:
     step = RigidBodyStep(normalize('rigid_body', params['rigid_body']), log=lambda level, text: lines.append((level, text)))
     step.start()
     zero = (0.0, 0.0, 0.0)
-    inputs = {'mode': None, 'wheel_h': zero, 'wheel_hdot': zero, 'dipole': zero}
+    inputs = {'mode': None, 'wheel_h': zero, 'wheel_hdot': zero, 'dipole': zero, 'gas_wrench': None}  # no cold_gas node
     step.integrate(0, 0.0, inputs)
     assert lines == [] and step.step_angle_max_rad < STEP_ANGLE_WARN_RAD
     step.model._w = (0.2, 0.2, 0.2)  # |ω| 0.35 rad/s: θ 0.17 rad, warned once

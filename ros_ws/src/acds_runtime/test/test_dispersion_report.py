@@ -14,7 +14,8 @@ INF = math.inf
 def _row(i, mag, acq, sim=100.0, **kw):
     return {'index': i, 'name': f's{i}', 'time_magnetics_only_min': mag, 'acquisition_time_min': acq,
             'time_wheels_magnetics_min': None if mag is None or acq is None else acq - mag,
-            'captured': acq is not None, 'sim_minutes': sim, 'final_wheel_momentum_ftlbs': 1.0 if acq else 9.0, **kw}
+            'captured': acq is not None, 'mode_1b_reached': mag is not None, 'sim_minutes': sim,
+            'final_wheel_momentum_ftlbs': 1.0 if acq else 9.0, **kw}
 
 
 def test_percentiles_match_numpy_and_a_censored_tail_is_unknown():
