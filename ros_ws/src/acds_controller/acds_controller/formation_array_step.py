@@ -14,27 +14,19 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from acds_common.stepper import Stepper
 from acds_common.validation import scenario_key
 
 from acds_controller.formation_array import ArrayController, ArraySpinLaw
 from acds_controller.formation_control import AttitudeLaw
-from acds_controller.formation_controller_step import command_outputs, controlled_vehicle, measurements_of
+from acds_controller.formation_controller_step import ArrayMemberStep, controlled_vehicle
 from acds_controller.magnetic_laws import ControllerError
 
 
-class FormationArrayStep(Stepper):
+class FormationArrayStep(ArrayMemberStep):
     """One vehicle's array controller (module docstring)."""
-
-    node = 'formation_controller'
 
     def __init__(self, params: dict[str, Any], log: Any = None) -> None:
         super().__init__(params, log)
-        self.names: list[str] = list(params['formation_vehicles'])
-        if self.vehicle not in self.names:
-            raise ControllerError(f'formation_controller: belongs to one of the vehicles {self.names}, got '
-                                  f'{self.vehicle!r}')
-        self.index = self.names.index(self.vehicle)
         f = self.section('formation')
         places = np.array([self.section('vehicle', v)['array_position'] for v in self.names], dtype=float)
         with scenario_key('formation', ControllerError):
@@ -44,8 +36,3 @@ class FormationArrayStep(Stepper):
                 [controlled_vehicle(v, self.section('spacecraft', v), self.section('vehicle', v)) for v in self.names],
                 f['frame'], law, AttitudeLaw(f['attitude_natural_frequency'], f['attitude_damping_ratio']),
                 self.control_period_s, f['max_force'])
-
-    def control(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
-        """Stage ``control``: every vehicle's command from every vehicle's measurements; this vehicle's part."""
-        commands = self.core.step(t_s, measurements_of(self.names, inp, self.control_period_s))
-        return command_outputs(k, commands[self.index], f'{self.vehicle}/{self.node}')

@@ -118,3 +118,25 @@ def command_outputs(k: int, command: VehicleCommand, source: str) -> dict[str, A
             values.update({f'{name}_{a}': f'{c:.6g}' for a, c in zip('xyz', vector, strict=True)})
         out['diagnostics'] = diagnostic(source, values)
     return out
+
+
+class ArrayMemberStep(Stepper):
+    """Base of the N-vehicle laws' steppers (``array_spin``, ``lqr``): this vehicle's place among the formation's
+    vehicles; :meth:`control` runs the subclass's ``core`` (set in its ``__init__``) on every vehicle's
+    measurements and publishes this vehicle's part."""
+
+    node = 'formation_controller'
+
+    def __init__(self, params: dict[str, Any], log: Any = None) -> None:
+        super().__init__(params, log)
+        self.names: list[str] = list(params['formation_vehicles'])
+        if self.vehicle not in self.names:
+            raise ControllerError(f'formation_controller: belongs to one of the vehicles {self.names}, got '
+                                  f'{self.vehicle!r}')
+        self.index = self.names.index(self.vehicle)
+        self.core: Any = None
+
+    def control(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
+        """Stage ``control``: every vehicle's command from every vehicle's measurements; this vehicle's part."""
+        commands = self.core.step(t_s, measurements_of(self.names, inp, self.control_period_s))
+        return command_outputs(k, commands[self.index], f'{self.vehicle}/{self.node}')

@@ -12,10 +12,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from acds_common.stepper import Stepper
 from acds_common.validation import scenario_key
 
-from acds_controller.formation_controller_step import command_outputs, controlled_vehicle, measurements_of
+from acds_controller.formation_controller_step import ArrayMemberStep, controlled_vehicle
 from acds_controller.formation_lqr import LqrFormationController, LqrWeights
 from acds_controller.magnetic_laws import ControllerError
 
@@ -37,21 +36,9 @@ def lqr_controller(formation: dict[str, Any], names: list[str], section: Any) ->
             places, formation['spin_rate'], weights)
 
 
-class FormationLqrStep(Stepper):
+class FormationLqrStep(ArrayMemberStep):
     """One vehicle's LQR formation controller (module docstring)."""
-
-    node = 'formation_controller'
 
     def __init__(self, params: dict[str, Any], log: Any = None) -> None:
         super().__init__(params, log)
-        self.names: list[str] = list(params['formation_vehicles'])
-        if self.vehicle not in self.names:
-            raise ControllerError(f'formation_controller: belongs to one of the vehicles {self.names}, got '
-                                  f'{self.vehicle!r}')
-        self.index = self.names.index(self.vehicle)
         self.core = lqr_controller(self.section('formation'), self.names, self.section)
-
-    def control(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
-        """Stage ``control``: every vehicle's command from every vehicle's measurements; this vehicle's part."""
-        commands = self.core.step(t_s, measurements_of(self.names, inp, self.control_period_s))
-        return command_outputs(k, commands[self.index], f'{self.vehicle}/{self.node}')
