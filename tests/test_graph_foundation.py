@@ -57,6 +57,20 @@ def test_hung_node_fails_the_run_naming_node_and_topic(launch_graph):
     assert text.startswith('reaction_wheels stopped at step'), text  # the node whose outputs stopped
     # which of its outputs (torque, momentum) is missing depends on where in its step the SIGSTOP landed
     assert re.search(r'/acds/wheels/(momentum|torque) \(from reaction_wheels', text), text
+    assert 'last lines of reaction_wheels:' in text and 'the process is stopped' in text, text
+
+
+def test_a_node_the_graph_waits_on_is_asked_for_its_python_stack(launch_graph):
+    """A hung node is reported with where it hangs: the launcher asks a live node for its stack (faulthandler on
+    STACK_SIGNAL), which costs the node nothing (it steps on)."""
+    with launch_graph('free_tumble_heao_b', steps=100000) as graph:
+        wait_for_messages(graph, topics.CLOCK, 10)
+        report = graph._stack_of(graph.processes['reaction_wheels'])
+        before = graph.monitor.clock_step
+        graph.monitor.wait_for(lambda: graph.monitor.clock_step > before + 10, timeout_s=60.0)
+        assert graph.monitor.clock_step > before + 10, 'the graph stopped stepping after the stack dump'
+        assert graph.exit_report() is None
+    assert 'last lines of reaction_wheels:' in report and 'File "' in report, report
 
 
 def test_unknown_node_parameter_is_one_precise_error(launch_graph):
@@ -86,3 +100,28 @@ def test_a_node_that_hangs_on_its_way_out_is_killed_and_reported_and_the_run_sta
     assert result.steps == 20 and result.exit_codes[stuck[0]] == -signal.SIGKILL
     assert [w.splitlines()[0] for w in result.warnings] == [
         f'node {stuck[0]} did not stop within 1 s of SIGINT (the launcher killed it)']
+
+
+def test_publisher_check_counts_unnamed_publishers_against_the_declared_nodes_not_yet_named():
+    """A node stopped before discovery learnt its name stays unnamed: not an intruder while a declared node is
+    unaccounted for; one more unnamed publisher than that is, after the grace; a named stranger at once."""
+    from types import SimpleNamespace
+
+    from acds_common.lockstep import UNNAMED, UNNAMED_GRACE_S, PublisherCheck
+
+    def info(name):
+        return SimpleNamespace(node_name=name, node_namespace='/' if name == UNNAMED else '/acds')
+
+    declared = {'rigid_body', 'reaction_wheels'}
+    check = PublisherCheck()
+    frozen = [info('rigid_body'), info(UNNAMED)]
+    assert check.strangers('/diagnostics', frozen, declared, 0.0) == []
+    assert check.strangers('/diagnostics', frozen, declared, 10 * UNNAMED_GRACE_S) == []
+    extra = frozen + [info(UNNAMED)]
+    assert check.strangers('/diagnostics', extra, declared, 100.0) == []  # the grace starts
+    assert check.strangers('/diagnostics', extra, declared, 100.0 + UNNAMED_GRACE_S) == \
+        ['a publisher without a ROS node name']
+    named = [info('rigid_body'), info('reaction_wheels'), info('intruder')]
+    assert check.strangers('/diagnostics', named, declared, 0.0) == ['intruder']
+    twice = [info('rigid_body'), info('rigid_body')]
+    assert check.strangers('/diagnostics', twice, declared, 0.0) == ['a second node named rigid_body']

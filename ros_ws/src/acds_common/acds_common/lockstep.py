@@ -90,6 +90,11 @@ STOP_GRACE_S = 10.0
 #: A node still running this long after its main loop ended (its flush takes at most 5 s) prints every thread's
 #: stack to its output, so the launcher's report of a hung exit says where it hung.
 STUCK_TRACE_S = 7.0
+#: How a node announces a lockstep failure on stderr (the launcher names the first node to print it).
+FAILURE_MARK = 'LOCKSTEP FAILURE: '
+#: The signal that makes a node print its Python stack (faulthandler): the launcher asks a node the graph
+#: waited on for it, so a hang is reported with where it hangs.
+STACK_SIGNAL = signal.SIGUSR1
 #: What the time owner prints as it leaves a completed run, followed by its last step: the launcher's word for where
 #: the run ends (the run monitor may still be draining steps before it; issue 18 §1).
 COMPLETE_PREFIX = 'RUN COMPLETE at step '
@@ -154,6 +159,34 @@ class _Port:
     diagnostics: bool = False
 
 
+class PublisherCheck:
+    """Who publishes a topic against who may (one rule for the nodes and the run monitor).
+
+    Discovery can report a publisher before its node's name (``_NODE_NAME_UNKNOWN_``, the name travels on a
+    separate discovery topic): an unnamed publisher may be a declared node whose name has not arrived, and a
+    node stopped (SIGSTOP, a debugger) before it arrived stays unnamed. So unnamed publishers count as strangers
+    only beyond the declared nodes not seen by name, and only once that excess has lasted
+    :data:`UNNAMED_GRACE_S`; a named publisher that is not declared, or a second node of a declared name, is a
+    stranger at once.
+    """
+
+    def __init__(self) -> None:
+        self._excess_since: dict[str, float] = {}
+
+    def strangers(self, topic: str, infos: Any, declared: set[str], now: float) -> list[str]:
+        """The publishers of ``topic`` (rclpy endpoint infos) the graph does not declare, as sorted phrases."""
+        names = [UNNAMED if i.node_name == UNNAMED else instance_name(i.node_namespace, i.node_name) for i in infos]
+        named = [n for n in names if n != UNNAMED]
+        out = sorted({n for n in named if n not in declared})
+        out += [f'a second node named {s}' for s in sorted(declared) if named.count(s) > 1]
+        excess = names.count(UNNAMED) - len(declared - set(named))
+        if excess <= 0:
+            self._excess_since.pop(topic, None)
+        elif now - self._excess_since.setdefault(topic, now) >= UNNAMED_GRACE_S:
+            out.append('a publisher without a ROS node name')
+        return out
+
+
 @dataclass
 class _InputTopic:
     topic: str
@@ -216,7 +249,7 @@ class LockstepNode(Node):
         #: The launcher that started this node (0: started by hand); while it is stopped the graph is paused.
         self._launcher = int(os.environ.get(LAUNCHER_PID_ENV, '0') or 0)
         self._last_intruder_check = 0.0
-        self._unnamed_since: dict[str, float] = {}
+        self._publisher_check = PublisherCheck()
         self._max_lag = max((i.lag for s in self._stages for i in s.inputs), default=0)
         #: Wall time per step (issue 20 §4): each stage from ready to published, summed over the step's stages.
         self.timing = StepTimes(self.params['deadline_ms'] / 1e3)
@@ -461,25 +494,11 @@ class LockstepNode(Node):
         return [self.resolve_topic_name(t) for t in self._inputs if self.count_publishers(t) == 0]
 
     def _check_intruders(self, now: float) -> None:
-        """Every input topic must have exactly the publishers the graph declares (here: its source node).
-
-        Discovery can report a new publisher before its node's name (``_NODE_NAME_UNKNOWN_``):
-        such a publisher is given :data:`UNNAMED_GRACE_S` to be named before it counts as an intruder.
-        """
+        """Every input topic must have exactly the publishers the graph declares (here: its source node)."""
         self._last_intruder_check = now
         for topic, sources in self._declared_publishers().items():
-            names = [UNNAMED if i.node_name == UNNAMED else instance_name(i.node_namespace, i.node_name)
-                     for i in self.get_publishers_info_by_topic(topic)]
-            unnamed = sum(1 for n in names if n == UNNAMED)
-            if unnamed:
-                first = self._unnamed_since.setdefault(topic, now)
-                if now - first < UNNAMED_GRACE_S:
-                    continue
-            else:
-                self._unnamed_since.pop(topic, None)
-            strangers = sorted({n if n != UNNAMED else 'a publisher without a ROS node name'
-                                for n in names if n not in sources})
-            strangers += [f'a second node named {s}' for s in sorted(sources) if names.count(s) > 1]
+            strangers = self._publisher_check.strangers(topic, self.get_publishers_info_by_topic(topic), sources,
+                                                        now)
             if strangers:
                 self.fail(f'{topic} has a publisher the graph does not declare ({", ".join(strangers)}); '
                           f'only {", ".join(sorted(sources))} may drive this input')
@@ -500,7 +519,7 @@ class LockstepNode(Node):
         """Seconds since the last watchdog tick that were a pause, not waiting: the whole gap when this process was
         not running, or the tick when its launcher is stopped (Ctrl-Z, SIGSTOP: it paces the graph)."""
         gap, self._last_tick = now - self._last_tick, now
-        return gap if gap > FROZEN_GAP_S or (self._launcher and _stopped(self._launcher)) else 0.0
+        return gap if gap > FROZEN_GAP_S or (self._launcher and is_stopped(self._launcher)) else 0.0
 
     def _watchdog(self) -> None:
         now = time.monotonic()
@@ -603,7 +622,7 @@ def release_node(executor: Any, node: Any, context: Any = None) -> None:
     rclpy.try_shutdown(context=context)
 
 
-def _stopped(pid: int) -> bool:
+def is_stopped(pid: int) -> bool:
     """Whether process ``pid`` is stopped (state T: SIGSTOP/SIGTSTP, or t: traced); False when it is gone."""
     try:
         with open(f'/proc/{pid}/stat', 'rb') as fh:
@@ -656,6 +675,7 @@ def run_node(name: str, args: list[str] | None = None) -> int:
 
     for sig in STOP_SIGNALS:
         signal.signal(sig, on_signal)
+    faulthandler.register(STACK_SIGNAL, file=sys.stderr, all_threads=True)
     node: LockstepNode | None = None
     executor: Any = None
     code = EXIT_OK
@@ -668,7 +688,7 @@ def run_node(name: str, args: list[str] | None = None) -> int:
             executor.spin_once(timeout_sec=0.1)
         faulthandler.dump_traceback_later(STUCK_TRACE_S, file=sys.stderr)
         if node.failure is not None:
-            print(f'[{name}] LOCKSTEP FAILURE: {node.failure}', file=sys.stderr, flush=True)
+            print(f'[{name}] {FAILURE_MARK}{node.failure}', file=sys.stderr, flush=True)
             code = EXIT_LOCKSTEP
         else:  # completed, or stopped by a signal: deliver what was published before leaving
             node.flush(timeout_s=2.0 if stop['signal'] is not None else 5.0)

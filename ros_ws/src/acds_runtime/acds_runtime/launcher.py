@@ -12,6 +12,7 @@ as any node dies (naming it, with its exit code and last lines).
 from __future__ import annotations
 
 import fcntl
+import math
 import os
 import shutil
 import signal
@@ -28,7 +29,15 @@ from typing import IO, Any
 import yaml
 from acds_common import topics
 from acds_common.graph import Graph, build_graph
-from acds_common.lockstep import LAUNCHER_PID_ENV, STOP_GRACE_S, completed_step
+from acds_common.lockstep import (
+    EXIT_LOCKSTEP,
+    FAILURE_MARK,
+    LAUNCHER_PID_ENV,
+    STACK_SIGNAL,
+    STOP_GRACE_S,
+    completed_step,
+    is_stopped,
+)
 from acds_common.parameters import node_parameters, parameters_yaml
 from acds_common.scenario import Scenario
 from acds_common.timing import DEADLINE_FAILURE, parse_line
@@ -57,7 +66,7 @@ class NodeProcess:
 
     name: str
     popen: subprocess.Popen[str]
-    tail: deque[str] = field(default_factory=lambda: deque(maxlen=15))
+    tail: deque[str] = field(default_factory=lambda: deque(maxlen=40))
     reader: threading.Thread | None = None
     #: Seconds it was given to stop after SIGINT when the launcher had to SIGKILL it (None: it stopped, or died).
     killed_after_s: float | None = None
@@ -65,6 +74,9 @@ class NodeProcess:
     completed_step: int | None = None
     #: The node's step timing, as it announced it on leaving (:mod:`acds_common.timing`); None until then.
     timing: dict[str, Any] | None = None
+    #: When the node announced its lockstep failure (monotonic s; None: it did not). A failed node may still be
+    #: leaving while the nodes waiting on it time out: the first to fail is the one the run names.
+    failed_at: float | None = None
 
 
 @dataclass
@@ -292,6 +304,8 @@ class GraphRun:
             if timing is not None:
                 proc.timing = timing
                 continue
+            if proc.failed_at is None and FAILURE_MARK in line:
+                proc.failed_at = time.monotonic()
             proc.tail.append(line)
             self.echo(f'[{proc.name}] {line}')
 
@@ -301,18 +315,21 @@ class GraphRun:
                           time.monotonic() - self._t0)
 
     def wait(self) -> RunResult:
-        """Wait until the time owner completes; raise LaunchError naming any node that dies first."""
+        """Wait until the time owner completes; raise LaunchError naming the node that failed first (a node that
+        announced a lockstep failure before the others timed out waiting on it, or the first to die)."""
         assert self.graph is not None
         owner = self.processes[self.graph.time_owner]
         while True:
             self._check_health()
-            for proc in self.processes.values():
-                code = proc.popen.poll()
-                if code is None:
-                    continue
-                if proc is owner and code == 0:
-                    return self._complete()
-                raise LaunchError(self._death_report(proc, code))
+            ended = {name: proc.popen.poll() for name, proc in self.processes.items()}
+            if ended[owner.name] == 0:
+                return self._complete()
+            failed = [proc for name, proc in self.processes.items()
+                      if ended[name] is not None or proc.failed_at is not None]
+            if failed:
+                first = min(failed, key=lambda p: p.failed_at if p.failed_at is not None else math.inf)
+                code = ended[first.name]
+                raise LaunchError(self._death_report(first, EXIT_LOCKSTEP if code is None else code))
             try:
                 owner.popen.wait(timeout=0.05)
             except subprocess.TimeoutExpired:
@@ -336,22 +353,45 @@ class GraphRun:
             raise LaunchError(self.monitor.failure)
 
     def _death_report(self, proc: NodeProcess, code: int) -> str:
-        if proc.reader is not None:
+        if proc.reader is not None and proc.popen.poll() is not None:
             proc.reader.join(timeout=2.0)
         how = f'killed by signal {signal.Signals(-code).name}' if code < 0 else f'exit code {code}'
         failure = [line for line in proc.tail if 'FAILURE' in line or 'ERROR' in line]
-        lines = '\n'.join(f'    {line}' for line in proc.tail)
-        if proc.killed_after_s is None:
-            head = f'node {proc.name} died ({how})'
-        else:
+        if proc.killed_after_s is not None:
             head = f'node {proc.name} did not stop within {proc.killed_after_s:g} s of SIGINT (the launcher killed it)'
+        elif proc.popen.poll() is None:
+            head = f'node {proc.name} failed'
+        else:
+            head = f'node {proc.name} died ({how})'
         if failure:
             head += f': {failure[-1]}'
         over_deadline = any(DEADLINE_FAILURE in line for line in failure)
         blame = self.monitor.blame() if self.monitor is not None and code == 3 and not over_deadline else None
+        report = f'\n  last lines of {proc.name}:\n' + '\n'.join(f'    {line}' for line in proc.tail)
         if blame:
-            head = f'{blame} (the graph stopped waiting for it); ' + head
-        return f'{head}\n  last lines of {proc.name}:\n{lines}'
+            culprit, text = blame
+            head = f'{text} (the graph stopped waiting for it); ' + head
+            if culprit != proc.name and culprit in self.processes:
+                report += self._stack_of(self.processes[culprit])
+        return head + report
+
+    def _stack_of(self, proc: NodeProcess) -> str:
+        """The last lines of a node the graph waited on; when it still runs, with its Python stack
+        (:data:`~acds_common.lockstep.STACK_SIGNAL`, a faulthandler dump), awaited at most 5 s."""
+        if proc.popen.poll() is None and is_stopped(proc.popen.pid):
+            proc.tail.append('(the process is stopped: SIGSTOP, a debugger or a Ctrl-Z outside the launcher)')
+        elif proc.popen.poll() is None and proc.failed_at is None:
+            before = len(proc.tail)
+            proc.tail.append('(its Python stack, asked for by the launcher:)')
+            try:
+                os.kill(proc.popen.pid, STACK_SIGNAL)
+            except ProcessLookupError:
+                pass
+            deadline = time.monotonic() + 5.0
+            while time.monotonic() < deadline and not any('File "' in line for line in list(proc.tail)[before:]):
+                if proc.reader is not None:
+                    proc.reader.join(timeout=0.1)
+        return f'\n  last lines of {proc.name}:\n' + '\n'.join(f'    {line}' for line in proc.tail)
 
     def _complete(self) -> RunResult:
         """The time owner finished: drain the monitor (and so the recorder) through the owner's last step, stop the

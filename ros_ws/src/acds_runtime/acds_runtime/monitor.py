@@ -27,8 +27,8 @@ from typing import Any
 import rclpy
 from acds_common import topics
 from acds_common.cdr import Codec, stamp_ns
-from acds_common.graph import MONITOR_ACK_EVERY, MONITOR_NAME, Graph, instance_name
-from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS, UNNAMED, UNNAMED_GRACE_S, message_class, release_node
+from acds_common.graph import MONITOR_ACK_EVERY, MONITOR_NAME, Graph
+from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS, PublisherCheck, message_class, release_node
 from rclpy.context import Context
 from rclpy.node import Node
 
@@ -99,7 +99,7 @@ class RunMonitor:
                                                  LOCKSTEP_QOS)
         self._ready_codec = Codec(topics.TYPES[topics.READY])
         self.ready = False
-        self._unnamed_since: dict[str, float] = {}
+        self._publisher_check = PublisherCheck()
         self._last_check = 0.0
         from rclpy.experimental import EventsExecutor
         self._executor = EventsExecutor(context=self.context)
@@ -135,15 +135,8 @@ class RunMonitor:
     def _check_publishers(self, now: float) -> None:
         """Every graph topic may only have the publishers the graph declares for it."""
         for name, st in self.topics.items():
-            names = [UNNAMED if i.node_name == UNNAMED else instance_name(i.node_namespace, i.node_name)
-                     for i in self.node.get_publishers_info_by_topic(name)]
-            if UNNAMED in names:
-                if now - self._unnamed_since.setdefault(name, now) < UNNAMED_GRACE_S:
-                    continue
-            else:
-                self._unnamed_since.pop(name, None)
-            strangers = sorted({n if n != UNNAMED else 'a publisher without a ROS node name'
-                                for n in names if n not in st.publishers})
+            strangers = self._publisher_check.strangers(name, self.node.get_publishers_info_by_topic(name),
+                                                        st.publishers, now)
             if strangers:
                 self._intrude(f'{name} has a publisher the graph does not declare: {", ".join(strangers)} '
                               f'(declared: {", ".join(sorted(st.publishers))})')
@@ -274,8 +267,9 @@ class RunMonitor:
             if not self.wait_for(advanced_since(self.last_steps()), timeout_s=min(quiet_s, left)):
                 return
 
-    def blame(self) -> str | None:
-        """The node whose outputs stopped while its inputs were there (a hung node), from what arrived.
+    def blame(self) -> tuple[str, str] | None:
+        """The node whose outputs stopped while its inputs were there (a hung node), from what arrived: its name
+        and a sentence.
 
         For each node of the graph: the first step it has not published on all its per-step
         outputs; the culprit is a node whose lag-0 inputs for that step have all arrived. What was in
@@ -297,7 +291,7 @@ class RunMonitor:
         if not candidates:
             return None
         k, name = min(candidates)
-        return f'{name} stopped at step {k}: its inputs for that step had arrived, its outputs did not'
+        return name, f'{name} stopped at step {k}: its inputs for that step had arrived, its outputs did not'
 
     def close(self) -> None:
         """Stop spinning and release the ROS context (closes the bag, if recording)."""
