@@ -41,3 +41,31 @@ def test_unknown_verb_and_option_are_clear_errors():
     assert proc.returncode == 2 and "invalid choice: 'fly'" in proc.stderr
     proc = run_acds('run', '--warp', '9')
     assert proc.returncode == 2 and 'unrecognized arguments: --warp' in proc.stderr
+
+
+@pytest.mark.parametrize(('args', 'message'), [
+    (['--external', 'wheel_law'], "--external: external node 'wheel_law': not a node of this graph"),
+    (['--external', 'rigid_body'], "external node 'rigid_body': it owns sim time"),
+    (['--external', 'acds_controller', '--engine', 'direct'], 'an external node joins the process graph'),
+    (['--external', 'acds_controller=1x'], "'1x' is not a ROS node name"),
+    (['--external', 'em_driver', '--external', 'em_driver'], "external node 'em_driver' is given twice"),
+    (['--domain', '5'], "argument --domain: expected a ROS domain in 11..99, got '5'"),
+    (['--deadline-ms', 'acds_controller=inf'], "expected NODE=MS with a finite MS > 0, got 'acds_controller=inf'"),
+    (['--deadline-ms', 'gyro=2'], '--deadline-ms gyro=2: scenario oresat_detumble runs no such node'),
+])
+def test_bad_external_node_options_are_one_line_before_any_process(tmp_path, args, message):
+    """Issue 20, bad input: checked before any process starts (no run folder is made)."""
+    proc = run_acds('run', 'oresat_detumble', '--steps', '5', '--run-dir', str(tmp_path / 'run'), *args)
+    assert proc.returncode == 2, proc.stderr
+    assert message in proc.stderr, proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    assert not (tmp_path / 'run').exists()
+
+
+def test_a_scenario_with_a_bad_external_key_is_one_line(tmp_path):
+    path = tmp_path / 'bad.yaml'
+    path.write_text(BASE.replace('name: free_tumble_heao_b\n', 'name: free_tumble_heao_b\nexternal: [rigid_body]\n'))
+    proc = run_acds('run', str(path), '--steps', '5')
+    assert proc.returncode == 2
+    assert "external: external node 'rigid_body': it owns sim time" in proc.stderr, proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1

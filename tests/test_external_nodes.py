@@ -59,3 +59,36 @@ def test_bad_external_nodes_are_one_line_before_any_process(launch_graph, item, 
         with launch_graph('oresat_detumble', steps=10, external=[item]):
             pass
     assert '\n' not in str(err.value)
+
+
+@pytest.mark.parametrize(('fault', 'got'), [
+    ('twice', 'faulty_fsw sent a second message for step 3; expected one message for step 4, stamped 4000000000 ns '
+              '(t = 4 s)'),
+    ('wallclock', 'faulty_fsw sent stamp '),
+    # In lockstep a skipped step stalls the graph (step 4's inputs wait on step 3's output): the stall names it.
+    ('skip', 'acds_controller (external, ROS node faulty_fsw) stopped at step 3: its inputs for that step had arrived, '
+             'its outputs did not (/acds/controller/moment_command of step 3, t = 3 s)'),
+])
+def test_an_external_node_that_breaks_the_step_rule_fails_the_run_in_one_line(launch_graph, fault, got):
+    """Issue 20 §1: twice for one step, a wrong stamp, a skipped step: one line naming the topic, the step and what
+    was expected (the run monitor and the node reading the topic find the same)."""
+    import sys
+    from pathlib import Path
+
+    from acds_common import topics
+
+    sc = load_scenario('oresat_detumble')
+    sc.values['']['input_timeout'] = 3.0  # the stall of a skipped step
+    with launch_graph(sc, steps=50, external=['acds_controller=faulty_fsw']) as graph:
+        spec = graph.graph.nodes['acds_controller']
+        inputs = [f'{spec.topic(i.topic)}={topics.type_of(i.topic)}' for st in spec.stages for i in st.inputs
+                  if i.source in graph.graph.nodes]
+        argv = [sys.executable, str(Path(__file__).parent / 'fixtures' / 'faulty_external.py'), 'faulty_fsw', fault,
+                '/acds/magnetometer/volts', '/acds/controller/moment_command', str(round(1e9)), *inputs]
+        with external_node(graph, argv):
+            with pytest.raises(LaunchError) as err:
+                graph.wait()
+    line = str(err.value).splitlines()[0]
+    assert got in line, line
+    if fault == 'wallclock':
+        assert line.endswith('expected one message for step 3, stamped 3000000000 ns (t = 3 s)'), line

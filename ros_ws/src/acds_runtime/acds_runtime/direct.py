@@ -58,6 +58,9 @@ class DirectRun:
         self.record = Path(record) if record is not None else None
         self.record_storage = record_storage
         self.record_compression = record_compression
+        if scenario.get('', 'external'):
+            raise LaunchError(f'scenario {scenario.name} leaves {", ".join(scenario.get("", "external"))} to the user '
+                              '(key external): an external node joins the process graph (acds run --engine graph)')
         self.params = node_parameters(scenario, self.steps, 0.0, overrides)
         self.graph = build_graph(self.params)
         self.observer = RunObserver(scenario, self.graph)

@@ -311,13 +311,16 @@ class RunMonitor:
             inputs = [(spec.topic(i.topic), i.lag) for s in spec.stages for i in s.inputs
                       if i.source in self.graph.nodes]
             if all(last.get(t, -1) >= nxt - lag for t, lag in inputs):
-                candidates.append((nxt, name))
+                missing = [t for o in spec.outputs if o.every_step
+                           if last.get(t := spec.topic(o.topic), -1) < nxt + o.stamp_offset]
+                candidates.append((nxt, name, missing))
         if not candidates:
             return None
-        k, name = min(candidates)
+        k, name, missing = min(candidates)
         who = name if self.external is None or name not in self.external.nodes else \
             f'{name} (external, ROS node {self.external.publisher(name)})'
-        return name, f'{who} stopped at step {k}: its inputs for that step had arrived, its outputs did not'
+        return name, (f'{who} stopped at step {k}: its inputs for that step had arrived, its outputs did not '
+                      f'({", ".join(missing)} of step {k}, t = {k * self.dt_ns / 1e9:g} s)')
 
     def close(self) -> None:
         """Stop spinning and release the ROS context (closes the bag, if recording)."""

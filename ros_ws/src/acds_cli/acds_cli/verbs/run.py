@@ -73,6 +73,13 @@ def cmd_run(args: argparse.Namespace) -> int:
             raise UsageError(f'--until-min {args.until_min:g}: {steps:,} steps of {scenario.control_period_s} s, '
                              f'more than the {MAX_STEPS:,} a run may have')
     direct = args.engine == 'direct'
+    try:
+        external = scenario.external(args.external)
+    except ValueError as exc:
+        raise UsageError(f'--external: {exc}') from None
+    if direct and external:
+        raise UsageError('--external: the direct engine runs every node in this process; an external node joins the '
+                         'process graph (use --engine graph)')
     overrides = _deadlines(args, scenario, direct)
     if direct and args.rtf:
         raise UsageError('--rtf paces the process graph\'s clock; the direct engine has none (use --engine graph)')
@@ -106,10 +113,11 @@ def cmd_run(args: argparse.Namespace) -> int:
         engine = DirectRun(scenario, steps=steps, echo=echo, progress=progress, **options)
     else:
         engine = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=progress,
-                          overrides=overrides, **options)
+                          overrides=overrides, external=args.external, domain=args.domain, **options)
     print(f'[acds] scenario {scenario.name}: {engine.steps} steps of {scenario.control_period_s} s '
           f'({engine.steps * scenario.control_period_s / 60:.1f} min sim), '
-          + ('direct engine (one process, no DDS)' if direct else f'nodes {", ".join(scenario.get("", "nodes"))}')
+          + ('direct engine (one process, no DDS)' if direct else 'nodes ' + ', '.join(
+              f'{i} (external)' if i in external else i for i, _n, _v in scenario.instances()))
           + f'; run folder {run_dir}', file=sys.stderr, flush=True)
     try:
         if direct:
@@ -218,5 +226,25 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="a node's wall-time budget per step, ms (repeatable): steps over it are counted and reported "
                         'as a warning at the end')
     p.add_argument('--deadline-strict', action='store_true', help='fail the run at the first step over a deadline')
+    p.add_argument('--external', action='append', default=[], metavar='NODE[=ROS_NODE_NAME]',
+                   help='leave NODE to your own ROS 2 node (repeatable; default ROS node name: NODE): the launcher '
+                        'does not start it and waits until your node serves its contract (./scripts/acds contract '
+                        'SCENARIO --node NODE)')
+    p.add_argument('--domain', type=domain_id, metavar='ID',
+                   help='ROS_DOMAIN_ID of the run (default: the first free one, printed), e.g. for an external node')
     p.set_defaults(func=cmd_run)
+
+
+def domain_id(text: str) -> int:
+    """``--domain``: a ROS domain the launcher may lease (its range)."""
+    from acds_runtime.launcher import DOMAIN_RANGE
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value not in DOMAIN_RANGE:
+        raise argparse.ArgumentTypeError(f'expected a ROS domain in {DOMAIN_RANGE.start}..{DOMAIN_RANGE.stop - 1}, '
+                                         f'got {text!r}')
+    return value
 
