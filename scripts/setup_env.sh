@@ -7,11 +7,13 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 VENV="$ROOT/.venv"
 PY="${ACDS_PYTHON:-python3}"
 STAMP="$VENV/.acds_setup_stamp"
-# Every package of the workspace (a folder of ros_ws/src with a setup.py): a new node package needs no edit here.
+# Every package of the workspace (a folder of ros_ws/src with a setup.py: a new node package needs no edit here)
+# and every example package of a user's own node (examples/*, issue 20 §3), each installed as a user would.
 PKGS=()
-for d in "$ROOT"/ros_ws/src/*/; do [[ -f "$d/setup.py" ]] && PKGS+=("$(basename "$d")"); done
+for d in "$ROOT"/ros_ws/src/*/ "$ROOT"/examples/*/; do [[ -f "$d/setup.py" ]] && PKGS+=("${d%/}"); done
 
-want=$(cd "$ROOT" && cat requirements.lock ros_ws/src/*/setup.py ros_ws/src/*/setup.cfg | sha256sum | cut -c1-16)
+want=$(cd "$ROOT" && cat requirements.lock ros_ws/src/*/setup.py ros_ws/src/*/setup.cfg examples/*/setup.py \
+  examples/*/setup.cfg 2>/dev/null | sha256sum | cut -c1-16)
 if [[ -f "$STAMP" && "$(cat "$STAMP")" == "$want" && -x "$VENV/bin/python" ]]; then
   exit 0
 fi
@@ -21,7 +23,7 @@ if [[ ! -x "$VENV/bin/python" ]]; then
 fi
 "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -r "$ROOT/requirements.lock" 2> >(grep -v "is ignored: it is neither" >&2)
 args=()
-for p in "${PKGS[@]}"; do args+=(-e "$ROOT/ros_ws/src/$p"); done
+for p in "${PKGS[@]}"; do args+=(-e "$p"); done
 "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation --use-pep517 "${args[@]}" 2> >(grep -v "is ignored: it is neither" >&2)
 echo "$want" > "$STAMP"
 echo "[setup] done" >&2

@@ -1,4 +1,5 @@
-"""Cross-package tests: the pytest harness of acds_runtime, the CLI's workspace and a ROS log folder in the checkout."""
+"""Cross-package tests: the CLI's workspace and a ROS log folder in the checkout (the launch_graph harness is the
+pytest plugin acds_runtime installs, entry point pytest11)."""
 
 import hashlib
 import os
@@ -9,8 +10,6 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 os.environ.setdefault('ROS_LOG_DIR', str(ROOT / 'runs' / 'ros_log'))
 os.environ.setdefault('ACDS_WORKSPACE', str(ROOT))
-
-pytest_plugins = ['acds_runtime.testing']
 
 
 @pytest.fixture

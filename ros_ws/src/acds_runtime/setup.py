@@ -17,4 +17,6 @@ setup(
     maintainer_email='acds@example.org',
     description='The ACDS runtime: launcher, run monitor and recorder, direct engine, run summaries.',
     license='Apache-2.0',
+    # The launch_graph harness as a pytest plugin (issue 20 §5): a user's package tests its node with it.
+    entry_points={'pytest11': ['acds = acds_runtime.testing']},
 )

@@ -6,8 +6,10 @@ the launcher does not start it and asks it for nothing but plain ROS 2 (:func:`a
 The run monitor, which subscribes to every output of the graph anyway, holds one :class:`ExternalWatch`:
 
 * **joined**: the graph starts once every external node publishes each of its per-step outputs (matched with the
-  monitor's readers, so with the lockstep QoS) and subscribes to each of its inputs (and to ``/clock`` when none of
-  a stage's inputs is of the same step); :meth:`ExternalWatch.missing` names what is not there yet;
+  monitor's readers, so with the lockstep QoS) and, for each stage, subscribes to one of its inputs at least
+  (which it reads is its own business; ``/clock`` for a stage none of whose inputs is of the same step; the
+  inputs are transient-local, so a reader that matches late still gets every step);
+  :meth:`ExternalWatch.missing` names what is not there yet;
 * **sequence**: each of its per-step outputs must carry every step once, in order, stamped with the step's time
   (:func:`acds_common.lockstep.sequence_error`: one line naming the topic, the step and what was expected);
 * **timing**: the wall time from the arrival of the last input of step k to that of its outputs of step k, as the
@@ -31,7 +33,8 @@ class _External:
 
     identity: str
     outputs: list[str]
-    subscriptions: list[str]
+    #: Per stage, the topics it may read (its present inputs; /clock when none is of the same step).
+    stage_inputs: list[list[str]]
     triggers: list[str]
     times: StepTimes
     strict: bool
@@ -49,19 +52,16 @@ class ExternalWatch:
         self.nodes: dict[str, _External] = {}
         for inst, identity in external.items():
             spec = graph.nodes[inst]
-            subscriptions: list[str] = []
+            stage_inputs: list[list[str]] = []
             triggers: list[str] = []
             for st in spec.stages:
                 present = [i for i in st.inputs if i.source in graph.nodes]
-                subscriptions += [spec.topic(i.topic) for i in present]
                 same_step = [spec.topic(i.topic) for i in present if i.lag == 0]
                 triggers += same_step or [topics.CLOCK]
-            if topics.CLOCK in triggers:
-                subscriptions.append(topics.CLOCK)
+                stage_inputs.append([spec.topic(i.topic) for i in present] + ([] if same_step else [topics.CLOCK]))
             ms, strict = (deadlines or {}).get(inst, (0.0, False))
             self.nodes[inst] = _External(identity, [spec.topic(o.topic) for o in spec.outputs if o.every_step],
-                                         sorted(set(subscriptions)), sorted(set(triggers)), StepTimes(ms / 1e3),
-                                         strict)
+                                         stage_inputs, sorted(set(triggers)), StepTimes(ms / 1e3), strict)
 
     def publisher(self, instance: str) -> str:
         """The ROS identity that publishes for ``instance`` (itself for a node the launcher starts)."""
@@ -88,10 +88,9 @@ class ExternalWatch:
             if unread:
                 parts.append('publishers the graph cannot read, QoS not RELIABLE/TRANSIENT_LOCAL as the contract '
                              'says: ' + ', '.join(unread))
-            deaf = [t for t in ext.subscriptions
-                    if not any(_identity(i) == ext.identity for i in node.get_subscriptions_info_by_topic(t))]
-            if deaf:
-                parts.append('no subscription to ' + ', '.join(deaf))
+            for inputs in ext.stage_inputs:  # which of its inputs it reads is its own business; at least one
+                if not any(_identity(i) == ext.identity for t in inputs for i in node.get_subscriptions_info_by_topic(t)):
+                    parts.append('no subscription to any of its inputs ' + ', '.join(inputs))
             if parts:
                 out.append(f'external node {inst} (ROS node {ext.identity}): ' + '; '.join(parts))
         return out

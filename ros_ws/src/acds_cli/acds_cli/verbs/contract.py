@@ -88,8 +88,16 @@ def node_contract(scenario: Any, node: str, steps: int | None = None) -> dict[st
         rules.append(f'a stage without a lag-0 input from a present node follows {topics.CLOCK} '
                      f'({topics.TYPES[topics.CLOCK]}, {lockstep_qos["reliability"]}): step k exists once /clock says k·Δt')
     if not spec.time_owner:
-        rules.append(f'once every present input has a publisher, the node publishes its name once on {topics.READY} '
-                     f'({topics.TYPES[topics.READY]}, lockstep QoS): the time owner starts step 0 when every node has')
+        rules.append(f'this project\'s node publishes its name once on {topics.READY} when every present input has '
+                     'a publisher; a node run as external (acds run --external NODE[=ROS_NODE_NAME]) needs no '
+                     'handshake: the graph starts step 0 once it publishes every per-step output and subscribes to '
+                     'one present input at least (the readiness timeout names what is missing)')
+        rules.append('external node: publish exactly one message per per-step output for each step k, stamped with the '
+                     'step time of the inputs it answers (k·Δt), after holding all of step k\'s inputs; a second '
+                     'message for a step, a skipped step or another stamp fails the run naming the topic and the step; '
+                     'any other publisher on its topics fails the run as an intruder')
+    else:
+        rules.append('the time owner cannot be external (it publishes /clock and paces the graph)')
     specs = {s.name: s for s in node_param_specs(spec.name, params[node].get('formation_vehicles') or ())}
     parameters = [{'name': name, 'type': specs[name].kind, 'unit': specs[name].unit,
                    'range': [specs[name].lo, specs[name].hi] if specs[name].lo is not None or specs[name].hi is not None
