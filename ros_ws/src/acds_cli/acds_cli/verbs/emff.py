@@ -352,9 +352,9 @@ def airtrack_study(configuration: str, step_m: float, duration_s: float, dt_s: f
     electromagnet's dipole steps to x0's equilibrium value; LQR: μ = μ_eq(x0) − K (x − x0, ẋ), K from the
     analytic linearisation and Bryson weights Q = diag(1/Δx², 1/Δv²), R = 1/Δμ² (``scales``)."""
     from acds_controller.formation_linear import lqr_gain
-    from dynamics.airtrack import AirtrackConfig, equilibrium_dipole_am2, linearised, simulate
+    from dynamics.airtrack import AirtrackConfig, simulate
     cfg = AirtrackConfig(configuration=configuration)
-    a, b = linearised(cfg)
+    a, b = cfg.plant.linearised(cfg.separation_m)
     dx, dv, dmu = scales
     k, _ = lqr_gain(a, b, np.diag([1.0 / dx ** 2, 1.0 / dv ** 2]), np.array([[1.0 / dmu ** 2]]))
     x_ref = cfg.separation_m
@@ -363,7 +363,7 @@ def airtrack_study(configuration: str, step_m: float, duration_s: float, dt_s: f
     open_loop = simulate(cfg, x_start, 0.0, lambda _t, _x, _v: mu_ref, duration_s, dt_s)
     closed = simulate(cfg, x_start, 0.0, lambda _t, x, v: mu_ref - float(k[0] @ np.array([x - x_ref, v])),
                       duration_s, dt_s)
-    rest = equilibrium_dipole_am2(cfg, x_start)
+    rest = cfg.plant.equilibrium_dipole_am2(x_start)
 
     def metrics(run: tuple[np.ndarray, np.ndarray, np.ndarray]) -> dict[str, Any]:
         t, x, _ = run
