@@ -192,6 +192,13 @@ class VehicleSpec:
         """Coil axes as columns (3, n_coils), body axes."""
         return np.stack([c.axis_body for c in self.coils], axis=1) if self.coils else np.zeros((3, 0))
 
+    def with_magnet(self, coils_dipole_body_am2: np.ndarray) -> np.ndarray:
+        """The vehicle's whole body dipole (A·m²): its coils' plus its permanent magnet's (the coils' as they are,
+        signed zeros kept, when it has none)."""
+        if np.any(self.permanent_dipole_body_am2):
+            return coils_dipole_body_am2 + self.permanent_dipole_body_am2
+        return coils_dipole_body_am2
+
     def coil_moments_am2(self, dipole_body_am2: np.ndarray) -> np.ndarray:
         """Split a body dipole (A·m²) into the coils' signed moments; DynamicsError if the dipole has a
         component no coil can make (more than 1e-9 of its size)."""
@@ -533,7 +540,7 @@ class FormationDynamics:
         dip, h0, hdot = [], [], []
         for spec, u in zip(self.vehicles, inputs, strict=True):
             spec.coil_moments_am2(u.dipole_body_am2)  # reject dipoles its coils cannot make
-            dip.append(finite_vector3(f"{spec.name} dipole_body_am2", u.dipole_body_am2) + spec.permanent_dipole_body_am2)
+            dip.append(spec.with_magnet(finite_vector3(f"{spec.name} dipole_body_am2", u.dipole_body_am2)))
             h0.append(finite_vector3(f"{spec.name} wheel_h_body_nms", u.wheel_h_body_nms))
             hdot.append(finite_vector3(f"{spec.name} wheel_hdot_body_nm", u.wheel_hdot_body_nm))
         step = (np.array(dip), np.array(h0), np.array(hdot))
@@ -609,7 +616,7 @@ class FormationDynamics:
     def wrenches_now(self, dipoles_body_am2: Sequence[Sequence[float]]) -> Wrenches:
         """Instantaneous wrenches at the current state for the given body dipoles of the coils (A·m²; the
         permanent magnets added)."""
-        dip = np.array([finite_vector3(f"{s.name} dipole_body_am2", d) + s.permanent_dipole_body_am2
+        dip = np.array([s.with_magnet(finite_vector3(f"{s.name} dipole_body_am2", d))
                         for s, d in zip(self.vehicles, dipoles_body_am2, strict=True)])
         return self._wrenches(self._t, self._pos, self._q, dip)
 
