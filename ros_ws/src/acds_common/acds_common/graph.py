@@ -27,6 +27,7 @@ that publishes it, exactly one time owner, no lag-0 cycle.
 from __future__ import annotations
 
 import functools
+import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
 from importlib.metadata import entry_points
@@ -285,6 +286,50 @@ def instance_name(namespace: str, node_name: str) -> str:
     """The graph key of a ROS node seen by discovery: its name, prefixed by its vehicle's namespace."""
     prefix = f'{topics.NAMESPACE}/'
     return f'{namespace[len(prefix):]}/{node_name}' if namespace.startswith(prefix) else node_name
+
+
+#: A ROS node name as rcl accepts it: letters, digits and underscores, not starting with a digit.
+ROS_NODE_NAME = re.compile(r'[A-Za-z_][A-Za-z0-9_]*')
+
+
+def external_nodes(items: Iterable[str], instances: Iterable[str], time_owner: str) -> dict[str, str]:
+    """``NODE[=ROS_NODE_NAME]`` items (``acds run --external``, scenario key ``external``; issue 20 §1) → {instance:
+    the ROS identity its publishers must carry}, ValueError (one line) for a node not in the graph, the time owner,
+    a node given twice or a name rcl would refuse.
+
+    An external node is one of the graph's nodes that the launcher does not start: the user's own process, in any
+    language, takes its place under the given ROS node name (default: the node's own name). A formation vehicle's
+    node (``VEHICLE/NODE``) keeps its vehicle's namespace, so its identity is ``VEHICLE/ROS_NODE_NAME``
+    (:func:`instance_name`). The time owner cannot be external: it publishes /clock and paces the graph.
+    """
+    known = list(instances)
+    out: dict[str, str] = {}
+    for item in items:
+        node, sep, ros_name = item.partition('=')
+        if node not in known:
+            raise ValueError(f'external node {node!r}: not a node of this graph (its nodes: {", ".join(known)})')
+        if node == time_owner:
+            raise ValueError(f'external node {node!r}: it owns sim time (it publishes /clock and paces the graph), so '
+                             'it cannot be external; any other node can')
+        if node in out:
+            raise ValueError(f'external node {node!r} is given twice')
+        name = ros_name if sep else node.rpartition('/')[2]
+        if not ROS_NODE_NAME.fullmatch(name):
+            raise ValueError(f'external node {item!r}: {name!r} is not a ROS node name (letters, digits and '
+                             '_, not starting with a digit)')
+        vehicle = node.rpartition('/')[0]
+        out[node] = f'{vehicle}/{name}' if vehicle else name
+    return out
+
+
+def external_parameter(external: dict[str, str]) -> list[str]:
+    """The nodes' parameter ``external_nodes``: ``instance=identity`` entries."""
+    return [f'{inst}={ident}' for inst, ident in external.items()]
+
+
+def external_of(params: dict[str, Any]) -> dict[str, str]:
+    """{instance: ROS identity} of the external nodes, from a node's parameter ``external_nodes``."""
+    return dict(entry.split('=', 1) for entry in params.get('external_nodes', []))
 
 
 @dataclass(frozen=True)

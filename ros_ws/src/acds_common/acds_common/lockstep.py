@@ -47,7 +47,16 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 
 from acds_common import topics
 from acds_common.cdr import Codec, stamp_ns
-from acds_common.graph import MONITOR_LAG, MONITOR_NAME, Input, NodeSpec, Output, instance_name, node_spec
+from acds_common.graph import (
+    MONITOR_LAG,
+    MONITOR_NAME,
+    Input,
+    NodeSpec,
+    Output,
+    external_of,
+    instance_name,
+    node_spec,
+)
 from acds_common.parameters import (
     FORMATION_VEHICLES,
     ConfigError,
@@ -57,7 +66,7 @@ from acds_common.parameters import (
     normalize,
 )
 from acds_common.stepper import StepError, load_stepper
-from acds_common.timing import DEADLINE_FAILURE, StepTimes
+from acds_common.timing import StepTimes, overrun
 
 #: QoS of every lockstep data topic: nothing is dropped between matched endpoints, late joiners
 #: get the history, and the history is deep enough for an observer (recorder) that runs up to
@@ -187,6 +196,24 @@ class PublisherCheck:
         return out
 
 
+def sequence_error(topic: str, publisher: str, t_ns: int, last: int, dt_ns: int) -> str:
+    """'' when a message stamped ``t_ns`` is the next step of a per-step topic whose last step was ``last``; else
+    the one line that fails the run: the topic, the publisher, the step expected and what came (issue 20 §1: an
+    external node that publishes twice for one step, skips one or stamps a wrong time)."""
+    expected = last + 1
+    if t_ns == expected * dt_ns:
+        return ''
+    k, rem = divmod(t_ns, dt_ns)
+    if rem:
+        got = f'stamp {t_ns} ns, not a step time (a multiple of Δt = {dt_ns} ns)'
+    elif k <= last:
+        got = f'a second message for step {k}'
+    else:
+        got = f'step {k}, skipping step {expected}' if k > expected else f'step {k}'
+    return (f'{topic}: {publisher} sent {got}; expected one message for step {expected}, stamped '
+            f'{expected * dt_ns} ns (t = {expected * dt_ns / 1e9:g} s)')
+
+
 @dataclass
 class _InputTopic:
     topic: str
@@ -194,6 +221,8 @@ class _InputTopic:
     codec: Codec
     buffer: dict[int, Any] = field(default_factory=dict)
     consumed_below: int = 0
+    #: The last step received (an external source must send every step once, in order).
+    last: int = -1
 
 
 class LockstepNode(Node):
@@ -217,6 +246,8 @@ class LockstepNode(Node):
         self.time_owner = self.spec.time_owner
         self.dt_ns = round(self.params['control_period_s'] * 1e9)
         self.graph_nodes: list[str] = self.params['graph_nodes']
+        #: The nodes the user runs (issue 20): their ROS identity; they send no READY.
+        self.external = external_of(self.params)
         self.input_timeout_s: float = self.params['input_timeout_s']
         self.stepper = load_stepper(self.spec.stepper)(self.params, log=self._log)
         self.failure: str | None = None
@@ -387,6 +418,12 @@ class LockstepNode(Node):
     def _on_input(self, topic: str, data: bytes) -> None:
         entry = self._inputs[topic]
         t_ns, value = entry.codec.decode(data)
+        if entry.source in self.external:
+            problem = sequence_error(self.resolve_topic_name(topic), self.external[entry.source], t_ns, entry.last,
+                                     self.dt_ns)
+            if problem:
+                self.fail(problem)
+                return
         k = self._step_of(topic, t_ns)
         if k is None:
             return
@@ -397,6 +434,7 @@ class LockstepNode(Node):
                       f'than {entry.source} injects data (publishers seen: {", ".join(names) or "none left"}); '
                       'refusing to use it')
             return
+        entry.last = max(entry.last, k)
         entry.buffer[k] = value
         self._try_fire()
 
@@ -478,8 +516,7 @@ class LockstepNode(Node):
         """Step k's stages have all fired: record its wall time; over the deadline with ``deadline_strict``: fail."""
         wall, self._step_wall = self._step_wall, 0.0
         if self.timing.add(k, wall) and self.params['deadline_strict']:
-            self.fail(f'step {k} took {wall * 1e3:.3f} ms from its last input to its outputs, {DEADLINE_FAILURE} '
-                      f'{self.params["deadline_ms"]:g} ms (--deadline-strict)')
+            self.fail(overrun(k, wall, self.params['deadline_ms']))
 
     def _prune(self) -> None:
         oldest = min(s.next_step for s in self._stages) - self._max_lag
@@ -508,9 +545,11 @@ class LockstepNode(Node):
         """Absolute topic → the instances that may publish it: each input's source and, for the time owner,
         the handshake (every other node's READY, the run monitor's acknowledgements; a participant left
         on the domain by an earlier run must not start or pace this one)."""
-        out = {self.resolve_topic_name(e.topic): {e.source} for e in self._inputs.values()}
+        out = {self.resolve_topic_name(e.topic): {self.external.get(e.source, e.source)} for e in self._inputs.values()}
         if self.time_owner:
-            out[self.resolve_topic_name(topics.READY)] = set(self.graph_nodes) - {self.instance}
+            # An external node need not say READY (plain ROS 2), but may: one of this project's nodes run by hand.
+            out[self.resolve_topic_name(topics.READY)] = (set(self.graph_nodes) - {self.instance} - set(self.external)
+                                                          | set(self.external.values()))
             if MONITOR_NAME in self.graph_nodes:
                 out[self.resolve_topic_name(topics.MONITOR_ACK)] = {MONITOR_NAME}
         return out
@@ -558,7 +597,7 @@ class LockstepNode(Node):
         missing = self._missing_publishers()
         absent: list[str] = []
         if self.time_owner:
-            absent = sorted(set(self.graph_nodes) - self._ready_from - {self.instance})
+            absent = sorted(set(self.graph_nodes) - self._ready_from - {self.instance} - set(self.external))
             if not missing and not absent:
                 self._check_intruders(now)
                 self._started = True

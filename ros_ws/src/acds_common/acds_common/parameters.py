@@ -17,7 +17,7 @@ from typing import Any
 import yaml
 
 from acds_common import topics
-from acds_common.graph import MONITOR_NAME, declared_node
+from acds_common.graph import MONITOR_NAME, declared_node, external_parameter
 from acds_common.scenario import MAX_STEPS, REQUIRED, SCHEMA, Scenario
 
 
@@ -56,6 +56,8 @@ LOCKSTEP: tuple[ParamSpec, ...] = (
     ParamSpec('deadline_ms', 'float', 0.0, 'wall-time budget of one step, from its last input to its published '
               'outputs (0: none); steps over it are counted (issue 20 §4)', 'ms', 0.0, 3.6e6),
     ParamSpec('deadline_strict', 'bool', False, 'fail the run at the first step over deadline_ms'),
+    ParamSpec('external_nodes', 'strs', [], 'nodes of graph_nodes that the user runs (issue 20): '
+              '"instance=ROS identity" entries; their publishers carry that identity, and they send no READY'),
     ParamSpec('vehicle', 'str', '', 'the formation vehicle this node belongs to (its namespace /acds/<vehicle>); '
               "'' in a single-vehicle graph"),
 )
@@ -175,22 +177,25 @@ def section(params: dict[str, Any], name: str, vehicle: str = '') -> dict[str, A
 
 
 def node_parameters(scenario: Scenario, steps: int, rtf: float = 0.0,
-                    overrides: dict[str, dict[str, Any]] | None = None) -> dict[str, dict[str, Any]]:
+                    overrides: dict[str, dict[str, Any]] | None = None,
+                    external: dict[str, str] | None = None) -> dict[str, dict[str, Any]]:
     """Every node's parameters for a run of ``steps`` steps: the lockstep ones plus its scenario sections.
 
     What the launcher writes to ``params.yaml`` and the direct engine passes its steppers, by instance:
     ``<node>`` for the nodes of the whole graph, ``<vehicle>/<node>`` for a formation vehicle's (which get
     parameter ``vehicle``). Empty lists are left out (rcl cannot type an empty list: the node's default).
+    ``external``: {instance: ROS identity} of the nodes the user runs (default: the scenario's,
+    :meth:`~acds_common.scenario.Scenario.external`); they are part of the graph (parameters included: the
+    contract's parameters file), not started by the launcher.
     """
-    instances: list[tuple[str, str, str]] = [(n, n, '') for n in scenario.get('', 'nodes')]
+    instances = scenario.instances()
     vehicles = [v['name'] for v in scenario.values.get('vehicles', [])]
-    for v in scenario.values.get('vehicles', []):
-        instances += [(f'{v["name"]}/{n}', n, v['name']) for n in v['nodes']]
     common = {
         'control_period_s': scenario.control_period_s,
         'graph_nodes': [inst for inst, _n, _v in instances] + [MONITOR_NAME],
         'input_timeout_s': scenario.get('', 'input_timeout'),
         'seed': scenario.get('', 'seed'),
+        'external_nodes': external_parameter(scenario.external() if external is None else external),
     }
     out: dict[str, dict[str, Any]] = {}
     for inst, node, vehicle in instances:

@@ -37,6 +37,7 @@ import datetime
 import math
 import os
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass
 from importlib.metadata import entry_points
 from importlib.resources import files
@@ -47,7 +48,14 @@ import yaml
 
 from acds_common import units as u
 from acds_common.environment import IGRF_LAST_YEAR, decimal_year_datetime
-from acds_common.graph import declared_node, declared_nodes, declared_sections, packages, time_owner_name
+from acds_common.graph import (
+    declared_node,
+    declared_nodes,
+    declared_sections,
+    external_nodes,
+    packages,
+    time_owner_name,
+)
 from acds_common.schema import ANGLE, DEG, INERTIA, LENGTH, RADIUS, RATE, REQUIRED, TIME, Field, quantity
 
 
@@ -80,7 +88,10 @@ WORLD: dict[str, dict[str, Field]] = {
                        "vehicle's nodes are listed under vehicles)", ['rigid_body', 'reaction_wheels'],
                        choices=tuple(n for n, (_pkg, node) in declared_nodes().items() if node.in_graph),
                        unique=True),
-        'input_timeout': quantity('wall time a node may wait for an input', 30.0, 's', TIME, lo=0.5, hi=3600.0),
+        'input_timeout': quantity('wall time a node may wait for an input (and the graph for its start, external '
+                                  'nodes included)', 30.0, 's', TIME, lo=0.5, hi=3600.0),
+        'external': Field('strs', 'nodes the user runs, "NODE" or "NODE=ROS_NODE_NAME" (issue 20; the launcher '
+                          'starts the others and waits for these; acds run --external adds to them)', [], unique=True),
     },
     'spacecraft': {
         'inertia': quantity('inertia [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (Table 4-1; products Ixy = ∫xy dm, '
@@ -194,6 +205,20 @@ class Scenario:
     def formation(self) -> bool:
         """Whether this is a formation of several vehicles (spec §10)."""
         return 'vehicles' in self.values
+
+    def instances(self) -> list[tuple[str, str, str]]:
+        """(instance, node, vehicle) of every node of the graph: ``<node>`` for the whole graph's,
+        ``<vehicle>/<node>`` for a formation vehicle's."""
+        out = [(n, n, '') for n in self.get('', 'nodes')]
+        for v in self.values.get('vehicles', []):
+            out += [(f'{v["name"]}/{n}', n, v['name']) for n in v['nodes']]
+        return out
+
+    def external(self, extra: Iterable[str] = ()) -> dict[str, str]:
+        """{instance: ROS identity} of the nodes the user runs: the scenario's ``external`` and ``extra`` (``acds run
+        --external``); ValueError (one line) as :func:`acds_common.graph.external_nodes` raises it."""
+        return external_nodes([*self.get('', 'external'), *extra], [i for i, _n, _v in self.instances()],
+                              time_owner_name(self.formation))
 
     def vehicle(self, name: str) -> dict[str, Any]:
         """One vehicle of a formation: {name, nodes, section: {field: SI value}}."""
@@ -489,6 +514,10 @@ def _check_graph(path: Path, sc: Scenario) -> None:
     formation_owner = time_owner_name(True)
     if not sc.formation and formation_owner in sc.get('', 'nodes'):
         raise ScenarioError(f'{path}: nodes: {formation_owner} needs a vehicles list')
+    try:
+        sc.external()
+    except ValueError as exc:
+        raise ScenarioError(f'{path}: external: {exc}') from None
     for pkg in packages():
         for check in pkg.checks:
             problem = check(sc)

@@ -82,6 +82,12 @@ class StepTimes:
         return TIMING_PREFIX + json.dumps(self.report())
 
 
+def overrun(k: int, wall_s: float, deadline_ms: float) -> str:
+    """The failure of step k over its deadline with ``--deadline-strict`` (one line, naming the step)."""
+    return (f'step {k} took {wall_s * 1e3:.3f} ms from its last input to its outputs, {DEADLINE_FAILURE} '
+            f'{deadline_ms:g} ms (--deadline-strict)')
+
+
 def parse_line(line: str) -> dict[str, Any] | None:
     """The timing a node's output line announces (:meth:`StepTimes.line`), or None."""
     _, mark, rest = line.partition(TIMING_PREFIX)

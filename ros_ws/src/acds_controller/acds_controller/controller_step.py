@@ -7,8 +7,8 @@ law/gain commands, applied before the step is computed), the attitude reference
 step k−1 (lag 1, so h(t_k) = h_{k−1} + ḣ_{k−1}·Δt exactly) and the coil current of step k−1
 (lag 1, TA telemetry only).
 
-It returns ``moment`` (A·m²) and ``volts`` (wheel drive, V) every step, and DPA + TA telemetry
-on ``diagnostics`` every ``controller.telemetry_every`` steps and at once when something is
+It returns ``moment`` (A·m²) and ``volts`` (wheel drive, V; with wheels in the graph) every step, and DPA +
+TA telemetry on ``diagnostics`` every ``controller.telemetry_every`` steps and at once when something is
 wrong (a refused command, a non-finite input).
 
 Absent sources: no magnetometer → zero sensed field (the magnetic laws command nothing); no
@@ -79,6 +79,8 @@ class DpaStep(Stepper):
         self.telemetry_period = c['telemetry_every']
         self.ta, self.dpa = build_dpa(self.section('spacecraft'), c, self.section('magnetometer'))
         self.excess_current_a = EXCESS_CURRENT_FACTOR * c['max_moment_am2'] / self.ta.moment_per_amp_am2_per_a
+        #: Whether wheels read the DPA's wheel volts (output ``volts`` is declared only then).
+        self.drives_wheels = self.present('reaction_wheels')
 
     def control(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Stage ``control``: one DPA control period (commands applied first, inputs checked)."""
@@ -91,6 +93,8 @@ class DpaStep(Stepper):
         except ControllerError as exc:
             warnings.append((f'input rejected, zero commands this step: {exc}', {}))
             result = {'moment': ZERO, 'volts': ZERO}
+        if not self.drives_wheels:
+            del result['volts']
         return warned(self, k, result, warnings)
 
     def apply_commands(self, k: int, commands: list[str], warnings: list[tuple[str, dict[str, str]]]) -> None:

@@ -103,8 +103,9 @@ def _acds_controller(params: dict[str, Any]) -> Ports:
     elif 'cold_gas' in params['graph_nodes']:
         stepper = 'cold_gas_controller_step:ColdGasControllerStep'
         store = (Output('volts', topics.WHEEL_VOLTS, BODY), Output('gas_on_time', topics.GAS_ON_TIME, BODY))
-    else:
-        stepper, store = 'controller_step:DpaStep', (Output('volts', topics.WHEEL_VOLTS, BODY),)
+    else:  # the wheel volts only to wheels (a graph without them, OreSat's, has no reader and no such topic)
+        stepper = 'controller_step:DpaStep'
+        store = (Output('volts', topics.WHEEL_VOLTS, BODY),) if 'reaction_wheels' in params['graph_nodes'] else ()
     return Ports(
         f'acds_controller.{stepper}',
         (Stage('control', (

@@ -21,7 +21,7 @@ import sys
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
@@ -33,6 +33,7 @@ from acds_common.lockstep import (
     EXIT_LOCKSTEP,
     FAILURE_MARK,
     LAUNCHER_PID_ENV,
+    READY_TIMEOUT_S,
     STACK_SIGNAL,
     STOP_GRACE_S,
     completed_step,
@@ -43,6 +44,7 @@ from acds_common.scenario import Scenario
 from acds_common.timing import DEADLINE_FAILURE, parse_line
 
 from . import shm
+from .external import ExternalWatch
 from .monitor import RunMonitor
 from .summary import RunObserver
 
@@ -107,20 +109,25 @@ class DomainLease:
     meet an orphan of this one.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, domain: int | None = None) -> None:
+        """The first free domain from one the pid picks, or exactly ``domain`` (LaunchError when another run holds it:
+        an external node joins a run on the domain its user chose, ``acds run --domain``)."""
         DOMAIN_LOCK_DIR.mkdir(parents=True, exist_ok=True)
         start = os.getpid() % len(DOMAIN_RANGE)
-        for i in range(len(DOMAIN_RANGE)):
-            domain = DOMAIN_RANGE[(start + i) % len(DOMAIN_RANGE)]
-            fh = open(DOMAIN_LOCK_DIR / f'domain_{domain}.lock', 'w')  # noqa: SIM115 (held for the run)
+        choices = [domain] if domain is not None else [DOMAIN_RANGE[(start + i) % len(DOMAIN_RANGE)]
+                                                       for i in range(len(DOMAIN_RANGE))]
+        for candidate in choices:
+            fh = open(DOMAIN_LOCK_DIR / f'domain_{candidate}.lock', 'w')  # noqa: SIM115 (held for the run)
             try:
                 fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except OSError:
                 fh.close()
                 continue
-            self.domain_id, self._fh = domain, fh
+            self.domain_id, self._fh = candidate, fh
             os.set_inheritable(fh.fileno(), True)
             return
+        if len(choices) == 1:
+            raise LaunchError(f'ROS domain {choices[0]} is in use by another run (lock {DOMAIN_LOCK_DIR})')
         raise LaunchError(f'no free ROS domain in {DOMAIN_RANGE.start}..{DOMAIN_RANGE.stop - 1}: '
                           f'too many runs at once (locks in {DOMAIN_LOCK_DIR})')
 
@@ -147,7 +154,8 @@ class GraphRun:
                  echo: Callable[[str], None] | None = None, progress: Callable[[int, int, float], None] | None = None,
                  overrides: dict[str, dict[str, Any]] | None = None,
                  record: Path | None = None, record_storage: str = 'mcap', record_compression: str | None = None,
-                 keep: bool = False, live: Callable[[dict[str, dict[str, Any]]], Any] | None = None):
+                 keep: bool = False, live: Callable[[dict[str, dict[str, Any]]], Any] | None = None,
+                 external: Iterable[str] = (), domain: int | None = None):
         self.scenario = scenario
         self.run_dir = Path(run_dir)
         self.steps = steps if steps is not None else scenario.total_steps()
@@ -177,6 +185,14 @@ class GraphRun:
         self._t0 = 0.0
         #: The SIGTSTP handler this run replaced (restored when it stops); None when not installed.
         self._tstp_before: Any = None
+        #: ``NODE[=ROS_NODE_NAME]`` of the nodes the user runs, beside the scenario's ``external`` (issue 20 §1).
+        self.external_items = list(external)
+        #: {instance: ROS identity} of the external nodes (once started).
+        self.external: dict[str, str] = {}
+        #: The ROS domain asked for (None: the first free one).
+        self.domain = domain
+        #: How long the graph may take to start, external nodes included (the nodes' own readiness timeout).
+        self.ready_timeout_s = max(scenario.get('', 'input_timeout'), READY_TIMEOUT_S)
 
     # ---- lifecycle ----------------------------------------------------------------------------------
     def __enter__(self) -> GraphRun:
@@ -211,20 +227,25 @@ class GraphRun:
                 check_target(self.record, self.record_storage, self.record_compression)
             except BagError as exc:
                 raise LaunchError(str(exc)) from None
+        try:
+            self.external = self.scenario.external(self.external_items)
+        except ValueError as exc:
+            raise LaunchError(str(exc)) from None
         self.run_dir.mkdir(parents=True, exist_ok=True)
         self._shm_before = shm.snapshot()
-        self.lease = DomainLease()
+        self.lease = DomainLease(self.domain)
         (self.run_dir / 'domain_id').write_text(f'{self.lease.domain_id}\n')
         (self.run_dir / 'scenario.yaml').write_text(yaml.safe_dump(self.scenario.raw, sort_keys=False))
         env = self.env()
         os.environ['FASTRTPS_DEFAULT_PROFILES_FILE'] = env['FASTRTPS_DEFAULT_PROFILES_FILE']
         os.environ.setdefault('ROS_LOG_DIR', env['ROS_LOG_DIR'])
         os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-        params = node_parameters(self.scenario, self.steps, self.rtf, self.overrides)
+        params = node_parameters(self.scenario, self.steps, self.rtf, self.overrides, self.external)
         self.graph = build_graph(params)
         # Each node's console script: this environment's, else the first on PATH (a node package installed elsewhere).
         search = os.pathsep.join([str(VENV_BIN), env.get('PATH', '')])
-        executables = {name: shutil.which(spec.name, path=search) for name, spec in self.graph.nodes.items()}
+        executables = {name: shutil.which(spec.name, path=search) for name, spec in self.graph.nodes.items()
+                       if name not in self.external}
         missing = sorted(f'{name} (package {self.graph.nodes[name].package})' for name, exe in executables.items() if not exe)
         if missing:
             self.lease.close()
@@ -259,11 +280,22 @@ class GraphRun:
 
             def record(node: Any) -> Any:
                 return RecordingSink(self.bag_writer, node)
-        self.monitor = RunMonitor(self.lease.domain_id, round(self.scenario.control_period_s * 1e9), self.graph,
-                                  on_clock=self._on_clock, record=record, observer=self.observer, keep=self.keep,
-                                  sink=self.live_sink)
+        dt_ns = round(self.scenario.control_period_s * 1e9)
+        watch = ExternalWatch(self.graph, self.external, dt_ns,
+                              {i: (params[i]['deadline_ms'], params[i]['deadline_strict']) for i in self.external
+                               if 'deadline_ms' in params[i]}) if self.external else None
+        self.monitor = RunMonitor(self.lease.domain_id, dt_ns, self.graph, on_clock=self._on_clock, record=record,
+                                  observer=self.observer, keep=self.keep, sink=self.live_sink, external=watch)
         self._t0 = time.monotonic()
+        for name, identity in self.external.items():
+            spec = self.graph.nodes[name]
+            self.echo(f'[acds] external node {name}: waiting (at most {self.ready_timeout_s:g} s) for ROS node '
+                      f'{identity.rpartition("/")[2]} in namespace {spec.namespace} on ROS_DOMAIN_ID='
+                      f'{self.lease.domain_id} (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST on this host); its contract: '
+                      f'./scripts/acds contract {self.scenario.name} --node {name}')
         for name, spec in self.graph.nodes.items():
+            if name in self.external:
+                continue
             exe = executables[name]
             namespace = [] if spec.namespace == topics.NAMESPACE else ['-r', f'__ns:={spec.namespace}']
             popen = subprocess.Popen(
@@ -347,10 +379,14 @@ class GraphRun:
         """Fail the run at once on a bag write error or on data from outside the graph."""
         if self.bag_writer is not None and self.bag_writer.error:
             raise LaunchError(self.bag_writer.error)
-        if self.monitor is not None and self.monitor.intrusion:
-            raise LaunchError(f'data from outside the graph: {self.monitor.intrusion}; the run is not valid')
         if self.monitor is not None and self.monitor.failure:
             raise LaunchError(self.monitor.failure)
+        if self.monitor is not None and self.monitor.intrusion:
+            raise LaunchError(f'data from outside the graph: {self.monitor.intrusion}; the run is not valid')
+        if self.external and self.monitor is not None and not self.monitor.ready \
+                and time.monotonic() - self._t0 > self.ready_timeout_s:
+            raise LaunchError(f'the graph never started: after {self.ready_timeout_s:g} s (scenario key input_timeout): '
+                              + ' | '.join(self.monitor.waiting_for or ['the run monitor is not ready']))
 
     def _death_report(self, proc: NodeProcess, code: int) -> str:
         if proc.reader is not None and proc.popen.poll() is not None:
@@ -419,6 +455,8 @@ class GraphRun:
             if proc.reader is not None:
                 proc.reader.join(timeout=2.0)
         timing = {name: proc.timing for name, proc in self.processes.items()}
+        if self.monitor.external is not None:
+            timing.update(self.monitor.external.timing())
         return RunResult(self.scenario, final, wall, summary, codes, self.record, self.monitor, warnings, timing)
 
     def _drain(self, final: int) -> None:

@@ -32,6 +32,8 @@ from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS, PublisherCheck, mess
 from rclpy.context import Context
 from rclpy.node import Node
 
+from .external import ExternalWatch
+
 #: Seconds between checks of who publishes on the graph's topics.
 PUBLISHER_CHECK_PERIOD_S = 1.0
 
@@ -57,7 +59,8 @@ class RunMonitor:
 
     def __init__(self, domain_id: int, dt_ns: int, graph: Graph, *, on_clock: Callable[[int], None] | None = None,
                  record: Callable[[Node], Callable[[str, bytes], None]] | None = None,
-                 observer: Any = None, keep: bool = False, sink: Callable[[str, bytes], None] | None = None) -> None:
+                 observer: Any = None, keep: bool = False, sink: Callable[[str, bytes], None] | None = None,
+                 external: ExternalWatch | None = None) -> None:
         self.context = Context()
         rclpy.init(context=self.context, domain_id=domain_id,
                    signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
@@ -67,8 +70,13 @@ class RunMonitor:
         self.keep = keep
         self.observer = observer
         self.intrusion: str | None = None
-        #: Set when the monitor itself failed (its thread stopped); the launcher fails the run with it.
+        #: Set when the monitor itself failed (its thread stopped) or an external node broke its contract (a step
+        #: twice, skipped or wrongly stamped; over a strict deadline); the launcher fails the run with it.
         self.failure: str | None = None
+        #: The nodes the user runs (issue 20), watched here: None when the launcher starts every node.
+        self.external = external
+        #: What the external nodes do not serve yet (the graph does not start until it is empty).
+        self.waiting_for: list[str] = []
         self._on_clock = on_clock
         self._lock = threading.Lock()
         self.clock_step = -1
@@ -80,7 +88,7 @@ class RunMonitor:
             if state is None:
                 state = self.topics[name] = TopicState(name, out.msg_type, set(), out.every_step,
                                                        Codec(out.msg_type).stamped)
-            state.publishers.add(spec.instance)
+            state.publishers.add(external.publisher(spec.instance) if external is not None else spec.instance)
         #: Called with (absolute topic, raw CDR) for every message, before the /clock ack (a bag writer).
         self.recorder = record(self.node) if record is not None else None
         #: Also called with every message, after the recorder (a live view: :mod:`acds_runtime.foxglove_bridge`).
@@ -128,6 +136,11 @@ class RunMonitor:
         """READY once this monitor's own readers are matched with every declared publisher of every per-step
         topic and with the time owner's /clock (matched endpoints, not merely discovered ones)."""
         per_step = [(self._subs[name], len(st.publishers)) for name, st in self.topics.items() if st.every_step]
+        if self.external is not None:
+            self.waiting_for = self.external.missing(
+                self.node, {name: sub.get_publisher_count() for name, sub in self._subs.items()})
+            if self.waiting_for:
+                return
         if self._clock_sub.get_publisher_count() > 0 and all(sub.get_publisher_count() >= n for sub, n in per_step):
             self._ready.publish(self._ready_codec.encode(0, MONITOR_NAME))
             self.ready = True
@@ -149,6 +162,8 @@ class RunMonitor:
     # ---- callbacks -------------------------------------------------------------------------------------
     def _on_raw(self, topic: str, data: bytes) -> None:
         st = self.topics[topic]
+        if self.external is not None:
+            self._watch(topic, data)
         k = stamp_ns(data) // self.dt_ns if st.stamped else None
         with self._lock:
             if k is not None and st.every_step:
@@ -169,7 +184,16 @@ class RunMonitor:
         if self.observer is not None:
             self.observer.feed_raw(topic, data)
 
+    def _watch(self, topic: str, data: bytes) -> None:
+        """Hand a message to the external nodes' watch; the first contract breach fails the run."""
+        assert self.external is not None
+        problem = self.external.on_message(topic, stamp_ns(data), time.monotonic())
+        if problem and self.failure is None:
+            self.failure = problem
+
     def _on_clock_raw(self, data: bytes) -> None:
+        if self.external is not None:
+            self._watch(topics.CLOCK, data)
         t_ns = stamp_ns(data)
         k = t_ns // self.dt_ns
         if self.recorder is not None:
@@ -291,7 +315,9 @@ class RunMonitor:
         if not candidates:
             return None
         k, name = min(candidates)
-        return name, f'{name} stopped at step {k}: its inputs for that step had arrived, its outputs did not'
+        who = name if self.external is None or name not in self.external.nodes else \
+            f'{name} (external, ROS node {self.external.publisher(name)})'
+        return name, f'{who} stopped at step {k}: its inputs for that step had arrived, its outputs did not'
 
     def close(self) -> None:
         """Stop spinning and release the ROS context (closes the bag, if recording)."""

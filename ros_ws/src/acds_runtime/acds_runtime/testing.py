@@ -1,16 +1,23 @@
-"""launch_testing-style pytest harness for the ACDS graph (a pytest plugin).
+"""launch_testing-style pytest harness for the ACDS graph: a pytest plugin (entry point ``pytest11``, issue 20 §5).
 
 ``launch_graph`` starts a scenario's processes in their own ROS domain (so
 parallel tests never cross-talk), gives the test the running
 :class:`~acds_runtime.launcher.GraphRun` and its :class:`RunMonitor`, and on exit
 stops every process and asserts that none is left behind. Waits are on
 messages, with timeouts that name what is missing.
+
+A user's package tests its own node against the emulator with it: ``launch_graph(scenario,
+external=['acds_controller=my_node'])`` leaves that node of the graph to the user, and
+:func:`external_node` starts the user's process on the graph's domain (and stops it, however the
+test ends). Installed with ``acds_runtime``, the fixtures need no ``conftest.py``.
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterator
+import signal
+import subprocess
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -101,3 +108,38 @@ def launch_graph(tmp_path: Path) -> Callable[..., Any]:
     def factory(scenario: str | Scenario, **kwargs: Any) -> Any:
         return _launch(tmp_path, scenario, **kwargs)
     return factory
+
+
+def external_env(graph: GraphRun, extra: dict[str, str] | None = None) -> dict[str, str]:
+    """The environment of a user's node joining ``graph``: its ROS domain, discovery on this host, nothing else of
+    this project (the node needs plain ROS 2 only)."""
+    assert graph.lease is not None, 'start the graph first'
+    env = {k: v for k, v in os.environ.items() if k not in ('FASTRTPS_DEFAULT_PROFILES_FILE', 'ACDS_LAUNCHER_PID')}
+    env.update(ROS_DOMAIN_ID=str(graph.lease.domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
+               ROS_LOG_DIR=str(graph.run_dir / 'ros_log'), PYTHONUNBUFFERED='1')
+    env.update(extra or {})
+    return env
+
+
+@contextmanager
+def external_node(graph: GraphRun, argv: Sequence[str], env: dict[str, str] | None = None,
+                  stop_timeout_s: float = 10.0) -> Iterator[subprocess.Popen[str]]:
+    """Run ``argv`` (a user's node) as an external node of ``graph`` (:func:`external_env`; ``env`` adds to it).
+
+    Its output goes to ``<run folder>/external_<n>.log``. On exit it gets SIGINT, then SIGKILL after
+    ``stop_timeout_s``, and is reaped: no test leaves it behind.
+    """
+    log = graph.run_dir / f'external_{len(list(graph.run_dir.glob("external_*.log")))}.log'
+    with log.open('w') as out:
+        proc = subprocess.Popen(list(argv), stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT, text=True,
+                                env=external_env(graph, env), start_new_session=True)
+        try:
+            yield proc
+        finally:
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+                try:
+                    proc.wait(timeout=stop_timeout_s)
+                except subprocess.TimeoutExpired:
+                    os.killpg(proc.pid, signal.SIGKILL)
+                    proc.wait()

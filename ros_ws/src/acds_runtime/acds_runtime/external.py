@@ -1,0 +1,134 @@
+"""External nodes, as the run monitor sees them (issue 20 §1, §4): when they have joined, what they send, how long
+they take.
+
+An external node is a node of the graph that the user runs (any ROS 2 node, any language, this host or another);
+the launcher does not start it and asks it for nothing but plain ROS 2 (:func:`acds_common.graph.external_nodes`).
+The run monitor, which subscribes to every output of the graph anyway, holds one :class:`ExternalWatch`:
+
+* **joined**: the graph starts once every external node publishes each of its per-step outputs (matched with the
+  monitor's readers, so with the lockstep QoS) and subscribes to each of its inputs (and to ``/clock`` when none of
+  a stage's inputs is of the same step); :meth:`ExternalWatch.missing` names what is not there yet;
+* **sequence**: each of its per-step outputs must carry every step once, in order, stamped with the step's time
+  (:func:`acds_common.lockstep.sequence_error`: one line naming the topic, the step and what was expected);
+* **timing**: the wall time from the arrival of the last input of step k to that of its outputs of step k, as the
+  monitor receives them (DDS delivery included both ways; the node processes measure themselves, from inside).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from acds_common import topics
+from acds_common.graph import Graph, instance_name
+from acds_common.lockstep import sequence_error
+from acds_common.timing import StepTimes, overrun
+
+
+@dataclass
+class _External:
+    """One external node: its ROS identity, topics, and the arrival times of its steps' inputs and outputs."""
+
+    identity: str
+    outputs: list[str]
+    subscriptions: list[str]
+    triggers: list[str]
+    times: StepTimes
+    strict: bool
+    inputs_at: dict[int, list[float]] = field(default_factory=dict)
+    outputs_at: dict[int, list[float]] = field(default_factory=dict)
+    last: dict[str, int] = field(default_factory=dict)
+
+
+class ExternalWatch:
+    """The external nodes of one run: ``external`` {instance: ROS identity}; ``deadlines`` {instance: (ms, strict)}."""
+
+    def __init__(self, graph: Graph, external: dict[str, str], dt_ns: int,
+                 deadlines: dict[str, tuple[float, bool]] | None = None) -> None:
+        self.dt_ns = dt_ns
+        self.nodes: dict[str, _External] = {}
+        for inst, identity in external.items():
+            spec = graph.nodes[inst]
+            subscriptions: list[str] = []
+            triggers: list[str] = []
+            for st in spec.stages:
+                present = [i for i in st.inputs if i.source in graph.nodes]
+                subscriptions += [spec.topic(i.topic) for i in present]
+                same_step = [spec.topic(i.topic) for i in present if i.lag == 0]
+                triggers += same_step or [topics.CLOCK]
+            if topics.CLOCK in triggers:
+                subscriptions.append(topics.CLOCK)
+            ms, strict = (deadlines or {}).get(inst, (0.0, False))
+            self.nodes[inst] = _External(identity, [spec.topic(o.topic) for o in spec.outputs if o.every_step],
+                                         sorted(set(subscriptions)), sorted(set(triggers)), StepTimes(ms / 1e3),
+                                         strict)
+
+    def publisher(self, instance: str) -> str:
+        """The ROS identity that publishes for ``instance`` (itself for a node the launcher starts)."""
+        ext = self.nodes.get(instance)
+        return instance if ext is None else ext.identity
+
+    def missing(self, node: Any, matched: dict[str, int]) -> list[str]:
+        """What the external nodes do not serve yet, one phrase per node; ``node``: an rclpy node for the graph
+        queries, ``matched``: {output topic: publishers matched with the monitor's reader}."""
+        out: list[str] = []
+        for inst, ext in self.nodes.items():
+            parts: list[str] = []
+            unread: list[str] = []
+            absent = []
+            for topic in ext.outputs:
+                seen = [i for i in node.get_publishers_info_by_topic(topic) if _identity(i) == ext.identity]
+                if not seen:
+                    absent.append(topic)
+                elif matched.get(topic, 0) < 1:
+                    qos = seen[0].qos_profile
+                    unread.append(f'{topic} ({qos.reliability.name}/{qos.durability.name})')
+            if absent:
+                parts.append('no publisher of ' + ', '.join(absent))
+            if unread:
+                parts.append('publishers the graph cannot read, QoS not RELIABLE/TRANSIENT_LOCAL as the contract '
+                             'says: ' + ', '.join(unread))
+            deaf = [t for t in ext.subscriptions
+                    if not any(_identity(i) == ext.identity for i in node.get_subscriptions_info_by_topic(t))]
+            if deaf:
+                parts.append('no subscription to ' + ', '.join(deaf))
+            if parts:
+                out.append(f'external node {inst} (ROS node {ext.identity}): ' + '; '.join(parts))
+        return out
+
+    def on_message(self, topic: str, t_ns: int, now: float) -> str:
+        """Account a message received at ``now`` (monotonic s); '' or the one line that fails the run."""
+        for ext in self.nodes.values():
+            if topic in ext.outputs:
+                problem = sequence_error(topic, ext.identity, t_ns, ext.last.get(topic, -1), self.dt_ns)
+                if problem:
+                    return problem
+                k = ext.last[topic] = t_ns // self.dt_ns
+                problem = self._arrived(ext, ext.outputs_at, k, now)
+                if problem:
+                    return problem
+            if topic in ext.triggers:
+                problem = self._arrived(ext, ext.inputs_at, t_ns // self.dt_ns, now)
+                if problem:
+                    return problem
+        return ''
+
+    def _arrived(self, ext: _External, at: dict[int, list[float]], k: int, now: float) -> str:
+        """One more of step k's inputs or outputs; when both sides are complete, step k's wall time is recorded."""
+        at.setdefault(k, []).append(now)
+        ins, outs = ext.inputs_at.get(k, []), ext.outputs_at.get(k, [])
+        if len(ins) < len(ext.triggers) or len(outs) < len(ext.outputs):
+            return ''
+        wall = max(0.0, max(outs) - max(ins))
+        del ext.inputs_at[k], ext.outputs_at[k]
+        if ext.times.add(k, wall) and ext.strict:
+            return f'{ext.identity}: ' + overrun(k, wall, ext.times.deadline_s * 1e3)
+        return ''
+
+    def timing(self) -> dict[str, dict[str, Any]]:
+        """{instance: p50/p99/max report} of the external nodes."""
+        return {inst: ext.times.report() for inst, ext in self.nodes.items()}
+
+
+def _identity(info: Any) -> str:
+    return instance_name(info.node_namespace, info.node_name)
