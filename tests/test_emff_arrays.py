@@ -348,9 +348,9 @@ def test_bad_formation_is_one_line_exit_2(tmp_path, edit, message):
 @pytest.mark.parametrize('configuration', ['stable', 'unstable'])
 def test_airtrack_poles_are_the_slides_and_lqr_holds_the_step(configuration):
     from acds_cli.verbs.emff import airtrack_study
-    from dynamics.airtrack import AirtrackConfig, acceleration, linearised
+    from dynamics.airtrack import AirtrackConfig
     cfg = AirtrackConfig(configuration=configuration)
-    a, _ = linearised(cfg)
+    a, _ = cfg.plant.linearised(0.5)
     s2 = 6.0 * 4e-7 * math.pi * cfg.nominal_dipole_am2 * cfg.magnet_dipole_am2 / (math.pi * cfg.mass_kg * 0.5 ** 5)
     poles = np.linalg.eigvals(a)
     if configuration == 'stable':  # slide 53: s = ±i√(6μ0 μ μ_p/(π m x0⁵))
@@ -358,7 +358,8 @@ def test_airtrack_poles_are_the_slides_and_lqr_holds_the_step(configuration):
     else:  # slide 54: s = ±√(…), the spinning pair's λ7,8
         assert np.allclose(sorted(poles.real), [-math.sqrt(s2), math.sqrt(s2)]) and np.allclose(poles.imag, 0.0)
     h = 1e-6  # the analytic stiffness is the nonlinear force's slope
-    slope = (acceleration(cfg, 0.5 + h, cfg.nominal_dipole_am2) - acceleration(cfg, 0.5 - h, cfg.nominal_dipole_am2)) / (2 * h)
+    mu = cfg.plant.equilibrium_dipole_am2(0.5)
+    slope = (cfg.plant.acceleration(0.5 + h, mu) - cfg.plant.acceleration(0.5 - h, mu)) / (2 * h)
     assert slope == pytest.approx(a[1, 0], rel=1e-6)
     r = airtrack_study(configuration, 0.05, 60.0, 0.05, (0.01, 0.01, 100.0))
     assert r['lqr']['settling_time_2pct_s'] is not None and r['lqr']['settling_time_2pct_s'] < 10.0

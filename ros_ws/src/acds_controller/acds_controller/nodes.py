@@ -130,6 +130,8 @@ FORMATION_LAWS = {
     'spin_up': 'acds_controller.formation_controller_step:FormationControllerStep',
     'array_spin': 'acds_controller.formation_array_step:FormationArrayStep',
     'lqr': 'acds_controller.formation_lqr_step:FormationLqrStep',
+    'airtrack_open_loop': 'acds_controller.airtrack_step:AirtrackOpenLoopStep',
+    'airtrack_lqr': 'acds_controller.airtrack_step:AirtrackLqrStep',
 }
 
 
@@ -150,6 +152,35 @@ def _formation_controller(params: dict[str, Any]) -> Ports:
                   Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
 
+def check_airtrack(sc: Any) -> str:
+    """The airtrack laws' formation: the electromagnet (fixed, coils, runs the controller) and the slider (free,
+    a permanent magnet, on the +x side), a track that holds the slider (magnet along the track, a tilt), positive
+    LQR scales ('' when so; seed 004 slides 52–55)."""
+    if not sc.formation or not sc.values['formation']['law'].startswith('airtrack_'):
+        return ''
+    from acds_controller.airtrack_step import airtrack_plant, bryson_scales
+    from acds_controller.magnetic_laws import ControllerError
+    f, vehicles = sc.values['formation'], sc.values['vehicles']
+    magnets = [v for v in vehicles if v['vehicle']['fixed'] and v['vehicle']['magnet'] == 'coils'
+               and 'formation_controller' in v['nodes']]
+    sliders = [v for v in vehicles if not v['vehicle']['fixed'] and v['vehicle']['magnet'] == 'permanent'
+               and not v['nodes']]
+    if len(vehicles) != 2 or len(magnets) != 1 or len(sliders) != 1:
+        return (f'vehicles: law {f["law"]} flies the airtrack: one fixed electromagnet (vehicle.fixed: true, magnet: '
+                'coils, nodes [em_driver, formation_controller]) and one free slider (magnet: permanent, no nodes)')
+    magnet, slider = magnets[0], sliders[0]
+    if not slider['vehicle']['initial_position'][0] > magnet['vehicle']['initial_position'][0]:
+        return (f'vehicles.{slider["name"]}.vehicle.initial_position_m: the slider starts on the +x side of the '
+                'electromagnet (the airtrack\'s separation is x_slider − x_magnet > 0)')
+    try:
+        airtrack_plant(f, slider['vehicle'], slider['spacecraft'])
+        if f['law'] == 'airtrack_lqr':
+            bryson_scales(f)
+    except (ValueError, ControllerError) as exc:
+        return str(exc)
+    return ''
+
+
 #: What the acds_controller package adds to the graph.
 PACKAGE = Package(
     'acds_controller',
@@ -160,6 +191,7 @@ PACKAGE = Package(
              every_vehicle=('spacecraft', 'vehicle', 'em_driver', 'wheels')),
     ),
     sections=SECTIONS,
+    checks=(check_airtrack,),
     topics=(
         Topic(topics.MOMENT_COMMAND, VECTOR3, 'A·m²', 'commanded dipole, body'),
         Topic(topics.WHEEL_VOLTS, VECTOR3, 'V', 'wheel drive volts per body axis'),

@@ -11,6 +11,14 @@ Seed 004 (MIT SSL / Lockheed Martin EMFF final review, 2003). What is modelled, 
     carriage" (slide 74): x, y and yaw only. The table reacts everything out of the plane (the z
     force, the roll and pitch torques), so a planar state stays planar.
   - ``free_space``: 3-D translation and attitude in an inertial frame with no external field.
+  - ``line``: the 1-D airtrack (slides 52–55): every vehicle sits on the frame x axis (the track) and
+    moves only along it; the track's air bearing and rails react everything else (the y and z forces,
+    every torque), so y, z, the velocities across the track, the attitude and the body rates stay as
+    they started (on the axis, at rest across it, rates zero). The track is tilted by ``track_tilt_rad``
+    (> 0 rising along +x): every free vehicle feels gravity −g sin θ along x. A ``fixed`` vehicle (the
+    airtrack's electromagnet, bolted to the track's end) does not move at all: its mount takes the
+    magnetic force on it, which its truth still reports. Momentum is not conserved (track, mount and
+    gravity are external).
   - ``hill``: relative motion about a circular LEO reference orbit by Hill's (Clohessy–Wiltshire)
     equations (slide 63 "'Stationary' Orbits"; x radial out, y along track, z along the orbit normal):
 
@@ -18,7 +26,9 @@ Seed 004 (MIT SSL / Lockheed Martin EMFF final review, 2003). What is modelled, 
 
     n the reference mean motion; attitude is integrated in ECI (body → ECI quaternions, the project
     convention). Positions for the Earth's field and gravity gradient are r_ref(t) + R_ECI←Hill ρ.
-* Inter-vehicle force and torque from every pair, from the vehicles' achieved dipoles:
+* Inter-vehicle force and torque from every pair, from the vehicles' dipoles — each vehicle's coils'
+  achieved dipole plus its permanent magnet (``VehicleSpec.permanent_dipole_body_am2``: a constant body
+  dipole and no coil, the airtrack slider's magnet; far field only, a point dipole):
   ``far_field`` (default) the exact dipole–dipole wrench (``acds_common.dipole_field``, slides
   12–13); ``near_field`` the Biot–Savart wrench of the actual coils (``dynamics.biot_savart``), with
   Newton's third law applied pairwise (F_A = −F_B, τ_A = −τ_B − r_AB × F_B) so the internal wrenches
@@ -82,7 +92,7 @@ from dynamics.integrator import rk4_step
 from dynamics.rigid_body_model import DEFAULT_SUBSTEPS, gravity_gradient_torque_nm, inertia_tensor
 
 #: Frames of relative motion (see the module docstring).
-FRAMES = ("planar", "free_space", "hill")
+FRAMES = ("planar", "free_space", "hill", "line")
 #: Inter-vehicle electromagnetic models.
 EM_MODELS = ("far_field", "near_field")
 #: Central-difference step of the Earth-field gradient, as a fraction of the geocentric radius
@@ -150,12 +160,16 @@ class Coil:
 @dataclass(frozen=True)
 class VehicleSpec:
     """One vehicle: ``name``, ``mass_kg``, ``inertia_kg_m2`` (3×3, body axes), ``coils`` (orthonormal
-    axes, so a body dipole splits uniquely into coil moments)."""
+    axes, so a body dipole splits uniquely into coil moments; none for a permanent magnet only),
+    ``permanent_dipole_body_am2`` (A·m², body axes, constant: a permanent magnet), ``fixed`` (frame
+    ``line`` only: held in place by its mount)."""
 
     name: str
     mass_kg: float
     inertia_kg_m2: np.ndarray
     coils: tuple[Coil, ...]
+    permanent_dipole_body_am2: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    fixed: bool = False
 
     def __post_init__(self) -> None:
         if not finite_float(f"{self.name}.mass_kg", self.mass_kg) > 0.0:
@@ -165,8 +179,10 @@ class VehicleSpec:
             raise DynamicsError(f"{self.name}.inertia_kg_m2 must be a symmetric 3x3 matrix")
         inertia_tensor(inertia[0, 0], inertia[1, 1], inertia[2, 2], -inertia[0, 1], -inertia[0, 2], -inertia[1, 2])
         object.__setattr__(self, "inertia_kg_m2", inertia)
-        if not self.coils:
-            raise DynamicsError(f"{self.name} needs at least one coil")
+        permanent = finite_vector3(f"{self.name}.permanent_dipole_body_am2", self.permanent_dipole_body_am2)
+        object.__setattr__(self, "permanent_dipole_body_am2", permanent)
+        if not self.coils and not np.any(permanent):
+            raise DynamicsError(f"{self.name} needs at least one coil or a permanent magnet")
         axes = self.coil_axes_body
         if not np.allclose(axes.T @ axes, np.eye(len(self.coils)), atol=1e-9):
             raise DynamicsError(f"{self.name}: coil axes must be orthonormal, got {axes.T.tolist()}")
@@ -174,7 +190,14 @@ class VehicleSpec:
     @property
     def coil_axes_body(self) -> np.ndarray:
         """Coil axes as columns (3, n_coils), body axes."""
-        return np.stack([c.axis_body for c in self.coils], axis=1)
+        return np.stack([c.axis_body for c in self.coils], axis=1) if self.coils else np.zeros((3, 0))
+
+    def with_magnet(self, coils_dipole_body_am2: np.ndarray) -> np.ndarray:
+        """The vehicle's whole body dipole (A·m²): its coils' plus its permanent magnet's (the coils' as they are,
+        signed zeros kept, when it has none)."""
+        if np.any(self.permanent_dipole_body_am2):
+            return coils_dipole_body_am2 + self.permanent_dipole_body_am2
+        return coils_dipole_body_am2
 
     def coil_moments_am2(self, dipole_body_am2: np.ndarray) -> np.ndarray:
         """Split a body dipole (A·m²) into the coils' signed moments; DynamicsError if the dipole has a
@@ -222,7 +245,8 @@ class VehicleInput:
 class FormationConfig:
     """``frame`` (FRAMES), ``em_model`` (EM_MODELS), ``segments`` per coil for the near field,
     ``substeps`` RK4 substeps per ``advance``; for ``hill``: ``orbit`` (circular ``Orbit``, the
-    reference), ``earth_field`` (callable b_eci(r_eci_m, t_s) → T, or None), ``gravity_gradient``."""
+    reference), ``earth_field`` (callable b_eci(r_eci_m, t_s) → T, or None), ``gravity_gradient``;
+    for ``line``: ``track_tilt_rad`` (signed, > 0 rising along +x)."""
 
     frame: str = "planar"
     em_model: str = "far_field"
@@ -231,6 +255,7 @@ class FormationConfig:
     orbit: Orbit | None = None
     earth_field: Callable[[np.ndarray, float], np.ndarray] | None = None
     gravity_gradient: bool = False
+    track_tilt_rad: float = 0.0
 
     def __post_init__(self) -> None:
         if self.frame not in FRAMES:
@@ -248,6 +273,11 @@ class FormationConfig:
         elif self.orbit is not None or self.earth_field is not None or self.gravity_gradient:
             raise DynamicsError(f"FormationConfig.frame {self.frame!r} has no orbit: orbit, earth_field and "
                                 "gravity_gradient apply to frame 'hill' only")
+        if not abs(finite_float("FormationConfig.track_tilt_rad", self.track_tilt_rad)) < math.pi / 2:
+            raise DynamicsError(f"FormationConfig.track_tilt_rad must be within ±90°, got {self.track_tilt_rad} rad")
+        if self.track_tilt_rad != 0.0 and self.frame != "line":
+            raise DynamicsError(f"FormationConfig.track_tilt_rad is the airtrack's tilt (frame 'line'), got frame "
+                                f"{self.frame!r}")
 
 
 # -------------------------------------------------------------------------------------- wrenches
@@ -335,6 +365,14 @@ class FormationDynamics:
         self._pos, self._vel, self._q, self._w = np.array(pos), np.array(vel), np.array(q), np.array(w)
         if cfg.frame == "planar":
             self._check_planar()
+        self._fixed = np.array([v.fixed for v in vehicles])
+        self._permanent = np.stack([v.permanent_dipole_body_am2 for v in vehicles])
+        if cfg.frame == "line":
+            self._check_line()
+        elif np.any(self._fixed):
+            raise DynamicsError("fixed vehicles are the airtrack's (frame 'line'), got frame " + repr(cfg.frame))
+        if cfg.em_model == "near_field" and np.any(self._permanent):
+            raise DynamicsError("a permanent magnet is a point dipole: em_model 'far_field' only")
         self._t = finite_float("t0_s", t0_s)
         self._pairs = [(i, j) for i in range(len(vehicles)) for j in range(i + 1, len(vehicles))]
         self._check_contact()
@@ -352,11 +390,19 @@ class FormationDynamics:
             if abs(self.vehicles[i].inertia_kg_m2[0, 2]) > 0.0 or abs(self.vehicles[i].inertia_kg_m2[1, 2]) > 0.0:
                 raise DynamicsError(f"{spec.name}: frame 'planar' needs body z principal (Ixz = Iyz = 0)")
 
+    def _check_line(self) -> None:
+        for i, spec in enumerate(self.vehicles):
+            if (np.any(self._pos[i, 1:] != 0.0) or np.any(self._vel[i, 1:] != 0.0) or np.any(self._w[i] != 0.0)
+                    or (spec.fixed and self._vel[i, 0] != 0.0)):
+                raise DynamicsError(f"{spec.name}: frame 'line' needs every vehicle on the track (y = z = 0), moving "
+                                    "only along it (v_y = v_z = 0, rates zero) and a fixed vehicle at rest (slides 52–55)")
+
     def _check_contact(self) -> None:
         """Vehicles closer than the sum of their largest coil radii have collided: refuse to go on."""
         for i, j in self._pairs:
             sep = float(np.linalg.norm(self._pos[j] - self._pos[i]))
-            reach = max(c.radius_m for c in self.vehicles[i].coils) + max(c.radius_m for c in self.vehicles[j].coils)
+            reach = (max((c.radius_m for c in self.vehicles[i].coils), default=0.0)
+                     + max((c.radius_m for c in self.vehicles[j].coils), default=0.0))
             if sep < reach:
                 raise DynamicsError(f"vehicles {self.vehicles[i].name} and {self.vehicles[j].name} collided at "
                                     f"t = {self._t:.6g} s: separation {sep:.4g} m < {reach:.4g} m (sum of coil radii)")
@@ -470,6 +516,11 @@ class FormationDynamics:
             acc[:, 2] = 0.0
             wdot = np.zeros_like(w)
             wdot[:, 2] = torque[:, 2] / self._inertia[:, 2, 2]
+        elif self.cfg.frame == "line":
+            acc[:, 0] += -units.STANDARD_GRAVITY_M_S2 * math.sin(self.cfg.track_tilt_rad)
+            acc[:, 1:] = 0.0
+            acc[self._fixed] = 0.0
+            wdot = np.zeros_like(w)
         else:
             h = h0 + hdot * tau_s
             iw = np.einsum("nij,nj->ni", self._inertia, w)
@@ -489,7 +540,7 @@ class FormationDynamics:
         dip, h0, hdot = [], [], []
         for spec, u in zip(self.vehicles, inputs, strict=True):
             spec.coil_moments_am2(u.dipole_body_am2)  # reject dipoles its coils cannot make
-            dip.append(finite_vector3(f"{spec.name} dipole_body_am2", u.dipole_body_am2))
+            dip.append(spec.with_magnet(finite_vector3(f"{spec.name} dipole_body_am2", u.dipole_body_am2)))
             h0.append(finite_vector3(f"{spec.name} wheel_h_body_nms", u.wheel_h_body_nms))
             hdot.append(finite_vector3(f"{spec.name} wheel_hdot_body_nm", u.wheel_hdot_body_nm))
         step = (np.array(dip), np.array(h0), np.array(hdot))
@@ -563,16 +614,17 @@ class FormationDynamics:
         return FormationTruth(t, tuple(out), h2e)
 
     def wrenches_now(self, dipoles_body_am2: Sequence[Sequence[float]]) -> Wrenches:
-        """Instantaneous wrenches at the current state for the given body dipoles (A·m²)."""
-        dip = np.array([finite_vector3(f"{s.name} dipole_body_am2", d)
+        """Instantaneous wrenches at the current state for the given body dipoles of the coils (A·m²; the
+        permanent magnets added)."""
+        dip = np.array([s.with_magnet(finite_vector3(f"{s.name} dipole_body_am2", d))
                         for s, d in zip(self.vehicles, dipoles_body_am2, strict=True)])
         return self._wrenches(self._t, self._pos, self._q, dip)
 
     def momentum(self, wheel_h_body_nms: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
         """Total linear (N·s) and angular (N·m·s, about the frame origin) momentum in the inertial frame,
         wheels included (``wheel_h_body_nms`` per vehicle, body axes). ``free_space`` and ``planar``
-        only (in ``hill`` the Earth's gravity exchanges momentum with the formation)."""
-        if self.cfg.frame == "hill":
+        only (in ``hill`` the Earth's gravity exchanges momentum with the formation, in ``line`` the track)."""
+        if self.cfg.frame not in ("free_space", "planar"):
             raise DynamicsError("momentum bookkeeping is for frames 'free_space' and 'planar' (no external forces)")
         p = np.zeros(3)
         ang = np.zeros(3)

@@ -2,7 +2,8 @@
 
 Built from the formation's shared sections (``formation``, ``dynamics``, and for the ``hill``
 frame ``orbit``/``earth``) and every vehicle's ``spacecraft``, ``vehicle`` and ``em_driver``
-sections (parameters ``<vehicle>.<name>``). Step 0's truth is published at start; stage
+sections (parameters ``<vehicle>.<name>``); a ``vehicle.magnet: permanent`` vehicle has its
+``permanent_dipole`` and no coil (nor em_driver: its absent dipole input is zero). Step 0's truth is published at start; stage
 ``integrate`` of step k takes every vehicle's achieved dipole and wheel momentum/rate of step k
 (an absent node means zero), checks them against what the hardware can produce, integrates
 t_k → t_k+1 (:class:`dynamics.formation.FormationDynamics`) and returns every vehicle's truth of
@@ -96,8 +97,10 @@ class FormationDynamicsStep(Stepper):
         for name in self.names:
             sc, vh, em = (self.section(s, name) for s in ('spacecraft', 'vehicle', 'em_driver'))
             with scenario_key(f'vehicles.{name}', DynamicsError):
+                permanent = vh['magnet'] == 'permanent'
                 spec = VehicleSpec(name, vh['mass'], inertia_tensor(*sc['inertia']) * sc['inertia_scale'],
-                                   coils(vh, name))
+                                   () if permanent else coils(vh, name),
+                                   np.array(vh['permanent_dipole'] if permanent else _ZERO), vh['fixed'])
                 check_coils_match_drives(name, spec, em)
             specs.append(spec)
             states.append(VehicleState(vh['initial_position'], vh['initial_velocity'], sc['initial_quaternion_xyzw'],
@@ -106,7 +109,8 @@ class FormationDynamicsStep(Stepper):
         with scenario_key('formation', DynamicsError):
             self.model = FormationDynamics(FormationConfig(
                 frame=f['frame'], em_model=f['em_model'], segments=f['segments'], substeps=dyn['substeps'],
-                orbit=orbit, earth_field=field, gravity_gradient=f['frame'] == 'hill' and dyn['gravity_gradient']),
+                orbit=orbit, earth_field=field, gravity_gradient=f['frame'] == 'hill' and dyn['gravity_gradient'],
+                track_tilt_rad=f['track_tilt']),
                 specs, states)
         self._wheel_h = [np.zeros(3) for _ in self.names]
 

@@ -8,6 +8,7 @@ and attitude, seed 004). Named in the entry-point group ``acds.nodes`` (setup.py
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from acds_common import topics
@@ -15,6 +16,7 @@ from acds_common import units as u
 from acds_common.frames import BODY, ECI, FORMATION, vehicle_body
 from acds_common.graph import Input, Node, Output, Package, Ports, Stage, Topic
 from acds_common.schema import (
+    ANGLE,
     DEG,
     LENGTH,
     MOMENTUM,
@@ -27,6 +29,8 @@ from acds_common.schema import (
 )
 
 VECTOR3 = 'geometry_msgs/msg/Vector3Stamped'
+#: The formation laws of the 1-D airtrack (frame ``line``; acds_controller.airtrack_control).
+AIRTRACK_LAWS = ('airtrack_open_loop', 'airtrack_lqr')
 #: The scenario sections this package defines.
 SECTIONS: dict[str, dict[str, Field]] = {
     'dynamics': {
@@ -80,8 +84,12 @@ SECTIONS: dict[str, dict[str, Field]] = {
     },
     'formation': {
         'frame': Field('str', 'planar: the EMFFORCE air-bearing testbed (x, y, yaw); free_space: 3-D, no field; '
-                       'hill: relative motion about a circular LEO orbit (Clohessy–Wiltshire)', 'planar',
-                       choices=('planar', 'free_space', 'hill')),
+                       'hill: relative motion about a circular LEO orbit (Clohessy–Wiltshire); line: the 1-D airtrack '
+                       '(slides 52–55: motion along the frame x axis only, the track holds the rest)', 'planar',
+                       choices=('planar', 'free_space', 'hill', 'line')),
+        'track_tilt': quantity('line: tilt of the track, > 0 rising along +x (away from an electromagnet at the '
+                               'origin): every free vehicle feels gravity −g sin θ along x', 0.0, 'rad', ANGLE,
+                               lo=-math.pi / 2, hi=math.pi / 2),
         'em_model': Field('str', 'inter-vehicle wrench: far_field (exact dipole–dipole) or near_field (Biot–Savart '
                           'of the coils)', 'far_field', choices=('far_field', 'near_field')),
         'segments': Field('int', 'near field: straight segments per coil loop', 64, lo=3, hi=4096),
@@ -89,8 +97,10 @@ SECTIONS: dict[str, dict[str, Field]] = {
                              'sections)', True),
         'law': Field('str', 'hold: keep the second vehicle at relative_position from the first; spin_up: spin '
                      'the pair about the frame z axis; array_spin: spin N vehicles at their array_position about '
-                     'the frame z axis (PD); lqr: LQR about the steady spin of the array at spin_rate', 'hold',
-                     choices=('hold', 'spin_up', 'array_spin', 'lqr')),
+                     'the frame z axis (PD); lqr: LQR about the steady spin of the array at spin_rate; '
+                     'airtrack_open_loop: the airtrack\'s electromagnet at the constant dipole that holds the slider '
+                     'at airtrack_separation; airtrack_lqr: that dipole plus LQR feedback on the separation', 'hold',
+                     choices=('hold', 'spin_up', 'array_spin', 'lqr') + AIRTRACK_LAWS),
         'relative_position': quantity('hold: the second vehicle\'s position relative to the first, formation frame',
                                 [2.5, 0.0, 0.0], 'm', LENGTH, length=3, lo=-1e5, hi=1e5),
         'hold_natural_frequency': quantity('hold: PD natural frequency', 0.1, 'rad_s', {'rad_s': 1.0}, lo=1e-4, hi=10.0),
@@ -119,6 +129,15 @@ SECTIONS: dict[str, dict[str, Field]] = {
                               ('normal', 'the relative positions along the spin axis (d·Δψ)'),
                               ('attitude', 'the attitude errors'), ('rate', 'the relative velocities and body rates'),
                               ('coil', 'the coil moments'), ('wheel', 'the wheel torques'))},
+        'airtrack_separation': quantity('airtrack laws: the commanded separation of the slider from the '
+                                        'electromagnet (the step\'s target)', 0.5, 'm', LENGTH, lo=1e-3, hi=100.0),
+        **{f'airtrack_{name}_scale': quantity(f'airtrack_lqr: Bryson scale of {what}: its weight is 1/scale² '
+                                              '(Q = diag(1/Δx², 1/Δv²), R = 1/Δμ²; > 0)', default, si, units,
+                                              lo=0.0, hi=1e6)
+           for name, what, default, si, units in (
+               ('position', 'the separation error Δx', 0.01, 'm', LENGTH),
+               ('velocity', 'the slider\'s velocity Δv', 0.01, 'm_s', {'m_s': 1.0}),
+               ('dipole', 'the electromagnet\'s dipole Δμ', 100.0, 'am2', {'am2': 1.0}))},
         'dump': Field('bool', 'hill with the Earth field: Earth as a momentum dump (slides 31–33)', False),
         'dump_start': quantity('dump: start dumping the vehicle whose wheels hold more than this', 0.5, 'nms', MOMENTUM,
                          lo=0.0, hi=1e6),
@@ -130,6 +149,13 @@ SECTIONS: dict[str, dict[str, Field]] = {
                                [0.0, 0.0, 0.0], 'm', LENGTH, length=3, lo=-1e7, hi=1e7),
         'initial_velocity': quantity('initial velocity, formation frame', [0.0, 0.0, 0.0], 'm_s', {'m_s': 1.0},
                                length=3, lo=-1e4, hi=1e4),
+        'magnet': Field('str', 'coils: electromagnets (the coil_* keys); permanent: a permanent magnet of '
+                        'permanent_dipole and no coil (the airtrack slider, seed 004 slide 52)', 'coils',
+                        choices=('coils', 'permanent')),
+        'permanent_dipole': quantity('magnet permanent: the magnet\'s constant dipole, body axes', [0.0, 0.0, 0.0],
+                                     'am2', {'am2': 1.0}, length=3, lo=-1e6, hi=1e6),
+        'fixed': Field('bool', 'frame line: the vehicle is bolted to the track (the airtrack\'s electromagnet): it '
+                       'never moves, its mount takes the force on it', False),
         'array_position': quantity('array_spin, lqr: the vehicle\'s place in the spinning array at t = 0, formation '
                                    'frame (about the array\'s centre of mass)', [0.0, 0.0, 0.0], 'm', LENGTH, length=3,
                                    lo=-1e7, hi=1e7),
@@ -238,6 +264,25 @@ def check_formation(sc: Any) -> str:
                 if a['vehicle'][key] == b['vehicle'][key]:
                     return (f'vehicles.{b["name"]}.vehicle.{key}_m: vehicles {a["name"]} and {b["name"]} {what} the '
                             f'same position {a["vehicle"][key]} m')
+    line = f['frame'] == 'line'
+    if line != (f['law'] in AIRTRACK_LAWS):
+        return (f'formation.law: frame line (the airtrack) flies the laws {", ".join(AIRTRACK_LAWS)} and they fly '
+                f'only it, got law {f["law"]!r} in frame {f["frame"]!r}')
+    if f['track_tilt'] != 0.0 and not line:
+        return f'formation.track_tilt: the airtrack\'s tilt is for frame line, got frame {f["frame"]!r}'
+    for v in vehicles:
+        vh, where = v['vehicle'], f'vehicles.{v["name"]}.vehicle'
+        if vh['fixed'] and not line:
+            return f'{where}.fixed: a vehicle bolted to the track is the airtrack\'s (frame line), got {f["frame"]!r}'
+        if (vh['magnet'] == 'permanent') != any(vh['permanent_dipole']):
+            return (f'{where}.permanent_dipole_am2: a permanent magnet (magnet: permanent) has a non-zero dipole and '
+                    f'only it, got magnet {vh["magnet"]} with {vh["permanent_dipole"]} A·m²')
+        if line and (any(vh['initial_position'][1:]) or any(vh['initial_velocity'][1:])
+                     or (vh['fixed'] and vh['initial_velocity'][0] != 0.0) or any(v['spacecraft']['initial_rates'])):
+            return (f'{where}: frame line puts every vehicle on the track (initial_position_m and initial_velocity_m_s '
+                    'along x only, spacecraft.initial_rates zero) and a fixed one at rest')
+    if line and f['em_model'] != 'far_field':
+        return 'formation.em_model: the airtrack\'s permanent magnet is a point dipole (far_field)'
     if f['law'] in ('hold', 'spin_up') and len(vehicles) != 2:
         return f'formation.law: {f["law"]!r} flies a pair of vehicles, got {len(vehicles)} (array_spin or lqr fly N)'
     if f['law'] in ('array_spin', 'lqr') and f['frame'] not in ('planar', 'free_space'):

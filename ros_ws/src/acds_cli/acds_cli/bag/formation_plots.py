@@ -73,6 +73,7 @@ def plot_formation(names: list[str], series: Callable[[str], tuple[np.ndarray, n
     ax_m.set_ylabel('|μ| achieved, A·m²')
     ax_h.set_ylabel('|h| wheels, N·m·s')
     for ax in (ax_m, ax_h):
-        ax.legend(fontsize=8)
+        if ax.get_legend_handles_labels()[0]:  # no wheels in the formation (the airtrack): nothing to label
+            ax.legend(fontsize=8)
         ax.grid(alpha=0.3)
     save(fig, 'emff_dipoles', 'Dipoles and wheel momentum of each vehicle')

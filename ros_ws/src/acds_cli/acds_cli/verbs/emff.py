@@ -184,15 +184,11 @@ def perturbed_data(sc: Any, deviation: float) -> dict[str, Any]:
     return data
 
 
-def nonlinear_run(sc: Any, deviation: float, workdir: Any) -> tuple[np.ndarray, str | None]:
-    """(separation of the first two vehicles per step, failure or None): the scenario's graph, direct engine."""
-    import yaml
+def graph_positions(run_sc: Any) -> tuple[dict[str, np.ndarray], str | None]:
+    """({vehicle: (steps, 3) positions, formation frame}, failure or None): the scenario's graph, direct engine
+    (the graph's steppers in one process), every vehicle's truth odometry of every step it reached."""
     from acds_common import topics
-    from acds_common.scenario import load_scenario
     from acds_runtime.direct import DirectRun
-    path = workdir / f'{sc.name}_{deviation:+.6g}.yaml'
-    path.write_text(yaml.safe_dump(perturbed_data(sc, deviation)))
-    run_sc = load_scenario(str(path))
     names = [v['name'] for v in run_sc.values['vehicles']]
     odometry = {topics.resolve(f'{n}/{topics.TRUTH_ODOMETRY}'): n for n in names}
     store: dict[str, list[np.ndarray]] = {n: [] for n in names}
@@ -214,8 +210,18 @@ def nonlinear_run(sc: Any, deviation: float, workdir: Any) -> tuple[np.ndarray, 
     except Exception as exc:  # a run that fails (a collision, a diverged state) is a result here, not a crash
         failure = str(exc).splitlines()[0]
     steps = min(len(s) for s in store.values())
-    sep = np.array([np.linalg.norm(store[names[1]][k] - store[names[0]][k]) for k in range(steps)])
-    return sep, failure
+    return {n: np.array(store[n][:steps]).reshape(steps, 3) for n in names}, failure
+
+
+def nonlinear_run(sc: Any, deviation: float, workdir: Any) -> tuple[np.ndarray, str | None]:
+    """(separation of the first two vehicles per step, failure or None): the scenario's graph, direct engine."""
+    import yaml
+    from acds_common.scenario import load_scenario
+    path = workdir / f'{sc.name}_{deviation:+.6g}.yaml'
+    path.write_text(yaml.safe_dump(perturbed_data(sc, deviation)))
+    positions, failure = graph_positions(load_scenario(str(path)))
+    a, b = list(positions.values())[:2]
+    return np.linalg.norm(b - a, axis=1), failure
 
 
 def linear_run(controller: Any, sc: Any, deviation: float, steps: int) -> np.ndarray:
@@ -345,49 +351,92 @@ def register(sub: argparse._SubParsersAction) -> None:
 # ------------------------------------------------------------------------------------------ airtrack
 
 
+#: The airtrack scenarios ``emff-airtrack --graph`` flies, per configuration: (open loop, LQR).
+AIRTRACK_SCENARIOS = {'stable': ('emff_airtrack_stable_open_loop', 'emff_airtrack_stable'),
+                      'unstable': ('emff_airtrack_unstable_open_loop', 'emff_airtrack_unstable')}
+
+
+def step_metrics(t: np.ndarray, x: np.ndarray, x_ref: float, step_m: float, duration_s: float) -> dict[str, Any]:
+    """Overshoot (% of the step), range, 2 % settling time (None if the response ends outside the band or the run
+    ended early) and, for a run that ended before ``duration_s``, when."""
+    err = (x - x_ref) / step_m
+    outside = np.flatnonzero(np.abs(err) > 0.02)
+    ended = t[-1] < duration_s - 1e-9
+    return {'overshoot_pct': float(max(0.0, err.max()) * 100.0), 'peak_m': float(x.max()), 'min_m': float(x.min()),
+            'settling_time_2pct_s': None if ended or (len(outside) and outside[-1] == len(t) - 1)
+            else (float(t[outside[-1] + 1]) if len(outside) else 0.0),
+            'ended_at_s': float(t[-1]) if ended else None}
+
+
+def _airtrack_row(configuration: str, plant: Any, lqr: Any, scales: Any, x_start: float, runs: tuple[Any, Any],
+                  duration_s: float) -> dict[str, Any]:
+    """One configuration's table row from its plant, LQR law, start and (open-loop, LQR) runs (t, x, μ or None)."""
+    a, _b = plant.linearised(lqr.separation_m)
+    step = lqr.separation_m - x_start
+    return {'configuration': configuration, 'mass_kg': plant.mass_kg, 'magnet_dipole_am2': plant.magnet_dipole_am2,
+            'separation_m': lqr.separation_m, 'tilt_deg': math.degrees(plant.tilt_rad),
+            'nominal_dipole_am2': lqr.dipole0_am2, 'resting_dipole_am2': plant.equilibrium_dipole_am2(x_start),
+            'step_m': step, 'gain': lqr.gain.tolist(),
+            'weights': {'position_m': scales.position_m, 'velocity_m_s': scales.velocity_m_s,
+                        'dipole_am2': scales.dipole_am2},
+            'open_loop_poles': [[p.real, p.imag] for p in np.linalg.eigvals(a)],
+            'closed_loop_poles': [[p.real, p.imag] for p in lqr.closed_loop_poles()],
+            'open_loop': step_metrics(*runs[0][:2], lqr.separation_m, step, duration_s),
+            'lqr': step_metrics(*runs[1][:2], lqr.separation_m, step, duration_s), '_runs': runs}
+
+
 def airtrack_study(configuration: str, step_m: float, duration_s: float, dt_s: float, scales: tuple[float, float, float]
                    ) -> dict[str, Any]:
-    """Step responses of one airtrack configuration, open loop and under LQR (``dynamics.airtrack``): the
-    commanded separation steps from x0 − ``step_m`` (where the slider rests) to x0 at t = 0. Open loop: the
-    electromagnet's dipole steps to x0's equilibrium value; LQR: μ = μ_eq(x0) − K (x − x0, ẋ), K from the
-    analytic linearisation and Bryson weights Q = diag(1/Δx², 1/Δv²), R = 1/Δμ² (``scales``)."""
-    from acds_controller.formation_linear import lqr_gain
-    from dynamics.airtrack import AirtrackConfig, equilibrium_dipole_am2, linearised, simulate
+    """Step responses of one airtrack configuration, open loop and under LQR, of the core model
+    (``dynamics.airtrack``): the commanded separation steps from x0 − ``step_m`` (where the slider rests) to x0
+    at t = 0; the laws are the graph's (``acds_controller.airtrack_control``), Bryson ``scales`` (Δx, Δv, Δμ)."""
+    from acds_controller.airtrack_control import AirtrackLqr, AirtrackOpenLoop, BrysonScales
+    from dynamics.airtrack import AirtrackConfig, simulate
     cfg = AirtrackConfig(configuration=configuration)
-    a, b = linearised(cfg)
-    dx, dv, dmu = scales
-    k, _ = lqr_gain(a, b, np.diag([1.0 / dx ** 2, 1.0 / dv ** 2]), np.array([[1.0 / dmu ** 2]]))
-    x_ref = cfg.separation_m
-    x_start = x_ref - step_m
-    mu_ref = cfg.nominal_dipole_am2
-    open_loop = simulate(cfg, x_start, 0.0, lambda _t, _x, _v: mu_ref, duration_s, dt_s)
-    closed = simulate(cfg, x_start, 0.0, lambda _t, x, v: mu_ref - float(k[0] @ np.array([x - x_ref, v])),
-                      duration_s, dt_s)
-    rest = equilibrium_dipole_am2(cfg, x_start)
+    weights = BrysonScales(*scales)
+    open_law, lqr = AirtrackOpenLoop(cfg.plant, cfg.separation_m), AirtrackLqr(cfg.plant, cfg.separation_m, weights)
+    x_start = cfg.separation_m - step_m
+    runs = tuple(simulate(cfg, x_start, 0.0, lambda _t, x, v, law=law: law.dipole_am2(x, v), duration_s, dt_s)
+                 for law in (open_law, lqr))
+    return _airtrack_row(configuration, cfg.plant, lqr, weights, x_start, runs, duration_s)
 
-    def metrics(run: tuple[np.ndarray, np.ndarray, np.ndarray]) -> dict[str, Any]:
-        t, x, _ = run
-        err = (x - x_ref) / step_m
-        outside = np.flatnonzero(np.abs(err) > 0.02)
-        ended = t[-1] < duration_s - 1e-9
-        return {'overshoot_pct': float(max(0.0, err.max()) * 100.0), 'peak_m': float(x.max()), 'min_m': float(x.min()),
-                'settling_time_2pct_s': None if ended or (len(outside) and outside[-1] == len(t) - 1)
-                else (float(t[outside[-1] + 1]) if len(outside) else 0.0),
-                'ended_at_s': float(t[-1]) if ended else None}
 
-    poles_open = np.linalg.eigvals(a)
-    poles_closed = np.linalg.eigvals(a - b @ k)
-    return {'configuration': configuration, 'mass_kg': cfg.mass_kg, 'magnet_dipole_am2': cfg.magnet_dipole_am2,
-            'separation_m': x_ref, 'tilt_deg': math.degrees(cfg.tilt_rad), 'nominal_dipole_am2': mu_ref,
-            'resting_dipole_am2': rest, 'step_m': step_m, 'gain': k[0].tolist(),
-            'weights': {'position_m': dx, 'velocity_m_s': dv, 'dipole_am2': dmu},
-            'open_loop_poles': [[p.real, p.imag] for p in poles_open],
-            'closed_loop_poles': [[p.real, p.imag] for p in poles_closed],
-            'open_loop': metrics(open_loop), 'lqr': metrics(closed), '_runs': (open_loop, closed)}
+def airtrack_graph_study(configuration: str) -> dict[str, Any]:
+    """The same step responses from the graph: the configuration's two shipped scenarios
+    (``AIRTRACK_SCENARIOS``) on the direct engine, the separation x_slider − x_magnet of every step."""
+    from acds_common.scenario import load_scenario
+    from acds_controller.airtrack_control import AirtrackLqr
+    from acds_controller.airtrack_step import airtrack_plant, bryson_scales
+    runs, durations = [], []
+    for name in AIRTRACK_SCENARIOS[configuration]:
+        sc = load_scenario(name)
+        positions, _failure = graph_positions(sc)  # a failed run is a shorter response (ended_at_s)
+        magnet_v = next(v for v in sc.values['vehicles'] if v['nodes'])  # the slider runs no node (check_airtrack)
+        slider_v = next(v for v in sc.values['vehicles'] if not v['nodes'])
+        x = positions[slider_v['name']][:, 0] - positions[magnet_v['name']][:, 0]
+        runs.append((np.arange(len(x)) * sc.control_period_s, x, None))
+        durations.append(sc.duration_s())
+    f = sc.values['formation']
+    plant, scales = airtrack_plant(f, slider_v['vehicle'], slider_v['spacecraft']), bryson_scales(f)
+    row = _airtrack_row(configuration, plant, AirtrackLqr(plant, f['airtrack_separation'], scales), scales,
+                        float(runs[1][1][0]), (runs[0], runs[1]), durations[1])
+    row['open_loop'] = step_metrics(*runs[0][:2], f['airtrack_separation'], row['step_m'], durations[0])
+    row['scenarios'] = list(AIRTRACK_SCENARIOS[configuration])
+    return row
 
 
 def cmd_airtrack(args: argparse.Namespace) -> int:
     """Both airtrack configurations' step responses: table and plots."""
+    from acds_controller.airtrack_control import BrysonScales
+    from acds_controller.magnetic_laws import ControllerError
+    scales = (args.weight_position_m, args.weight_velocity_m_s, args.weight_dipole_am2)
+    try:
+        BrysonScales(*scales)
+    except ControllerError as exc:
+        raise UsageError(f'--weight-*: {exc}') from None
+    for name, value in (('--step-m', args.step_m), ('--duration-s', args.duration_s), ('--dt-s', args.dt_s)):
+        if not (math.isfinite(value) and value > 0.0):
+            raise UsageError(f'{name}: must be > 0, got {value:g}')
     out_dir = Path(args.out)
     out_dir.mkdir(parents=True, exist_ok=True)
     import matplotlib
@@ -395,21 +444,26 @@ def cmd_airtrack(args: argparse.Namespace) -> int:
     import matplotlib.pyplot as plt
     rows = []
     for configuration in ('stable', 'unstable'):
-        r = airtrack_study(configuration, args.step_m, args.duration_s, args.dt_s,
-                           (args.weight_position_m, args.weight_velocity_m_s, args.weight_dipole_am2))
+        r = (airtrack_graph_study(configuration) if args.graph
+             else airtrack_study(configuration, args.step_m, args.duration_s, args.dt_s, scales))
         (t_o, x_o, _), (t_c, x_c, mu_c) = r.pop('_runs')
-        fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+        fig, axes = plt.subplots(1 if mu_c is None else 2, 1, figsize=(7, 4 if mu_c is None else 6), sharex=True,
+                                 squeeze=False)
+        ax = axes[0, 0]
         ax.plot(t_o, x_o, label='open loop')
         ax.plot(t_c, x_c, label='LQR')
         ax.axhline(r['separation_m'], color='k', lw=0.5)
         ax.set_ylabel('separation, m')
-        ax.set_title(f'EMFF airtrack, {configuration} configuration: step {r["step_m"]:g} m (seed 004 slides 53–54)')
+        source = 'graph, direct engine' if args.graph else 'core model'
+        ax.set_title(f'EMFF airtrack, {configuration}: step {r["step_m"]:g} m ({source}; seed 004 slides 53–54)',
+                     fontsize=10)
         ax.legend()
-        ax2.plot(t_c, mu_c, label='LQR electromagnet dipole')
-        ax2.set_xlabel('time, s')
-        ax2.set_ylabel('μ_e, A·m²')
-        ax2.legend()
-        path = out_dir / f'airtrack_{configuration}.png'
+        if mu_c is not None:
+            axes[1, 0].plot(t_c, mu_c, label='LQR electromagnet dipole')
+            axes[1, 0].set_ylabel('μ_e, A·m²')
+            axes[1, 0].legend()
+        axes[-1, 0].set_xlabel('time, s')
+        path = out_dir / f'airtrack_{configuration}{"_graph" if args.graph else ""}.png'
         fig.savefig(path, dpi=100)
         plt.close(fig)
         r['plot'] = str(path)
@@ -419,7 +473,8 @@ def cmd_airtrack(args: argparse.Namespace) -> int:
         return 0
     for r in rows:
         print(f'airtrack {r["configuration"]}: m {r["mass_kg"]:g} kg, μ_p {r["magnet_dipole_am2"]:g} A·m², x0 '
-              f'{r["separation_m"]:g} m, tilt {r["tilt_deg"]:.4f}°, μ_e0 {r["nominal_dipole_am2"]:.1f} A·m²')
+              f'{r["separation_m"]:g} m, tilt {r["tilt_deg"]:.4f}°, μ_e0 {r["nominal_dipole_am2"]:.1f} A·m²'
+              + (f' ({", ".join(r["scenarios"])})' if 'scenarios' in r else ''))
         print(f'  open-loop poles {", ".join(f"{a:+.4f}{b:+.4f}i" for a, b in r["open_loop_poles"])}; LQR K '
               f'{np.round(r["gain"], 2).tolist()} (Δx {r["weights"]["position_m"]:g} m, Δv {r["weights"]["velocity_m_s"]:g} '
               f'm/s, Δμ {r["weights"]["dipole_am2"]:g} A·m²) → poles '
@@ -444,5 +499,9 @@ def _register_airtrack(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--weight-velocity-m-s', type=float, default=0.01, help='Bryson scale of the velocity (default 0.01)')
     p.add_argument('--weight-dipole-am2', type=float, default=100.0, help='Bryson scale of the dipole (default 100)')
     p.add_argument('--out', default='runs/emff_airtrack', help='folder for the plots (default runs/emff_airtrack)')
+    p.add_argument('--graph', action='store_true',
+                   help='fly the shipped scenarios (emff_airtrack_stable[_open_loop], emff_airtrack_unstable[_open_loop]) '
+                        'on the direct engine instead of the core model; the step, duration, period and weights are '
+                        "then the scenarios' (the --step-m, --duration-s, --dt-s, --weight-* options are not used)")
     p.add_argument('--json', action='store_true', help='print one JSON list instead of the table')
     p.set_defaults(func=cmd_airtrack)
