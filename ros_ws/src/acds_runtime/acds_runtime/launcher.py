@@ -155,7 +155,7 @@ class GraphRun:
                  overrides: dict[str, dict[str, Any]] | None = None,
                  record: Path | None = None, record_storage: str = 'mcap', record_compression: str | None = None,
                  keep: bool = False, live: Callable[[dict[str, dict[str, Any]]], Any] | None = None,
-                 external: Iterable[str] = (), domain: int | None = None):
+                 external: Iterable[str] = (), domain: int | None = None, peers: Iterable[str] = ()):
         self.scenario = scenario
         self.run_dir = Path(run_dir)
         self.steps = steps if steps is not None else scenario.total_steps()
@@ -191,6 +191,8 @@ class GraphRun:
         self.external: dict[str, str] = {}
         #: The ROS domain asked for (None: the first free one).
         self.domain = domain
+        #: Hosts whose participants discovery also contacts (ROS_STATIC_PEERS): an external node on another machine.
+        self.peers = list(peers)
         #: How long the graph may take to start, external nodes included (the nodes' own readiness timeout).
         self.ready_timeout_s = max(scenario.get('', 'input_timeout'), READY_TIMEOUT_S)
 
@@ -217,6 +219,10 @@ class GraphRun:
             **{LAUNCHER_PID_ENV: str(os.getpid())},
         )
         env.pop('ROS_LOCALHOST_ONLY', None)
+        if self.peers:  # discovery stays off the subnet but reaches these hosts (an external node's, issue 20 §6)
+            env['ROS_STATIC_PEERS'] = ';'.join(self.peers)
+        else:
+            env.pop('ROS_STATIC_PEERS', None)
         return env
 
     def start(self) -> None:
@@ -240,6 +246,10 @@ class GraphRun:
         os.environ['FASTRTPS_DEFAULT_PROFILES_FILE'] = env['FASTRTPS_DEFAULT_PROFILES_FILE']
         os.environ.setdefault('ROS_LOG_DIR', env['ROS_LOG_DIR'])
         os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+        if self.peers:
+            os.environ['ROS_STATIC_PEERS'] = env['ROS_STATIC_PEERS']
+        else:
+            os.environ.pop('ROS_STATIC_PEERS', None)
         params = node_parameters(self.scenario, self.steps, self.rtf, self.overrides, self.external)
         self.graph = build_graph(params)
         # Each node's console script: this environment's, else the first on PATH (a node package installed elsewhere).
