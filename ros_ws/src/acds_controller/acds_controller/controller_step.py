@@ -27,7 +27,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from acds_common.messages import WARN, diagnostic, mode_status, xyz
+from acds_common.messages import WARN, diagnostic, xyz
+from acds_common.mode_report import mode_status
 from acds_common.modes import HEAO_MODES
 from acds_common.stepper import Stepper
 from acds_common.validation import all_finite

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from acds_common.cdr import Status
 from acds_common.coupling import coupling_from_section
-from acds_common.messages import WARN, diagnostic, mode_status
+from acds_common.messages import WARN, diagnostic
+from acds_common.mode_report import mode_status
 from acds_common.parameters import normalize
 from acds_common.scenario import load_scenario
 from acds_controller.configuration import build_dpa

@@ -16,7 +16,8 @@ from __future__ import annotations
 from typing import Any
 
 from acds_common.cdr import Status
-from acds_common.messages import MODE_STATUS, OK, WARN, diagnostic
+from acds_common.messages import MODE_STATUS, WARN, diagnostic
+from acds_common.mode_report import ModeReport
 from acds_common.validation import scenario_key
 
 from ascs_mode_manager.heao_part import event_text
@@ -47,9 +48,8 @@ class AapPart:
         events = [event_text(tr) for tr in transitions]
         for text in events:
             self.host.log('info', text)
-        values = (('mode', self.core.mode), ('cause', '; '.join(tr.cause for tr in transitions)),
-                  ('captured', 'false'), ('run_complete', 'false'))
-        out: dict[str, Any] = {'mode': (Status(OK, MODE_STATUS, self.core.mode, MODE_STATUS, values),)}
+        report = ModeReport(self.core.mode, '; '.join(tr.cause for tr in transitions))
+        out: dict[str, Any] = {'mode': report.encode()}
         if events:
             out['events'] = events
         if diagnostics:

@@ -314,12 +314,11 @@ class HeaoModeManager:
         return CommandResult(True, 'routed to acds_controller', 'acds_controller', normalised)
 
     def status(self) -> dict[str, str]:
-        """Mode manager state as key/value strings for diagnostics (times in s, '' when not reached)."""
+        """The logic's status beyond :attr:`mode` and :attr:`captured`, as key/value strings for the ``mode``
+        report (times in s, '' when not reached)."""
         def fmt(x: float | None) -> str:
             return '' if x is None else f'{x:.3f}'
         return {
-            'mode': self.mode,
-            'captured': 'true' if self.captured else 'false',
             'mode_1b_entry_t_s': fmt(self.mode_1b_entry_t_s),
             'capture_t_s': fmt(self.capture_t_s),
             'pending_commands': str(len(self._pending)),

@@ -29,7 +29,8 @@ from typing import Any
 
 from acds_common.cdr import Status
 from acds_common.dpa_commands import GAIN_LIMITS, LAW_CHOICES
-from acds_common.messages import MODE_STATUS, OK, WARN, diagnostic, xyz
+from acds_common.messages import MODE_STATUS, WARN, diagnostic, xyz
+from acds_common.mode_report import ModeReport
 from acds_common.modes import HEAO_CRUISE_MODES
 from acds_common.validation import all_finite, scenario_key
 
@@ -121,14 +122,9 @@ class HeaoPart:
             text = event_text(tr)
             self.host.log('info', text)
             events.append(text)
-        values = [
-            ('mode', self.core.mode),
-            ('cause', '; '.join(tr.cause for tr in transitions)),
-            *((key, str(v)) for key, v in self.core.status().items() if key != 'mode'),
-            ('run_complete', 'true' if self.run_complete else 'false'),
-            *((f'command/{route}', text) for route, text in forwarded),
-        ]
-        out: dict[str, Any] = {'mode': (Status(OK, MODE_STATUS, self.core.mode, MODE_STATUS, tuple(values)),)}
+        report = ModeReport(self.core.mode, '; '.join(tr.cause for tr in transitions), self.core.captured,
+                            tuple(self.core.status().items()), self.run_complete, tuple(forwarded))
+        out: dict[str, Any] = {'mode': report.encode()}
         if events:
             out['events'] = events
         if diagnostics:

@@ -53,14 +53,15 @@ from typing import Any
 
 import numpy as np
 from acds_common.cdr import Status
-from acds_common.messages import OK, WARN, diagnostic, vec, vector3
+from acds_common.messages import MODE_STATUS, WARN, diagnostic, vec, vector3
+from acds_common.mode_report import ModeReport
 from acds_common.units import GAUSS_T, tesla_to_gauss
 from acds_common.validation import scenario_key
 
 from ascs_mode_manager.spin_mechanizations import MECHANIZATIONS, AscsError, Mechanization, coil_moments
 from ascs_mode_manager.sss_ascs import SssAscs, SssOutput, build_sss_ascs
 
-NODE = 'ascs_mode_manager'
+NODE = MODE_STATUS
 #: Body axis of the spin-plane magnetometer channel (fixed by the core's wiring).
 CHANNEL_AXIS = 1
 DIAGNOSTIC_EVERY = 20
@@ -167,5 +168,4 @@ class SssPart:
 
     def mode_value(self, out: SssOutput, cause: str) -> tuple[Status]:
         """The step's ``mode`` DiagnosticArray value (module docstring)."""
-        values = {'mode': self.mode, 'cause': cause, 'captured': 'false', **self.telemetry(out)}
-        return (Status(OK, NODE, self.mode, NODE, tuple(values.items())),)
+        return ModeReport(self.mode, cause, status=tuple(self.telemetry(out).items()), run_complete=None).encode()

@@ -211,4 +211,4 @@ def test_status() -> None:
     mgr = _manager()
     _to_captured_1b(mgr)
     st_ = mgr.status()
-    assert st_['mode'] == 'mode_1b' and st_['captured'] == 'true' and st_['capture_t_s'] == '1.000'
+    assert mgr.mode == 'mode_1b' and mgr.captured and st_['capture_t_s'] == '1.000'

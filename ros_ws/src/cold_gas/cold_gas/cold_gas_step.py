@@ -22,7 +22,8 @@ from __future__ import annotations
 from typing import Any
 
 from acds_common.cdr import Status
-from acds_common.messages import OK, WARN, diagnostic, mode_status, xyz
+from acds_common.messages import OK, WARN, diagnostic, xyz
+from acds_common.mode_report import mode_status
 from acds_common.stepper import StepError, Stepper
 
 from cold_gas.configuration import build_rcs

@@ -23,7 +23,8 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from acds_common.messages import ERROR, OK, WARN, diagnostic, mode_status, vector3
+from acds_common.messages import ERROR, OK, WARN, diagnostic, vector3
+from acds_common.mode_report import mode_status
 from acds_common.stepper import Stepper
 from acds_common.validation import scenario_key
 

@@ -15,7 +15,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from acds_common.messages import ERROR, OK, WARN, diagnostic, mode_status, xyz
+from acds_common.messages import ERROR, OK, WARN, diagnostic, xyz
+from acds_common.mode_report import mode_status
 from acds_common.stepper import Stepper
 from acds_common.validation import all_finite, scenario_key
 

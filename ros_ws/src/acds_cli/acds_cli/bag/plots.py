@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 import yaml
 from acds_common import topics, units
+from acds_common.mode_report import ModeReport
 from acds_common.parameters import ConfigError, normalize, section
 from acds_runtime.bag.reader import Bag, open_bag
 from acds_runtime.bag.writer import BagError, check_out_dir, typestore
@@ -223,9 +224,10 @@ def figures(bag: Bag) -> list[tuple[str, Any]]:
         vectors[topics.COLD_GAS_STATE] = cold_gas_plots.state_vector
 
     def mode_of(m: Any) -> tuple[str, str, bool]:
-        kv = {v.key: v.value for v in m.status[0].values} if m.status else {}
-        return (kv.get('mode', m.status[0].message if m.status else ''), kv.get('cause', ''),
-                kv.get('captured') == 'true')
+        if not m.status:
+            return '', '', False
+        report = ModeReport.from_values(m.status[0].message, ((v.key, v.value) for v in m.status[0].values))
+        return report.mode, report.cause, report.captured
 
     data = _gather(bag, vectors, {topics.MODE: mode_of})
     mode_stamps, mode_values = data.get(topics.resolve(topics.MODE), ((), []))
