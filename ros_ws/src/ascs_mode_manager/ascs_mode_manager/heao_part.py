@@ -34,6 +34,7 @@ from acds_common.mode_report import ModeReport
 from acds_common.modes import HEAO_CRUISE_MODES
 from acds_common.validation import all_finite, scenario_key
 
+from ascs_mode_manager.ground_commands import answer
 from ascs_mode_manager.heao_modes import HeaoModeConfig, HeaoModeManager, Transition
 from ascs_mode_manager.spin_mechanizations import AscsError
 
@@ -89,17 +90,17 @@ class HeaoPart:
     def _commands(self, t: float, diagnostics: list[Status]) -> list[tuple[str, str]]:
         """Validate the due commands; return the forwarded (node, text) pairs."""
         forwarded = []
-        for text, _source in self.host.commands.due(t):
-            result = self.core.command(text, t)
+        for text, parsed, _source in self.host.commands.due(t):
+            result = answer(self.core, parsed, t)
             if result.accepted:
-                answer = f'accepted t={t:.1f}: {result.command}: {result.reason}'
+                line = f'accepted t={t:.1f}: {result.command}: {result.reason}'
                 if result.route is not None:
                     forwarded.append((result.route, result.command or text))
             else:
-                answer = f'refused t={t:.1f}: {text}: {result.reason}'
+                line = f'refused t={t:.1f}: {text}: {result.reason}'
                 diagnostics.extend(diagnostic(MODE_STATUS, {'command': text, 'reason': result.reason},
                                               'ground command refused', WARN))
-            self.host.acknowledge(answer, result.accepted)
+            self.host.acknowledge(line, result.accepted)
         return forwarded
 
     def step(self, k: int, t: float, inp: dict[str, Any]) -> dict[str, Any]:
