@@ -79,13 +79,6 @@ class ColdGasModeManager(HeaoModeManager):
                                            f'line, {rates} ≤ {deg(self.gas.handover_rate_rad_s):.4f} deg/s'))
         return out
 
-    def _enter(self, t: float, to_mode: str, cause: str) -> Transition:
-        tr = super()._enter(t, to_mode, cause)
-        if to_mode in GAS_MODES:
-            self.captured = False
-            self._capture_since_t_s = None
-        return tr
-
     #: The HEAO commands and the cold-gas hardware's.
     grammar = (*HeaoModeManager.grammar, GasCommand)
 

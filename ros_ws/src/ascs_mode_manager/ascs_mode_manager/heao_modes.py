@@ -207,7 +207,7 @@ class HeaoModeManager:
     def _enter(self, t: float, to_mode: str, cause: str) -> Transition:
         from_mode = self.mode
         self.mode = to_mode
-        if to_mode in ('mode_1a', 'mode_1b', 'standby'):
+        if to_mode not in HEAO_CRUISE_MODES:  # capture is latched in Mode 1B and kept in cruise only
             self.captured = False
             self._capture_since_t_s = None
         if to_mode == 'mode_1b':
