@@ -9,11 +9,11 @@ Stage ``heao`` of step k (inputs: gyro and sun sensor of step k from rigid_body)
    accepted mode transfers are applied in this step, commands for other nodes are
    forwarded in this step's ``mode`` (key ``command/<node>``);
 2. the on-board logic of :class:`~ascs_mode_manager.heao_modes.HeaoModeManager`;
-3. ``mode`` (DiagnosticArray, every step): status ``ascs_mode_manager`` with message =
-   mode and keys ``mode``, ``cause`` (this step's transition causes, '' if none),
-   ``captured``, ``run_complete`` ('true' from the capture step on when
-   ``modes.stop_at_capture``: the time owner then ends the run after this step), the
-   core's status keys, and the forwarded ``command/<node>`` keys;
+3. ``mode`` (DiagnosticArray, every step): the step's
+   :class:`~acds_common.mode_report.ModeReport`: the mode, this step's transition causes
+   ('' if none), the capture flag, the core's status keys, ``run_complete`` (from the
+   capture step on when ``modes.stop_at_capture``: the time owner then ends the run after
+   this step) and the forwarded commands;
 4. ``events``: one line per transition, "t=<s> <from>-><to>: <cause>" (capture:
    "t=<s> capture in mode_1b: <cause>").
 
