@@ -67,23 +67,39 @@ class ModeReport:
     @classmethod
     def decode(cls, value: Sequence[Status] | None) -> ModeReport | None:
         """The report in a ``mode`` DiagnosticArray value; None when absent (no mode manager, or before it speaks)."""
-        for status in value or ():
-            if status.name == MODE_STATUS:
-                return cls.from_values(status.message, status.values)
-        return None
+        status = _mode_status(value)
+        return None if status is None else cls.from_values(status.message, status.values)
 
     def commands_for(self, node: str) -> list[str]:
         """The command texts forwarded to ``node`` this step, in order."""
         return [text for route, text in self.forwarded if route == node]
 
 
+def _mode_status(value: Sequence[Status] | None) -> Status | None:
+    for status in value or ():
+        if status.name == MODE_STATUS:
+            return status
+    return None
+
+
 def mode_status(value: Sequence[Status] | None, node: str) -> tuple[str | None, list[str]]:
-    """(mode, commands forwarded to ``node`` in order) from the step's ``mode`` value; (None, []) if absent."""
-    report = ModeReport.decode(value)
-    return (None, []) if report is None else (report.mode, report.commands_for(node))
+    """(mode, commands forwarded to ``node`` in order) from the step's ``mode`` value; (None, []) if absent.
+
+    What every node reads each step: the two fields alone, without building the whole :class:`ModeReport`.
+    """
+    status = _mode_status(value)
+    if status is None:
+        return None, []
+    keyed = dict(status.values)  # the mode is written once; commands may repeat
+    key = COMMAND_PREFIX + node
+    return keyed.get('mode', status.message), ([v for k, v in status.values if k == key] if key in keyed else [])
 
 
 def run_complete(value: Sequence[Status] | None) -> bool:
-    """Whether the step's ``mode`` value asks the time owner to end the run."""
-    report = ModeReport.decode(value)
-    return report is not None and bool(report.run_complete)
+    """Whether the step's ``mode`` value asks the time owner to end the run (read each step: the one key alone)."""
+    status = _mode_status(value)
+    if status is not None:
+        for key, text in status.values:
+            if key == 'run_complete':
+                return text == _FLAG[True]
+    return False
