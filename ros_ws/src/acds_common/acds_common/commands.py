@@ -18,7 +18,10 @@ Grammar (whitespace separated, keywords case-insensitive)::
     gas bank <on|off> | gas transducer <on|off>
 
 Which commands a mode logic takes is its grammar (a tuple of these classes, :func:`decode`); whether a
-command is allowed now (mode, gain range) is its logic's decision, not the parser's.
+command is allowed now (mode, gain range) is its logic's decision, not the parser's. A command only one
+package knows has the same shape (``verb``, ``route``, ``parse``, ``text``) in that package: the em_driver's
+``eea_failure``, the magnetometer's ``magnetometer_fault`` (for tools that talk to the node directly), the
+SSS ASCS's ``sss …`` (:class:`ascs_mode_manager.sss_ascs.SssCommand`).
 """
 
 from __future__ import annotations
