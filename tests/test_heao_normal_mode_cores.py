@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 from acds_common import topics
-from acds_common.messages import MODE_STATUS, status_value
+from acds_common.mode_report import ModeReport
 from acds_common.scenario import load_scenario
 from acds_common.units import nms_to_ftlbs
 from acds_runtime.direct import DirectRun
@@ -49,7 +49,7 @@ def _two_orbits(name: str) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarra
     DirectRun(sc, steps=steps, live=lambda params: traces.append(_Trace(params)) or traces[-1]).run()
     got = traces[0].values
     h = np.array(got[topics.resolve(topics.WHEEL_MOMENTUM)][:steps])
-    modes = [status_value(v, MODE_STATUS, 'mode') for v in got[topics.resolve(topics.MODE)][:steps]]
+    modes = [ModeReport.decode(v).mode for v in got[topics.resolve(topics.MODE)][:steps]]
     moment = np.array(got[topics.resolve(topics.MOMENT_COMMAND)][:steps])
     omega = np.array([odom.angular for odom in got[topics.resolve(topics.TRUTH_ODOMETRY)][:steps]])
     return np.arange(steps) * DT_S, nms_to_ftlbs(h), modes, moment, omega

@@ -9,6 +9,7 @@ sun) agrees with arccos B33 of the truth direction cosines; titles name the scen
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import matplotlib.pyplot as plt
@@ -112,3 +113,38 @@ def test_long_series_are_gathered_at_a_common_stride_and_the_modes_whole(acquisi
     assert gyro & wheels, 'the kept steps are common to both series'
     mode = topics.resolve(topics.MODE)
     assert list(part[mode][0]) == list(full[mode][0]) and part[mode][1] == full[mode][1]
+
+
+#: Each mission's figures, as its plug-in (acds_cli.bag.mission_plots) names them.
+MISSION_FIGURES = {'cold_gas': {'cold_gas_thruster_raster', 'cold_gas_propellant_pressure', 'cold_gas_rates_sun_angle'},
+                   'formation': {'emff_formation_plane', 'emff_dipoles'}, 'sss': {'sss_spin_rate_torque'},
+                   'torque_rod': {'torque_rod_detumble'}}
+
+
+@pytest.mark.parametrize(('scenario', 'name', 'missions'), [
+    ('sss_a_pass_test', 'spin_run', {'sss'}),  # an SSS run by any name
+    ('heao_b_acquisition_short', 'sss_lookalike', set()),  # an 'sss…' name does not make an SSS run
+    ('oresat_detumble', 'rods', {'torque_rod'}),
+    ('heao_b_acquisition_cold_gas_short', 'gas', {'cold_gas'}),
+    ('emff_testbed_hold', 'pair', {'formation'}),
+])
+def test_mission_plots_are_plugins_chosen_by_the_nodes_that_ran_not_the_scenario_name(tmp_path, scenario, name,
+                                                                                        missions):
+    from acds_cli.bag import mission_plots
+    from acds_cli.bag.plots import run_context
+
+    sc = dataclasses.replace(load_scenario(scenario), name=name)
+    DirectRun(sc, steps=min(60, sc.total_steps()), record=tmp_path / 'bag').run()
+    bag = open_bag(tmp_path / 'bag')
+    assert {m.__name__.rpartition('.')[2] for m in mission_plots.chosen(run_context(bag))} == missions
+    assert set(MISSION_FIGURES) == {m.__name__.rpartition('.')[2] for m in mission_plots.plugins()}
+    figs = dict(figures(bag))
+    try:
+        drawn = {mission for mission, stems in MISSION_FIGURES.items() if stems & set(figs)}
+        assert drawn == missions, sorted(figs)
+        for mission in missions:
+            assert MISSION_FIGURES[mission] <= set(figs), (mission, sorted(figs))
+            assert all(name in figs[stem]._suptitle.get_text() for stem in MISSION_FIGURES[mission])
+    finally:
+        for fig in figs.values():
+            plt.close(fig)

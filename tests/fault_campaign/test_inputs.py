@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 from acds_cli import __main__ as acds_main
 from acds_common.scenario import ScenarioError, load_scenario
+from ascs_mode_manager.ground_commands import submit
 
 ROOT = Path(__file__).resolve().parents[2]
 FREE_TUMBLE = (ROOT / 'scenarios' / 'free_tumble_heao_b.yaml').read_text()
@@ -333,13 +334,13 @@ def test_disable_mode_attitude_enable_mid_spin_pass_cannot_start_an_attitude_pas
             out.append(ascs.step(float(t), dt, gauss * GAUSS_T * np.array([math.cos(theta), math.sin(theta), 0.0])))
         return out
 
-    assert ascs.command('sss enable', 0.0).accepted and ascs.command('sss mode spin', 0.0).accepted
+    assert submit(ascs, 'sss enable', 0.0).accepted and submit(ascs, 'sss mode spin', 0.0).accepted
     assert perigee(0.0, 60.0, 0.27)[-1].mode == 'spin'
-    assert ascs.command('sss disable', 60.0).accepted
-    refused = ascs.command('sss mode attitude', 60.0)
+    assert submit(ascs, 'sss disable', 60.0).accepted
+    refused = submit(ascs, 'sss mode attitude', 60.0)
     assert not refused.accepted and 'already had a spin-mode pass' in refused.reason
-    assert ascs.command('sss enable', 60.0).accepted
+    assert submit(ascs, 'sss enable', 60.0).accepted
     assert all(o.attitude_coil == 0 for o in perigee(60.0, 60.0, 0.27))
     perigee(120.0, 60.0, 0.02)  # the field falls below 0.075 G: the perigee pass ends
-    assert ascs.command('sss mode attitude', 180.0).accepted  # the next perigee: attitude mode
+    assert submit(ascs, 'sss mode attitude', 180.0).accepted  # the next perigee: attitude mode
     assert perigee(180.0, 30.0, 0.27)[-1].attitude_coil == 1

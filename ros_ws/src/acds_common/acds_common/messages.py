@@ -54,29 +54,3 @@ def magnetic_field(b_t: Iterable[float], covariance: Iterable[float] | None = No
 def diagnostic(node: str, values: dict[str, object], message: str = 'ok', level: int = OK) -> tuple[Status]:
     """One DiagnosticStatus named after the node (hardware_id too), with key/value telemetry."""
     return (Status(level, node, message, node, tuple((k, str(v)) for k, v in values.items())),)
-
-
-def mode_status(value: Sequence[Status] | None, node: str) -> tuple[str | None, list[str]]:
-    """(mode, commands forwarded to ``node`` in order) from the step's ``mode`` value; (None, []) if absent.
-
-    The mode manager forwards accepted ground commands for other nodes as ``command/<node>`` keys.
-    """
-    if value is None:
-        return None, []
-    key = f'command/{node}'
-    for status in value:
-        if status.name == MODE_STATUS:
-            keyed = dict(status.values)  # the mode manager writes 'mode' once; commands may repeat
-            mode = keyed.get('mode', status.message)
-            return mode, ([v for k, v in status.values if k == key] if key in keyed else [])
-    return None, []
-
-
-def status_value(value: Sequence[Status] | None, name: str, key: str) -> str | None:
-    """The value of ``key`` in status ``name`` of a DiagnosticArray value (None when absent)."""
-    for status in value or ():
-        if status.name == name:
-            for k, v in status.values:
-                if k == key:
-                    return v
-    return None

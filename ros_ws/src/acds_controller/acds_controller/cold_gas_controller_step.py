@@ -19,7 +19,8 @@ from typing import Any
 
 import numpy as np
 from acds_common.inertia import inertia_tensor
-from acds_common.messages import diagnostic, mode_status, xyz
+from acds_common.messages import diagnostic, xyz
+from acds_common.mode_report import mode_status
 from acds_common.modes import GAS_MODES
 from acds_common.thrusters import arrangement_from_section
 from acds_common.units import deg

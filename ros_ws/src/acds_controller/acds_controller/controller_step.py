@@ -27,7 +27,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from acds_common.messages import WARN, diagnostic, mode_status, xyz
+from acds_common.commands import CommandError, GainCommand, LawCommand, decode
+from acds_common.messages import WARN, diagnostic, xyz
+from acds_common.mode_report import mode_status
 from acds_common.modes import HEAO_MODES
 from acds_common.stepper import Stepper
 from acds_common.validation import all_finite
@@ -42,23 +44,25 @@ ZERO = (0.0, 0.0, 0.0)
 MID_SCALE_V = (2.5, 2.5, 2.5)
 
 
-def apply_command(dpa: Dpa, text: str) -> str:
-    """Apply a forwarded 'law <slot> <name>' or 'gain <name> <value>'; return what was done.
+#: The commands the DPA applies (forwarded in the ``mode`` report, key ``command/acds_controller``).
+GRAMMAR = (LawCommand, GainCommand)
 
-    Raises :class:`ControllerError` for anything else (the stepper turns it into a diagnostic).
-    """
-    words = text.split()
-    if len(words) == 3 and words[0].lower() == 'law':
-        dpa.set_law(words[1].lower(), words[2].lower())
-        return f'law {words[1]} set to {words[2]}'
-    if len(words) == 3 and words[0].lower() == 'gain':
-        try:
-            value = float(words[2])
-        except ValueError as exc:
-            raise ControllerError(f'gain value {words[2]!r} is not a number') from exc
-        dpa.set_gain(words[1].lower(), value)
-        return f'gain {words[1]} set to {value:g}'
-    raise ControllerError(f'command {text!r} is not "law <slot> <name>" or "gain <name> <value>"')
+
+def parse_command(text: str) -> LawCommand | GainCommand:
+    """Parse a forwarded command; :class:`ControllerError` says what is wrong (the stepper makes it a diagnostic)."""
+    try:
+        return decode(text, GRAMMAR, 'acds_controller command')
+    except CommandError as exc:
+        raise ControllerError(str(exc)) from None
+
+
+def apply_command(dpa: Dpa, cmd: LawCommand | GainCommand) -> str:
+    """Apply a parsed law/gain command to the DPA (which checks it against its tables); return what was done."""
+    if isinstance(cmd, LawCommand):
+        dpa.set_law(cmd.slot, cmd.name)
+        return f'law {cmd.slot} set to {cmd.name}'
+    dpa.set_gain(cmd.name, cmd.value)
+    return f'gain {cmd.name} set to {cmd.value:g}'
 
 
 def check_finite(inputs: tuple[tuple[str, Sequence[float]], ...]) -> None:
@@ -101,7 +105,7 @@ class DpaStep(Stepper):
         """Apply the forwarded law/gain commands to the DPA; a refusal becomes a warning."""
         for text in commands:
             try:
-                self.log('info', f'step {k}: {apply_command(self.dpa, text)}')
+                self.log('info', f'step {k}: {apply_command(self.dpa, parse_command(text))}')
             except ControllerError as exc:
                 warnings.append((f'command refused: {text!r}: {exc}', {'command': text, 'reason': str(exc)}))
 

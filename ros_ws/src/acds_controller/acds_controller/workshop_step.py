@@ -17,7 +17,8 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from acds_common.messages import diagnostic, mode_status, vec, vector3, xyz
+from acds_common.messages import diagnostic, vec, vector3, xyz
+from acds_common.mode_report import mode_status
 from acds_common.modes import WORKSHOP_MODES
 from acds_common.stepper import Stepper
 

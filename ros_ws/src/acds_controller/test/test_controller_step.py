@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 from acds_common.cdr import Status
 from acds_common.coupling import coupling_from_section
-from acds_common.messages import WARN, diagnostic, mode_status
+from acds_common.messages import WARN, diagnostic
+from acds_common.mode_report import mode_status
 from acds_common.parameters import normalize
 from acds_common.scenario import load_scenario
 from acds_controller.configuration import build_dpa
-from acds_controller.controller_step import DpaStep, apply_command
+from acds_controller.controller_step import DpaStep, apply_command, parse_command
 from acds_controller.magnetic_laws import ControllerError
 
 
@@ -30,13 +31,13 @@ def test_mode_status_reads_mode_and_forwarded_commands():
 def test_forwarded_commands_change_the_dpa_and_bad_ones_raise():
     sc = load_scenario('heao_b_acquisition').values
     _ta, dpa = build_dpa(sc['spacecraft'], sc['controller'], sc['magnetometer'])
-    assert apply_command(dpa, 'gain max_moment 1500') == 'gain max_moment set to 1500'
+    assert apply_command(dpa, parse_command('gain max_moment 1500')) == 'gain max_moment set to 1500'
     assert dpa.config.max_moment_am2 == 1500.0
-    apply_command(dpa, 'law unloading lead')
+    apply_command(dpa, parse_command('law unloading lead'))
     assert dpa.config.unloading_law == 'lead'
     for bad in ('gain max_moment 1e9', 'gain nonsense 1', 'law unloading magic', 'gain max_moment x', 'reboot'):
         with pytest.raises(ControllerError):
-            apply_command(dpa, bad)
+            apply_command(dpa, parse_command(bad))
     assert dpa.config.max_moment_am2 == 1500.0
 
 

@@ -42,7 +42,7 @@ from acds_common.cdr import Codec, stamp_ns
 from acds_common.environment import Sun, SunConfig, ecliptic_normal_eci, sun_frame_dcm
 from acds_common.frames import SUN_FRAME
 from acds_common.graph import build_graph
-from acds_common.messages import mode_status
+from acds_common.mode_report import ModeReport
 from acds_common.scenario import SCHEMA
 from foxglove.channels import FrameTransformsChannel
 from foxglove.messages import FrameTransform, FrameTransforms, Quaternion, Timestamp, Vector3
@@ -270,8 +270,8 @@ class FoxgloveBridge:
             if lim['max_moment'] is not None:
                 out.update(max_am2=lim['max_moment'], min_am2=-lim['max_moment'])
             return out
-        mode = mode_status(value, '')[0]
-        return None if mode is None else {'mode': mode}
+        report = ModeReport.decode(value)
+        return None if report is None else {'mode': report.mode}
 
     def close(self) -> None:
         """Stop the server (clients see the connection close)."""

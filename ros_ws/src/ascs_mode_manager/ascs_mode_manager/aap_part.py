@@ -16,9 +16,11 @@ from __future__ import annotations
 from typing import Any
 
 from acds_common.cdr import Status
-from acds_common.messages import MODE_STATUS, OK, WARN, diagnostic
+from acds_common.messages import MODE_STATUS, WARN, diagnostic
+from acds_common.mode_report import ModeReport
 from acds_common.validation import scenario_key
 
+from ascs_mode_manager.ground_commands import answer
 from ascs_mode_manager.heao_part import event_text
 from ascs_mode_manager.spin_mechanizations import AscsError
 from ascs_mode_manager.workshop_modes import WorkshopModeManager
@@ -35,8 +37,8 @@ class AapPart:
     def step(self, k: int, t: float, _inp: dict[str, Any]) -> dict[str, Any]:
         """One step: ground commands, mode transfers, ``mode`` (always), ``events``, ``diagnostics``."""
         diagnostics: list[Status] = []
-        for text, _source in self.host.commands.due(t):
-            result = self.core.command(text, t)
+        for text, parsed, _source in self.host.commands.due(t):
+            result = answer(self.core, parsed, t)
             if result.accepted:
                 self.host.acknowledge(f'accepted t={t:.1f}: {result.command}: {result.reason}', True)
             else:
@@ -47,9 +49,8 @@ class AapPart:
         events = [event_text(tr) for tr in transitions]
         for text in events:
             self.host.log('info', text)
-        values = (('mode', self.core.mode), ('cause', '; '.join(tr.cause for tr in transitions)),
-                  ('captured', 'false'), ('run_complete', 'false'))
-        out: dict[str, Any] = {'mode': (Status(OK, MODE_STATUS, self.core.mode, MODE_STATUS, values),)}
+        report = ModeReport(self.core.mode, '; '.join(tr.cause for tr in transitions))
+        out: dict[str, Any] = {'mode': report.encode()}
         if events:
             out['events'] = events
         if diagnostics:

@@ -22,13 +22,13 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from acds_common.commands import Command, GasCommand, ModeCommand
 from acds_common.modes import GAS_MODES
 from acds_common.units import deg
 
-from ascs_mode_manager.heao_modes import CommandResult, HeaoModeConfig, HeaoModeManager, Transition, _refuse
+from ascs_mode_manager.ground_commands import CommandResult, refuse
+from ascs_mode_manager.heao_modes import HeaoModeConfig, HeaoModeManager, Transition
 from ascs_mode_manager.spin_mechanizations import AscsError
-
-_GAS_USAGE = 'usage: gas isolation <1|2> <open|close> | gas bank <on|off> | gas transducer <on|off>'
 
 
 @dataclass(frozen=True)
@@ -79,33 +79,22 @@ class ColdGasModeManager(HeaoModeManager):
                                            f'line, {rates} ≤ {deg(self.gas.handover_rate_rad_s):.4f} deg/s'))
         return out
 
-    def _enter(self, t: float, to_mode: str, cause: str) -> Transition:
-        tr = super()._enter(t, to_mode, cause)
-        if to_mode in GAS_MODES:
-            self.captured = False
-            self._capture_since_t_s = None
-        return tr
+    #: The HEAO commands and the cold-gas hardware's.
+    grammar = (*HeaoModeManager.grammar, GasCommand)
 
-    def command(self, text: str, t_s: float) -> CommandResult:
-        """``mode reacquire`` and ``gas …`` here; every other command as in the HEAO grammar."""
-        words = str(text).split()
-        if len(words) == 2 and words[0].lower() == 'mode' and words[1].lower() == 'reacquire':
+    def apply(self, cmd: Command, t_s: float) -> CommandResult:
+        """``mode reacquire`` here (a gas mode by name is refused); every other command as in the HEAO logic
+        (``gas …`` is routed to cold_gas)."""
+        if isinstance(cmd, ModeCommand) and cmd.target == 'reacquire':
             current = self._effective_mode()
             if current in GAS_MODES:
-                return _refuse(f'wrong mode: already acquiring on gas ({current})')
+                return refuse(f'wrong mode: already acquiring on gas ({current})')
             self._pending.append(('gas_rate_damping', float(t_s), 'mode reacquire'))
             return CommandResult(True, f'{current} → gas_rate_damping (sun reacquisition on gas) at the next step',
                                  None, 'mode reacquire')
-        if words and words[0].lower() == 'gas':
-            args = [w.lower() for w in words[1:]]
-            ok = (len(args) == 3 and args[0] == 'isolation' and args[1] in ('1', '2') and args[2] in ('open', 'close')) \
-                or (len(args) == 2 and args[0] in ('bank', 'transducer') and args[1] in ('on', 'off'))
-            if not ok:
-                return _refuse(_GAS_USAGE)
-            return CommandResult(True, 'routed to cold_gas', 'cold_gas', ' '.join(args))
-        if len(words) == 2 and words[0].lower() == 'mode' and words[1].lower() in GAS_MODES:
-            return _refuse('wrong mode: the gas modes are entered by the acquisition sequence or by "mode reacquire"')
-        return super().command(text, t_s)
+        if isinstance(cmd, ModeCommand) and cmd.target in GAS_MODES:
+            return refuse('wrong mode: the gas modes are entered by the acquisition sequence or by "mode reacquire"')
+        return super().apply(cmd, t_s)
 
     def status(self) -> dict[str, str]:
         """The HEAO status and the hand-over time (s, '' before it)."""

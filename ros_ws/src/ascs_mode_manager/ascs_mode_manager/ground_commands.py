@@ -3,14 +3,72 @@
 Two sources feed one queue: the scenario's schedule (``modes.ground_commands``,
 entries "T_S: command", applied at the first step with t_k ≥ T_S — deterministic)
 and live commands received on ``ground/command`` (applied at the next step the
-mode manager computes). The HEAO and the SSS logic both take their commands here.
+mode manager computes). The text is parsed where it enters, by the mode logic's
+``parse`` (its grammar of :mod:`acds_common.commands` objects): the logic then
+validates the command object (``apply``) and answers with a :class:`CommandResult`.
+A text that does not parse is refused with the parser's reason. Every mode logic
+(HEAO, cold-gas, SSS, AAP) takes its commands here.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+from acds_common.commands import Command, CommandError
 
 from ascs_mode_manager.spin_mechanizations import AscsError
+
+
+@dataclass(frozen=True)
+class CommandResult:
+    """Answer to a ground command: accepted or refused with a reason.
+
+    ``route``: the node that must apply it ('em_driver', 'magnetometer_sim', 'acds_controller', 'cold_gas'),
+    None for commands the mode logic applies itself. ``command``: the command's normalised text.
+    """
+
+    accepted: bool
+    reason: str
+    route: str | None = None
+    command: str | None = None
+
+
+def refuse(reason: str) -> CommandResult:
+    """A refusal with its reason."""
+    return CommandResult(False, reason)
+
+
+class ModeLogic(Protocol):
+    """What a mode logic offers the intake: its parser and its validation of a parsed command."""
+
+    def parse(self, text: str) -> Command: ...
+
+    def apply(self, cmd: Command, t_s: float) -> CommandResult: ...
+
+
+#: A parsed command, or why its text does not parse.
+Parsed = Command | CommandError
+
+
+def parse(logic: ModeLogic, text: str) -> Parsed:
+    """``text`` parsed by the logic's grammar; the :class:`CommandError` itself when it does not parse."""
+    try:
+        return logic.parse(text)
+    except CommandError as exc:
+        return exc
+
+
+def answer(logic: ModeLogic, parsed: Parsed, t_s: float) -> CommandResult:
+    """The logic's answer to a parsed command received at sim time ``t_s`` (s) (a parse error: refused)."""
+    return refuse(str(parsed)) if isinstance(parsed, CommandError) else logic.apply(parsed, t_s)
+
+
+def submit(logic: ModeLogic, text: str, t_s: float) -> CommandResult:
+    """Parse and answer one command text at sim time ``t_s`` (s): tools (the SSS test stand) and tests."""
+    return answer(logic, parse(logic, text), t_s)
 
 
 def parse_schedule(entries: list[str]) -> list[tuple[float, str]]:
@@ -33,24 +91,27 @@ MAX_PENDING = 5000
 
 
 class GroundCommandQueue:
-    """Scheduled and live ground commands, handed out step by step."""
+    """Scheduled and live ground commands, parsed on entry, handed out step by step."""
 
-    def __init__(self, schedule: list[str]) -> None:
-        self._scheduled = parse_schedule(schedule)
-        self._live: list[str] = []
+    def __init__(self, schedule: list[str], parser: Callable[[str], Parsed]) -> None:
+        self._parse = parser
+        self._scheduled = [(t_s, text, parser(text)) for t_s, text in parse_schedule(schedule)]
+        self._live: list[tuple[str, Parsed]] = []
 
     def receive(self, text: str) -> bool:
-        """A live command: queued for the next step; False when the queue is full (the caller refuses it)."""
+        """A live command: parsed and queued for the next step; False when the queue is full (the caller
+        refuses it)."""
         if len(self._live) >= MAX_PENDING:
             return False
-        self._live.append(text)
+        self._live.append((text, self._parse(text)))
         return True
 
-    def due(self, t_s: float) -> list[tuple[str, str]]:
-        """Commands to apply at the step at ``t_s``: (text, 'scheduled'|'live'), scheduled first."""
+    def due(self, t_s: float) -> list[tuple[str, Parsed, str]]:
+        """Commands to apply at the step at ``t_s``: (text, parsed, 'scheduled'|'live'), scheduled first."""
         out = []
         while self._scheduled and self._scheduled[0][0] <= t_s + 1e-9:
-            out.append((self._scheduled.pop(0)[1], 'scheduled'))
-        out.extend((text, 'live') for text in self._live)
+            _, text, parsed = self._scheduled.pop(0)
+            out.append((text, parsed, 'scheduled'))
+        out.extend((text, parsed, 'live') for text, parsed in self._live)
         self._live = []
         return out

@@ -11,13 +11,14 @@ latched flag (:attr:`HeaoModeManager.captured`) and reported once as a ``Transit
 |ω_i| ≤ 0.01°/s, a tenth of the acquisition maneuver rate limit 0.1°/s (Table 4-2); the
 seed gives no number.
 
-Ground command grammar (whitespace separated, keywords case-insensitive)::
+Ground commands (:mod:`acds_common.commands`, one parser each; whitespace separated, keywords
+case-insensitive)::
 
     mode <standby|mode_1a|mode_1b|celestial_scan|celestial_point>
     eea_select <x|y|z> <A|B>          → routed to em_driver (active driver/winding)
     magnetometer_select <A|B>         → routed to magnetometer_sim (active assembly)
-    law <acquisition|unloading> <name> → routed to acds_controller
-    gain <name> <value>               → routed to acds_controller (study units, see its gain table)
+    law <acquisition|unloading> <name> → routed to acds_controller (checked against ``law_choices``)
+    gain <name> <value>               → routed to acds_controller (study units, checked against ``gain_limits``)
 
 Mode transfers accepted by ground command (checked against the mode the manager will be in
 once the commands already queued are applied):
@@ -38,14 +39,23 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
+from acds_common.commands import (
+    AXES,
+    Command,
+    EeaSelect,
+    GainCommand,
+    LawCommand,
+    MagnetometerSelect,
+    ModeCommand,
+    decode,
+)
 from acds_common.modes import HEAO_CRUISE_MODES, HEAO_MODES
 from acds_common.units import deg, rad
 from acds_common.validation import finite_xyz
 
+from ascs_mode_manager.ground_commands import CommandResult, refuse
 from ascs_mode_manager.spin_mechanizations import AscsError  # the package's one exception type
 
-#: All HEAO ACDS modes.
-#: Cruise (normal) modes.
 #: Baseline Mode 1A → 1B rate thresholds |ω_x|, |ω_y|, |ω_z|, deg/s (seed 002 §4.3.1).
 BASELINE_RATE_THRESHOLDS_DEG_S = (0.573, 0.115, 0.115)
 #: Table 4-7 case 5 thresholds ("higher rates for wheel transition"), deg/s.
@@ -55,8 +65,6 @@ CAPTURE_CONE_DEG = 10.0
 #: "Rates nulled" for capture, deg/s: a tenth of the 0.1°/s maneuver rate limit (Table 4-2).
 CAPTURE_RATE_DEG_S = 0.01
 
-_EEA_AXES = ('x', 'y', 'z')
-_UNITS = ('A', 'B')
 
 
 @dataclass(frozen=True)
@@ -120,24 +128,6 @@ class Transition:
     kind: str = 'mode'
 
 
-@dataclass(frozen=True)
-class CommandResult:
-    """Answer to a ground command: accepted or refused with a reason.
-
-    ``route``: the node that must apply it ('em_driver', 'magnetometer_sim', 'acds_controller'),
-    None for mode transfers applied here. ``command``: the normalised command text.
-    """
-
-    accepted: bool
-    reason: str
-    route: str | None = None
-    command: str | None = None
-
-
-def _refuse(reason: str) -> CommandResult:
-    return CommandResult(False, reason)
-
-
 class HeaoModeManager:
     """On-board HEAO mode logic with ground command handling (spec §8; seed 002 Figure 4-3, §4.3.1)."""
 
@@ -186,7 +176,7 @@ class HeaoModeManager:
             thr = self.config.rate_thresholds_rad_s
             if present and all(abs(omega[i]) <= thr[i] for i in range(3)):
                 rates = ', '.join(f'|ω{a}|={deg(abs(omega[i])):.4f}≤{deg(thr[i]):.4f}'
-                                  for i, a in enumerate(_EEA_AXES))
+                                  for i, a in enumerate(AXES))
                 out.append(self._enter(t, 'mode_1b', f'rates below thresholds ({rates} deg/s) and sun present'))
         if self.mode == 'mode_1b' and self.mode_1b_entry_t_s is None:
             self.mode_1b_entry_t_s = t  # started in Mode 1B (wheels on from separation)
@@ -217,7 +207,7 @@ class HeaoModeManager:
     def _enter(self, t: float, to_mode: str, cause: str) -> Transition:
         from_mode = self.mode
         self.mode = to_mode
-        if to_mode in ('mode_1a', 'mode_1b', 'standby'):
+        if to_mode not in HEAO_CRUISE_MODES:  # capture is latched in Mode 1B and kept in cruise only
             self.captured = False
             self._capture_since_t_s = None
         if to_mode == 'mode_1b':
@@ -225,101 +215,62 @@ class HeaoModeManager:
         return Transition(t, from_mode, to_mode, cause)
 
     # ----------------------------------------------------------- ground commands
-    def command(self, text: str, t_s: float) -> CommandResult:
-        """Validate a ground command received at sim time ``t_s`` (s); grammar in the module docstring."""
-        words = str(text).split()
-        if not words:
-            return _refuse('empty command')
-        verb = words[0].lower()
-        handlers = {
-            'mode': self._cmd_mode,
-            'eea_select': self._cmd_eea_select,
-            'magnetometer_select': self._cmd_magnetometer_select,
-            'law': self._cmd_law,
-            'gain': self._cmd_gain,
-        }
-        if verb not in handlers:
-            return _refuse(f"unknown command '{verb}'; known: {', '.join(handlers)}")
-        return handlers[verb](words[1:], float(t_s))
+    #: The commands this logic takes (:mod:`acds_common.commands`); a variant adds its own.
+    grammar: tuple[type, ...] = (ModeCommand, EeaSelect, MagnetometerSelect, LawCommand, GainCommand)
+
+    def parse(self, text: str) -> Command:
+        """A ground command's text → its command object (:class:`CommandError`: the reason it does not parse)."""
+        return decode(text, self.grammar)
+
+    def apply(self, cmd: Command, t_s: float) -> CommandResult:
+        """Validate a parsed ground command received at sim time ``t_s`` (s): a mode transfer is queued for the
+        next step, the rest is routed to the node that applies it (module docstring)."""
+        if isinstance(cmd, ModeCommand):
+            return self._cmd_mode(cmd.target, float(t_s))
+        if isinstance(cmd, LawCommand) and self.config.law_choices is not None:
+            choices = self.config.law_choices
+            if cmd.slot not in choices:
+                return refuse(f"unknown law slot '{cmd.slot}'; slots: {', '.join(choices)}")
+            if cmd.name not in choices[cmd.slot]:
+                return refuse(f"unknown {cmd.slot} law '{cmd.name}'; choose one of {', '.join(choices[cmd.slot])}")
+        if isinstance(cmd, GainCommand) and self.config.gain_limits is not None:
+            limits = self.config.gain_limits
+            if cmd.name not in limits:
+                return refuse(f"unknown gain '{cmd.name}'; known: {', '.join(sorted(limits))}")
+            lo, hi = limits[cmd.name]
+            if not lo <= cmd.value <= hi:
+                return refuse(f'gain {cmd.name} = {cmd.value:g} is out of range [{lo:g}, {hi:g}]')
+        return CommandResult(True, f'routed to {cmd.route}', cmd.route, cmd.text)
 
     def _effective_mode(self) -> str:
         return self._pending[-1][0] if self._pending else self.mode
 
-    def _cmd_mode(self, args: list[str], t_s: float) -> CommandResult:
-        if len(args) != 1:
-            return _refuse(f'usage: mode <{"|".join(HEAO_MODES)}>')
-        target = args[0].lower()
+    def _cmd_mode(self, target: str, t_s: float) -> CommandResult:
         if target not in HEAO_MODES:
-            return _refuse(f"unknown mode '{args[0]}'; modes: {', '.join(HEAO_MODES)}")
+            return refuse(f"unknown mode '{target}'; modes: {', '.join(HEAO_MODES)}")
         current = self._effective_mode()
         captured = self.captured and not self._pending
         if target == current:
-            return _refuse(f'wrong mode: already in {current}')
+            return refuse(f'wrong mode: already in {current}')
         if target == 'mode_1b' and current == 'mode_1a':
-            return _refuse('wrong mode: mode_1a → mode_1b is the on-board transfer '
+            return refuse('wrong mode: mode_1a → mode_1b is the on-board transfer '
                            '(all rates below thresholds and sun present)')
         if target in HEAO_CRUISE_MODES and current not in HEAO_CRUISE_MODES:
             if current != 'mode_1b':
-                return _refuse(f'wrong mode: {current}; cruise is entered from mode_1b after acquisition capture')
+                return refuse(f'wrong mode: {current}; cruise is entered from mode_1b after acquisition capture')
             if not captured:
-                return _refuse('wrong mode: mode_1b has not reached acquisition capture '
+                return refuse('wrong mode: mode_1b has not reached acquisition capture '
                                '(z within the capture cone of the sun line with rates nulled)')
         normalised = f'mode {target}'
         self._pending.append((target, t_s, normalised))
         return CommandResult(True, f'{current} → {target} at the next step', None, normalised)
 
-    def _cmd_eea_select(self, args: list[str], t_s: float) -> CommandResult:
-        if len(args) != 2 or args[0].lower() not in _EEA_AXES or args[1].upper() not in _UNITS:
-            return _refuse('usage: eea_select <x|y|z> <A|B>')
-        normalised = f'eea_select {args[0].lower()} {args[1].upper()}'
-        return CommandResult(True, 'routed to em_driver', 'em_driver', normalised)
-
-    def _cmd_magnetometer_select(self, args: list[str], t_s: float) -> CommandResult:
-        if len(args) != 1 or args[0].upper() not in _UNITS:
-            return _refuse('usage: magnetometer_select <A|B>')
-        normalised = f'magnetometer_select {args[0].upper()}'
-        return CommandResult(True, 'routed to magnetometer_sim', 'magnetometer_sim', normalised)
-
-    def _cmd_law(self, args: list[str], t_s: float) -> CommandResult:
-        if len(args) != 2:
-            return _refuse('usage: law <acquisition|unloading> <name>')
-        slot, name = args[0].lower(), args[1].lower()
-        choices = self.config.law_choices
-        if choices is not None:
-            if slot not in choices:
-                return _refuse(f"unknown law slot '{slot}'; slots: {', '.join(choices)}")
-            if name not in choices[slot]:
-                return _refuse(f"unknown {slot} law '{name}'; choose one of {', '.join(choices[slot])}")
-        normalised = f'law {slot} {name}'
-        return CommandResult(True, 'routed to acds_controller', 'acds_controller', normalised)
-
-    def _cmd_gain(self, args: list[str], t_s: float) -> CommandResult:
-        if len(args) != 2:
-            return _refuse('usage: gain <name> <value>')
-        name = args[0].lower()
-        try:
-            value = float(args[1])
-        except ValueError:
-            return _refuse(f"gain value '{args[1]}' is not a number")
-        if not math.isfinite(value):
-            return _refuse(f'gain value {args[1]} is not finite')
-        limits = self.config.gain_limits
-        if limits is not None:
-            if name not in limits:
-                return _refuse(f"unknown gain '{name}'; known: {', '.join(sorted(limits))}")
-            lo, hi = limits[name]
-            if not lo <= value <= hi:
-                return _refuse(f'gain {name} = {value:g} is out of range [{lo:g}, {hi:g}]')
-        normalised = f'gain {name} {value!r}'
-        return CommandResult(True, 'routed to acds_controller', 'acds_controller', normalised)
-
     def status(self) -> dict[str, str]:
-        """Mode manager state as key/value strings for diagnostics (times in s, '' when not reached)."""
+        """The logic's status beyond :attr:`mode` and :attr:`captured`, as key/value strings for the ``mode``
+        report (times in s, '' when not reached)."""
         def fmt(x: float | None) -> str:
             return '' if x is None else f'{x:.3f}'
         return {
-            'mode': self.mode,
-            'captured': 'true' if self.captured else 'false',
             'mode_1b_entry_t_s': fmt(self.mode_1b_entry_t_s),
             'capture_t_s': fmt(self.capture_t_s),
             'pending_commands': str(len(self._pending)),

@@ -9,11 +9,11 @@ Stage ``heao`` of step k (inputs: gyro and sun sensor of step k from rigid_body)
    accepted mode transfers are applied in this step, commands for other nodes are
    forwarded in this step's ``mode`` (key ``command/<node>``);
 2. the on-board logic of :class:`~ascs_mode_manager.heao_modes.HeaoModeManager`;
-3. ``mode`` (DiagnosticArray, every step): status ``ascs_mode_manager`` with message =
-   mode and keys ``mode``, ``cause`` (this step's transition causes, '' if none),
-   ``captured``, ``run_complete`` ('true' from the capture step on when
-   ``modes.stop_at_capture``: the time owner then ends the run after this step), the
-   core's status keys, and the forwarded ``command/<node>`` keys;
+3. ``mode`` (DiagnosticArray, every step): the step's
+   :class:`~acds_common.mode_report.ModeReport`: the mode, this step's transition causes
+   ('' if none), the capture flag, the core's status keys, ``run_complete`` (from the
+   capture step on when ``modes.stop_at_capture``: the time owner then ends the run after
+   this step) and the forwarded commands;
 4. ``events``: one line per transition, "t=<s> <from>-><to>: <cause>" (capture:
    "t=<s> capture in mode_1b: <cause>").
 
@@ -29,10 +29,12 @@ from typing import Any
 
 from acds_common.cdr import Status
 from acds_common.dpa_commands import GAIN_LIMITS, LAW_CHOICES
-from acds_common.messages import MODE_STATUS, OK, WARN, diagnostic, xyz
+from acds_common.messages import MODE_STATUS, WARN, diagnostic, xyz
+from acds_common.mode_report import ModeReport
 from acds_common.modes import HEAO_CRUISE_MODES
 from acds_common.validation import all_finite, scenario_key
 
+from ascs_mode_manager.ground_commands import answer
 from ascs_mode_manager.heao_modes import HeaoModeConfig, HeaoModeManager, Transition
 from ascs_mode_manager.spin_mechanizations import AscsError
 
@@ -88,17 +90,17 @@ class HeaoPart:
     def _commands(self, t: float, diagnostics: list[Status]) -> list[tuple[str, str]]:
         """Validate the due commands; return the forwarded (node, text) pairs."""
         forwarded = []
-        for text, _source in self.host.commands.due(t):
-            result = self.core.command(text, t)
+        for text, parsed, _source in self.host.commands.due(t):
+            result = answer(self.core, parsed, t)
             if result.accepted:
-                answer = f'accepted t={t:.1f}: {result.command}: {result.reason}'
+                line = f'accepted t={t:.1f}: {result.command}: {result.reason}'
                 if result.route is not None:
                     forwarded.append((result.route, result.command or text))
             else:
-                answer = f'refused t={t:.1f}: {text}: {result.reason}'
+                line = f'refused t={t:.1f}: {text}: {result.reason}'
                 diagnostics.extend(diagnostic(MODE_STATUS, {'command': text, 'reason': result.reason},
                                               'ground command refused', WARN))
-            self.host.acknowledge(answer, result.accepted)
+            self.host.acknowledge(line, result.accepted)
         return forwarded
 
     def step(self, k: int, t: float, inp: dict[str, Any]) -> dict[str, Any]:
@@ -121,14 +123,9 @@ class HeaoPart:
             text = event_text(tr)
             self.host.log('info', text)
             events.append(text)
-        values = [
-            ('mode', self.core.mode),
-            ('cause', '; '.join(tr.cause for tr in transitions)),
-            *((key, str(v)) for key, v in self.core.status().items() if key != 'mode'),
-            ('run_complete', 'true' if self.run_complete else 'false'),
-            *((f'command/{route}', text) for route, text in forwarded),
-        ]
-        out: dict[str, Any] = {'mode': (Status(OK, MODE_STATUS, self.core.mode, MODE_STATUS, tuple(values)),)}
+        report = ModeReport(self.core.mode, '; '.join(tr.cause for tr in transitions), self.core.captured,
+                            tuple(self.core.status().items()), self.run_complete, tuple(forwarded))
+        out: dict[str, Any] = {'mode': report.encode()}
         if events:
             out['events'] = events
         if diagnostics:

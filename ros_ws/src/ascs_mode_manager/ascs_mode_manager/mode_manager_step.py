@@ -18,7 +18,7 @@ from acds_common.stepper import Stepper
 
 from ascs_mode_manager.aap_part import AapPart
 from ascs_mode_manager.cold_gas_part import ColdGasPart
-from ascs_mode_manager.ground_commands import MAX_PENDING, GroundCommandQueue
+from ascs_mode_manager.ground_commands import MAX_PENDING, GroundCommandQueue, parse
 from ascs_mode_manager.heao_part import HeaoPart
 from ascs_mode_manager.sss_part import SssPart
 
@@ -34,9 +34,9 @@ class ModeManagerStep(Stepper):
         super().__init__(params, log)
         self.modes = self.section('modes')
         self.sss_params = self.section('sss')
-        self.commands = GroundCommandQueue(self.modes['ground_commands'])
         self._acks: list[str] = []
         self.logic = self.part(self)
+        self.commands = GroundCommandQueue(self.modes['ground_commands'], lambda text: parse(self.logic.core, text))
 
     def receive_command(self, text: str) -> None:
         """A live ground command: applied at the next step this node computes (refused if the queue is full)."""

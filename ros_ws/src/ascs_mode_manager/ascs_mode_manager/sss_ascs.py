@@ -27,7 +27,8 @@ Hardware model (body axes as in :mod:`spin_mechanizations`: z spin axis, spacecr
 * Direct Attitude: the attitude coil straight from the bus regardless of enable and threshold; the spin
   coil is then inhibited (never both coils on one pass).
 
-Command grammar (case-insensitive, whitespace-separated)::
+Command grammar (case-insensitive, whitespace-separated; :class:`SssCommand`, parsed where the text enters the
+mode manager, :mod:`ascs_mode_manager.ground_commands`)::
 
     sss enable | sss disable
     sss mode spin | sss mode attitude
@@ -57,12 +58,15 @@ on a single perigee pass." It holds per *perigee pass*, not per activation:
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
+from acds_common.commands import CommandError, decode
 from acds_common.units import GAUSS_T, nm_to_dyne_cm, rad_s_to_rpm, tesla_to_gauss
 
+from ascs_mode_manager.ground_commands import CommandResult
 from ascs_mode_manager.spin_mechanizations import (
     ATTITUDE_COIL,
     BUS_V,
@@ -73,8 +77,8 @@ from ascs_mode_manager.spin_mechanizations import (
     polarity,
 )
 
-__all__ = ["AscsError", "CommandResult", "Event", "PassAccumulator", "SssAscs", "SssAscsConfig", "SssOutput",
-           "build_sss_ascs"]
+__all__ = ["AscsError", "Event", "PassAccumulator", "SssAscs", "SssAscsConfig", "SssCommand",
+           "SssOutput", "build_sss_ascs"]
 
 _MODES = ("spin", "attitude")
 _PASS_MODES = ("spin", "attitude", "direct_attitude")
@@ -138,12 +142,38 @@ def build_sss_ascs(sss: dict[str, Any]) -> SssAscs:
         bus_v=sss["bus_v"]))
 
 
-@dataclass(frozen=True)
-class CommandResult:
-    """Outcome of a ground command: accepted or refused, and why."""
+#: The SSS command's actions and the argument each takes ('' = none).
+_SSS_ACTIONS: dict[str, tuple[str, ...]] = {
+    "enable": ("",), "disable": ("",), "mode": _MODES, "spin_up": ("",), "despin": ("",),
+    "direct_attitude": ("on", "off"), "attitude_polarity": ("plus", "minus"),
+}
+_SSS_USAGE = ("usage: sss enable|disable|mode spin|mode attitude|spin_up|despin|direct_attitude on|off|"
+              "attitude_polarity plus|minus")
 
-    accepted: bool
-    reason: str
+
+@dataclass(frozen=True)
+class SssCommand:
+    """``sss <action> [argument]`` (grammar in the module docstring), parsed: an action of :data:`_SSS_ACTIONS`
+    and its argument ('' for none). Applied by the ASCS itself."""
+
+    action: str
+    argument: str = ""
+    verb: ClassVar[str] = "sss"
+    route: ClassVar[str] = ""
+
+    @classmethod
+    def parse(cls, args: Sequence[str]) -> SssCommand:
+        """The words after the verb → the command (:class:`CommandError`: the usage)."""
+        words = [w.lower() for w in args]
+        action, rest = (words[0], words[1:]) if words else ("", [])
+        if action not in _SSS_ACTIONS or len(rest) > 1 or (rest[0] if rest else "") not in _SSS_ACTIONS[action]:
+            raise CommandError(_SSS_USAGE)
+        return cls(action, rest[0] if rest else "")
+
+    @property
+    def text(self) -> str:
+        """The normalised command."""
+        return " ".join(w for w in ("sss", self.action, self.argument) if w)
 
 
 @dataclass(frozen=True)
@@ -203,45 +233,39 @@ class SssAscs:
                 f"spin-plane signal has stayed below {tesla_to_gauss(cfg.polarity_level_t):.3f} G "
                 f"for {cfg.hold_time_s:.1f} s")
 
-    def command(self, text: str, t_s: float) -> CommandResult:
-        """Apply a ground command (grammar in the module docstring) at sim time ``t_s`` (s)."""
+    def parse(self, text: str) -> SssCommand:
+        """A ground command's text → its command (:class:`CommandError`: the reason it does not parse)."""
+        return decode(text, (SssCommand,))
+
+    def apply(self, cmd: SssCommand, t_s: float) -> CommandResult:
+        """Apply a parsed ground command at sim time ``t_s`` (s), or refuse it with the reason (module docstring)."""
         _finite("t_s", t_s)
-        words = str(text).strip().lower().split()
-        if len(words) < 2 or words[0] != "sss":
-            return CommandResult(False, f"unknown command '{text}': expected 'sss enable|disable|mode spin|"
-                                        "mode attitude|spin_up|despin|direct_attitude on|off|"
-                                        "attitude_polarity plus|minus'")
-        verb, args = words[1], words[2:]
-        if verb in ("enable", "disable") and not args:
+        verb, arg = cmd.action, cmd.argument
+        if verb in ("enable", "disable"):
             self.enabled = verb == "enable"
             level_g = tesla_to_gauss(self.config.polarity_level_t)
             return CommandResult(True, f"{verb}d; automatic turn-on at {level_g:.3f} G "
                                        f"{'armed' if self.enabled else 'inhibited'}")
-        if verb == "mode" and len(args) == 1 and args[0] in _MODES:
-            wanted = args[0]
-            other = "spin" if wanted == "attitude" else "attitude"
-            why = self._already_on_this_pass(other) if wanted != self.mode else ""
+        if verb == "mode":
+            other = "spin" if arg == "attitude" else "attitude"
+            why = self._already_on_this_pass(other) if arg != self.mode else ""
             if why:
-                return CommandResult(False, f"refused '{text}': {why}")
-            self.mode = wanted
-            return CommandResult(True, f"mode {wanted} selected")
-        if verb in ("spin_up", "despin") and not args:
+                return CommandResult(False, f"refused '{cmd.text}': {why}")
+            self.mode = arg
+            return CommandResult(True, f"mode {arg} selected")
+        if verb in ("spin_up", "despin"):
             self.spin_direction = verb
             return CommandResult(True, f"spin direction {verb}")
-        if verb == "direct_attitude" and len(args) == 1 and args[0] in ("on", "off"):
-            turn_on = args[0] == "on"
+        if verb == "direct_attitude":
+            turn_on = arg == "on"
             why = self._already_on_this_pass("spin") if turn_on else ""
             if why:
-                return CommandResult(False, f"refused '{text}': {why}")
+                return CommandResult(False, f"refused '{cmd.text}': {why}")
             self.direct_attitude = turn_on
-            return CommandResult(True, f"direct attitude {args[0]}: attitude coil "
+            return CommandResult(True, f"direct attitude {arg}: attitude coil "
                                        f"{'on from the main bus' if turn_on else 'back to automatic control'}")
-        if verb == "attitude_polarity" and len(args) == 1 and args[0] in ("plus", "minus"):
-            self.attitude_polarity = 1 if args[0] == "plus" else -1
-            return CommandResult(True, f"attitude dipole along {'+' if self.attitude_polarity > 0 else '-'}z")
-        return CommandResult(False, f"unknown command '{text}': expected 'sss enable|disable|mode spin|"
-                                    "mode attitude|spin_up|despin|direct_attitude on|off|"
-                                    "attitude_polarity plus|minus'")
+        self.attitude_polarity = 1 if arg == "plus" else -1
+        return CommandResult(True, f"attitude dipole along {'+' if self.attitude_polarity > 0 else '-'}z")
 
     def step(self, t_s: float, dt_s: float, b_sensed_t: np.ndarray) -> SssOutput:
         """Advance the subsystem to ``t_s`` (s) after ``dt_s`` (s) with the sensed field ``b_sensed_t``

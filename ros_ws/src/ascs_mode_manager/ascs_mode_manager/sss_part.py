@@ -53,14 +53,16 @@ from typing import Any
 
 import numpy as np
 from acds_common.cdr import Status
-from acds_common.messages import OK, WARN, diagnostic, vec, vector3
+from acds_common.messages import MODE_STATUS, WARN, diagnostic, vec, vector3
+from acds_common.mode_report import ModeReport
 from acds_common.units import GAUSS_T, tesla_to_gauss
 from acds_common.validation import scenario_key
 
+from ascs_mode_manager.ground_commands import Parsed, answer
 from ascs_mode_manager.spin_mechanizations import MECHANIZATIONS, AscsError, Mechanization, coil_moments
 from ascs_mode_manager.sss_ascs import SssAscs, SssOutput, build_sss_ascs
 
-NODE = 'ascs_mode_manager'
+NODE = MODE_STATUS
 #: Body axis of the spin-plane magnetometer channel (fixed by the core's wiring).
 CHANNEL_AXIS = 1
 DIAGNOSTIC_EVERY = 20
@@ -97,7 +99,7 @@ class SssPart:
         self.mech = MECHANIZATIONS[p['mechanization']]
         self.scale_v_per_t = p['magnetometer_scale_v_per_g'] / GAUSS_T
         with scenario_key('sss', AscsError):
-            self.ascs = build_sss_ascs(p)
+            self.core = build_sss_ascs(p)
         self.mode = 'sss_disabled'
         self.last_signal_t = 0.0
 
@@ -113,9 +115,9 @@ class SssPart:
             return np.zeros(3)
         return (volts - bias) / self.scale_v_per_t
 
-    def apply(self, text: str, t_s: float, source: str) -> str:
+    def apply(self, text: str, parsed: Parsed, t_s: float, source: str) -> str:
         """Apply one ground command; acknowledge it; return the cause text if it was accepted."""
-        result = self.ascs.command(text, t_s)
+        result = answer(self.core, parsed, t_s)
         verdict = 'accepted' if result.accepted else 'refused'
         self.host.acknowledge(f't={t_s:.2f} {verdict} ({source}) {text!r}: {result.reason}', result.accepted)
         return f'ground command {text!r}' if result.accepted else ''
@@ -123,11 +125,11 @@ class SssPart:
     def step(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Step k: commands due, the core step, then mode, moment command, events and diagnostics."""
         diagnostics: list[Status] = []
-        causes = [self.apply(text, t_s, source) for text, source in self.host.commands.due(t_s)]
+        causes = [self.apply(text, parsed, t_s, source) for text, parsed, source in self.host.commands.due(t_s)]
         b_t = self.sensed_field_t(k, inp, diagnostics)
         self.last_signal_t = float(b_t[CHANNEL_AXIS])
-        out = self.ascs.step(t_s, self.host.control_period_s, b_t)
-        name = mode_name(self.ascs, out)
+        out = self.core.step(t_s, self.host.control_period_s, b_t)
+        name = mode_name(self.core, out)
         cause = ''
         events = []
         for event in out.events:
@@ -140,7 +142,7 @@ class SssPart:
         for text in events:
             self.host.log('info', text)
         result: dict[str, Any] = {
-            'moment': vector3(dipole_command(self.mech, self.ascs, out, b_t)),
+            'moment': vector3(dipole_command(self.mech, self.core, out, b_t)),
             'mode': self.mode_value(out, cause),
         }
         if events:
@@ -155,10 +157,10 @@ class SssPart:
         """SSS telemetry key/values (strings)."""
         return {
             'pass_mode': out.mode,
-            'enabled': str(self.ascs.enabled).lower(),
-            'selected_mode': self.ascs.mode,
-            'spin_direction': self.ascs.spin_direction,
-            'direct_attitude': str(self.ascs.direct_attitude).lower(),
+            'enabled': str(self.core.enabled).lower(),
+            'selected_mode': self.core.mode,
+            'spin_direction': self.core.spin_direction,
+            'direct_attitude': str(self.core.direct_attitude).lower(),
             'signal_gauss': f'{tesla_to_gauss(self.last_signal_t):.5f}',
             'spin_coil': str(out.spin_coil),
             'attitude_coil': str(out.attitude_coil),
@@ -167,5 +169,4 @@ class SssPart:
 
     def mode_value(self, out: SssOutput, cause: str) -> tuple[Status]:
         """The step's ``mode`` DiagnosticArray value (module docstring)."""
-        values = {'mode': self.mode, 'cause': cause, 'captured': 'false', **self.telemetry(out)}
-        return (Status(OK, NODE, self.mode, NODE, tuple(values.items())),)
+        return ModeReport(self.mode, cause, status=tuple(self.telemetry(out).items()), run_complete=None).encode()

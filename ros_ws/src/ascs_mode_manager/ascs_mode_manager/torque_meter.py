@@ -35,7 +35,7 @@ from ascs_mode_manager.spin_mechanizations import (
     ripple_pct,
     rotating_field_body_t,
 )
-from ascs_mode_manager.sss_ascs import Event, SssAscs, SssAscsConfig
+from ascs_mode_manager.sss_ascs import Event, SssAscs, SssAscsConfig, SssCommand
 
 #: Field steps of a simulated perigee pass, G (seed: turn-on stepping 0.070 → 0.075 G, Fig. 13's 0.081 G,
 #: 0.274 G peak).  0.076 G is added: at exactly the 0.075 G level an ideal comparator gives zero-width
@@ -112,8 +112,8 @@ def run_torque_meter(field_steps_g: tuple[float, ...] = DEFAULT_FIELD_STEPS_G, *
     b_body = b_stand @ r_sb  # rows: r_sbᵀ b
     ascs = SssAscs(config)
     cfg = ascs.config
-    for text in ("sss enable", f"sss mode {'attitude' if attitude else 'spin'}", f"sss {direction}"):
-        result = ascs.command(text, float(t[0]))
+    for cmd in (SssCommand("enable"), SssCommand("mode", "attitude" if attitude else "spin"), SssCommand(direction)):
+        result = ascs.apply(cmd, float(t[0]))
         if not result.accepted:
             raise AscsError(f"stand set-up command refused: {result.reason}")
     spin_rl, att_rl = CoilRL(cfg.spin_coil), CoilRL(cfg.attitude_coil)

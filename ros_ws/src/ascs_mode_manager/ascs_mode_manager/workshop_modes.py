@@ -16,9 +16,11 @@ next step; anything else is refused with the reason.
 
 from __future__ import annotations
 
+from acds_common.commands import CommandError, ModeCommand, decode
 from acds_common.modes import WORKSHOP_INITIAL_MODES, WORKSHOP_MODES
 
-from ascs_mode_manager.heao_modes import CommandResult, Transition
+from ascs_mode_manager.ground_commands import CommandResult, refuse
+from ascs_mode_manager.heao_modes import Transition
 from ascs_mode_manager.spin_mechanizations import AscsError
 
 
@@ -32,19 +34,26 @@ class WorkshopModeManager:
         self.mode = initial_mode
         self._pending: list[tuple[str, float]] = []
 
-    def command(self, text: str, t_s: float) -> CommandResult:
-        """Validate a ground command received at sim time ``t_s`` (s); grammar in the module docstring."""
-        words = str(text).split()
-        if len(words) != 2 or words[0].lower() != 'mode':
-            return CommandResult(False, f'the Workshop mode logic takes only "mode <{"|".join(WORKSHOP_MODES)}>"')
-        target = words[1].lower()
+    #: The one command this logic takes.
+    grammar = (ModeCommand,)
+
+    def parse(self, text: str) -> ModeCommand:
+        """A ground command's text → its command (:class:`CommandError`: the reason it does not parse)."""
+        try:
+            return decode(text, self.grammar)
+        except CommandError:
+            raise CommandError(f'the Workshop mode logic takes only "mode <{"|".join(WORKSHOP_MODES)}>"') from None
+
+    def apply(self, cmd: ModeCommand, t_s: float) -> CommandResult:
+        """Validate a parsed mode command received at sim time ``t_s`` (s); accepted, it applies at the next step."""
+        target = cmd.target
         if target not in WORKSHOP_MODES:
-            return CommandResult(False, f"unknown mode '{words[1]}'; Workshop modes: {', '.join(WORKSHOP_MODES)}")
+            return refuse(f"unknown mode '{target}'; Workshop modes: {', '.join(WORKSHOP_MODES)}")
         current = self._pending[-1][0] if self._pending else self.mode
         if target == current:
-            return CommandResult(False, f'wrong mode: already in {current}')
+            return refuse(f'wrong mode: already in {current}')
         self._pending.append((target, float(t_s)))
-        return CommandResult(True, f'{current} → {target} at the next step', None, f'mode {target}')
+        return CommandResult(True, f'{current} → {target} at the next step', None, cmd.text)
 
     def step(self, t_s: float) -> list[Transition]:
         """Apply the mode transfers accepted before this step (at sim time ``t_s``); return them."""

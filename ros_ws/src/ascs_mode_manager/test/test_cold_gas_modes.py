@@ -7,6 +7,7 @@ import math
 import pytest
 from acds_common.units import rad
 from ascs_mode_manager.cold_gas_modes import ColdGasModeManager, GasHandover
+from ascs_mode_manager.ground_commands import submit
 from ascs_mode_manager.heao_modes import HeaoModeConfig
 from ascs_mode_manager.spin_mechanizations import AscsError
 
@@ -38,18 +39,18 @@ def test_gas_rate_damping_then_sun_acquisition_then_hand_over_then_capture():
 
 def test_reacquire_by_ground_command_and_gas_commands_routed():
     m = core()
-    assert not m.command('mode reacquire', 0.0).accepted  # already on gas
+    assert not submit(m, 'mode reacquire', 0.0).accepted  # already on gas
     m.mode = 'celestial_point'
-    res = m.command('mode reacquire', 10.0)
+    res = submit(m, 'mode reacquire', 10.0)
     assert res.accepted and res.route is None
     (tr,) = m.step(10.5, FAST, SUN_Z, True)
     assert tr.to_mode == 'gas_rate_damping' and not m.captured
-    res = m.command('gas isolation 2 close', 11.0)
+    res = submit(m, 'gas isolation 2 close', 11.0)
     assert res.accepted and res.route == 'cold_gas' and res.command == 'isolation 2 close'
-    assert m.command('gas bank OFF', 11.0).command == 'bank off'
-    assert not m.command('gas isolation 3 close', 11.0).accepted
-    assert not m.command('mode gas_sun_acquisition', 11.0).accepted
-    assert m.command('eea_select x B', 11.0).route == 'em_driver'  # the HEAO grammar still holds
+    assert submit(m, 'gas bank OFF', 11.0).command == 'bank off'
+    assert not submit(m, 'gas isolation 3 close', 11.0).accepted
+    assert not submit(m, 'mode gas_sun_acquisition', 11.0).accepted
+    assert submit(m, 'eea_select x B', 11.0).route == 'em_driver'  # the HEAO grammar still holds
 
 
 def test_a_gas_acquisition_starts_in_a_gas_mode():

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 from acds_common.units import rad
+from ascs_mode_manager.ground_commands import submit
 from ascs_mode_manager.heao_modes import (
     CASE_5_RATE_THRESHOLDS_DEG_S,
     HeaoModeConfig,
@@ -116,56 +117,56 @@ def test_auto_cruise_at_capture(target: str) -> None:
 def test_ground_cruise_command_applied_at_next_step() -> None:
     mgr = _manager()
     _to_captured_1b(mgr)
-    res = mgr.command('MODE celestial_point', 1.2)
+    res = submit(mgr, 'MODE celestial_point', 1.2)
     assert res.accepted and res.route is None and res.command == 'mode celestial_point'
     assert mgr.mode == 'mode_1b'  # not yet: applied at the next step boundary
     out = mgr.step(1.5, np.zeros(3), SUN_Z, True)
     assert [(tr.from_mode, tr.to_mode) for tr in out] == [('mode_1b', 'celestial_point')]
     assert "ground command 'mode celestial_point' accepted at t=1.200 s" in out[0].cause
-    assert mgr.command('mode celestial_scan', 2.0).accepted  # cruise ↔ cruise
+    assert submit(mgr, 'mode celestial_scan', 2.0).accepted  # cruise ↔ cruise
     mgr.step(2.5, np.zeros(3), SUN_Z, True)
     assert mgr.mode == 'celestial_scan'
 
 
 def test_refused_mode_commands_carry_reasons() -> None:
     mgr = _manager()
-    res = mgr.command('mode celestial_point', 0.0)
+    res = submit(mgr, 'mode celestial_point', 0.0)
     assert not res.accepted and res.reason.startswith('wrong mode: mode_1a')
-    res = mgr.command('mode mode_1b', 0.0)
+    res = submit(mgr, 'mode mode_1b', 0.0)
     assert not res.accepted and 'on-board transfer' in res.reason
-    res = mgr.command('mode mode_1a', 0.0)
+    res = submit(mgr, 'mode mode_1a', 0.0)
     assert not res.accepted and res.reason == 'wrong mode: already in mode_1a'
     mgr.step(0.0, np.zeros(3), SUN_OFF, True)
     assert mgr.mode == 'mode_1b' and not mgr.captured
-    res = mgr.command('mode celestial_scan', 0.5)
+    res = submit(mgr, 'mode celestial_scan', 0.5)
     assert not res.accepted and 'not reached acquisition capture' in res.reason
-    res = mgr.command('mode cruise_fast', 0.5)
+    res = submit(mgr, 'mode cruise_fast', 0.5)
     assert not res.accepted and "unknown mode 'cruise_fast'" in res.reason
-    res = mgr.command('warp 9', 0.5)
+    res = submit(mgr, 'warp 9', 0.5)
     assert not res.accepted and "unknown command 'warp'" in res.reason
-    assert not mgr.command('', 0.5).accepted
+    assert not submit(mgr, '', 0.5).accepted
 
 
 def test_reacquisition_from_cruise_resets_capture() -> None:
     mgr = _manager(auto_cruise=True)
     _to_captured_1b(mgr)
     assert mgr.mode == 'celestial_point'
-    assert mgr.command('mode mode_1a', 2.0).accepted
+    assert submit(mgr, 'mode mode_1a', 2.0).accepted
     # a second command is checked against the queued mode
-    assert not mgr.command('mode mode_1b', 2.0).accepted
+    assert not submit(mgr, 'mode mode_1b', 2.0).accepted
     out = mgr.step(3.0, _rates_deg(1.0, 1.0, 1.0), SUN_Z, True)
     assert out[0].to_mode == 'mode_1a' and mgr.mode == 'mode_1a' and not mgr.captured
 
 
 def test_routed_commands_are_validated_and_normalised() -> None:
     mgr = _manager(gain_limits=LIMITS, law_choices=LAWS)
-    res = mgr.command('eea_select Y b', 0.0)
+    res = submit(mgr, 'eea_select Y b', 0.0)
     assert res.accepted and res.route == 'em_driver' and res.command == 'eea_select y B'
-    res = mgr.command('magnetometer_select a', 0.0)
+    res = submit(mgr, 'magnetometer_select a', 0.0)
     assert res.accepted and res.route == 'magnetometer_sim' and res.command == 'magnetometer_select A'
-    res = mgr.command('law unloading LEAD', 0.0)
+    res = submit(mgr, 'law unloading LEAD', 0.0)
     assert res.accepted and res.route == 'acds_controller' and res.command == 'law unloading lead'
-    res = mgr.command('gain unloading_gain_point 0.04', 0.0)
+    res = submit(mgr, 'gain unloading_gain_point 0.04', 0.0)
     assert res.accepted and res.route == 'acds_controller' and res.command == 'gain unloading_gain_point 0.04'
     assert mgr.mode == 'mode_1a'  # routed commands do not change the mode
     for text, reason in [('eea_select w A', 'usage: eea_select'), ('magnetometer_select C', 'usage'),
@@ -175,12 +176,12 @@ def test_routed_commands_are_validated_and_normalised() -> None:
                          ('gain unloading_gain_point nan', 'not finite'),
                          ('gain unloading_gain_point x', 'not a number'),
                          ('gain warp_factor 1', "unknown gain 'warp_factor'")]:
-        res = mgr.command(text, 0.0)
+        res = submit(mgr, text, 0.0)
         assert not res.accepted and reason in res.reason and res.route is None, text
 
 
 def test_without_injected_limits_only_syntax_is_checked() -> None:
-    res = _manager().command('gain anything 3.5', 0.0)
+    res = submit(_manager(), 'gain anything 3.5', 0.0)
     assert res.accepted and res.route == 'acds_controller'
 
 
@@ -211,4 +212,4 @@ def test_status() -> None:
     mgr = _manager()
     _to_captured_1b(mgr)
     st_ = mgr.status()
-    assert st_['mode'] == 'mode_1b' and st_['captured'] == 'true' and st_['capture_t_s'] == '1.000'
+    assert mgr.mode == 'mode_1b' and mgr.captured and st_['capture_t_s'] == '1.000'

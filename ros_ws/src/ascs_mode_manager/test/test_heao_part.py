@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from acds_common.scenario import load_scenario
+from ascs_mode_manager.ground_commands import submit
 from ascs_mode_manager.heao_modes import Transition
 from ascs_mode_manager.heao_part import build_core, event_text
 
@@ -22,6 +23,6 @@ def test_core_from_scenarios():
     scan = build_core(load_scenario('heao_a_scan_unloading').values['modes'])
     assert scan.mode == 'celestial_scan'
     # the controller's gain table bounds the mode manager's validation of gain commands
-    assert not base.command('gain unloading_gain_point 7', 0.0).accepted
-    assert 'out of range' in base.command('gain unloading_gain_point 7', 0.0).reason
-    assert base.command('gain unloading_gain_point 0.03', 0.0).route == 'acds_controller'
+    assert not submit(base, 'gain unloading_gain_point 7', 0.0).accepted
+    assert 'out of range' in submit(base, 'gain unloading_gain_point 7', 0.0).reason
+    assert submit(base, 'gain unloading_gain_point 0.03', 0.0).route == 'acds_controller'

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 from acds_common.units import GAUSS_T, rpm_to_rad_s
+from ascs_mode_manager.ground_commands import submit
 from ascs_mode_manager.sss_ascs import (
     AscsError,
     PassAccumulator,
@@ -34,8 +35,8 @@ def _run(ascs: SssAscs, amplitude_g, t0: float, duration_s: float) -> tuple[list
 
 def _enabled(mode: str = "spin") -> SssAscs:
     ascs = SssAscs()
-    assert ascs.command("sss enable", 0.0).accepted
-    assert ascs.command(f"sss mode {mode}", 0.0).accepted
+    assert submit(ascs, "sss enable", 0.0).accepted
+    assert submit(ascs, f"sss mode {mode}", 0.0).accepted
     return ascs
 
 
@@ -76,7 +77,7 @@ def test_constant_0070_never_turns_on_and_disabled_never_turns_on() -> None:
 @pytest.mark.parametrize("direction,sign", [("spin_up", 1), ("despin", -1)])
 def test_spin_coil_follows_magnetometer_polarity(direction: str, sign: int) -> None:
     ascs = _enabled()
-    assert ascs.command(f"sss {direction}", 0.0).accepted
+    assert submit(ascs, f"sss {direction}", 0.0).accepted
     outs, times = _run(ascs, lambda t: 0.3, 0.0, 30.0)
     for o, t in zip(outs, times, strict=True):
         b = _field(0.3, t)
@@ -94,16 +95,16 @@ def test_exclusivity_spin_pass_refuses_attitude_mode() -> None:
     ascs = _enabled("spin")
     _run(ascs, lambda t: 0.3, 0.0, 10.0)
     assert ascs.torquing_active
-    result = ascs.command("sss mode attitude", 10.0)
+    result = submit(ascs, "sss mode attitude", 10.0)
     assert not result.accepted
     assert "already had a spin-mode pass" in result.reason and "stayed below 0.075 G for 20.8 s" in result.reason
     assert ascs.mode == "spin"
-    refused = ascs.command("sss direct_attitude on", 10.0)
+    refused = submit(ascs, "sss direct_attitude on", 10.0)
     assert not refused.accepted and "spin-mode pass" in refused.reason
-    assert ascs.command("sss mode spin", 10.0).accepted  # no change requested: fine
+    assert submit(ascs, "sss mode spin", 10.0).accepted  # no change requested: fine
     outs, _ = _run(ascs, lambda t: 0.05, 10.0, 40.0)
     assert [e.kind for o in outs for e in o.events] == ["turn_off"]
-    assert ascs.command("sss mode attitude", 50.0).accepted
+    assert submit(ascs, "sss mode attitude", 50.0).accepted
     assert ascs.mode == "attitude"
 
 
@@ -113,25 +114,25 @@ def test_one_mode_per_perigee_pass_survives_disable_mode_change_enable() -> None
     ascs = _enabled("spin")
     outs, _ = _run(ascs, lambda t: 0.3, 0.0, 10.0)
     assert ascs.torquing_active and outs[-1].mode == "spin"
-    assert ascs.command("sss disable", 10.0).accepted
+    assert submit(ascs, "sss disable", 10.0).accepted
     outs, _ = _run(ascs, lambda t: 0.3, 10.0, 5.0)
     assert [e.kind for o in outs for e in o.events] == ["turn_off"] and not ascs.torquing_active
     assert ascs.perigee_pass  # the field still reaches the level: same perigee pass
-    refused = ascs.command("sss mode attitude", 15.0)
+    refused = submit(ascs, "sss mode attitude", 15.0)
     assert not refused.accepted and ascs.mode == "spin"
     assert "already had a spin-mode pass (from t=0.0 s)" in refused.reason
     assert "never both active on one perigee pass" in refused.reason and "below 0.075 G for 20.8 s" in refused.reason
-    da = ascs.command("sss direct_attitude on", 15.0)
+    da = submit(ascs, "sss direct_attitude on", 15.0)
     assert not da.accepted and "spin-mode pass" in da.reason and not ascs.direct_attitude
-    assert ascs.command("sss enable", 15.0).accepted  # re-enabled: still spin mode, the one this pass had
+    assert submit(ascs, "sss enable", 15.0).accepted  # re-enabled: still spin mode, the one this pass had
     outs, _ = _run(ascs, lambda t: 0.3, 15.0, 30.0)
     assert all(o.attitude_coil == 0 and o.mode in ("spin", "off") for o in outs)
     assert [e.kind for o in outs for e in o.events] == ["turn_on"] and "spin mode" in outs[0].events[0].detail
     # The pass ends: below the level for the hold time (disabled or not). The next perigee may be attitude.
-    assert ascs.command("sss disable", 45.0).accepted
+    assert submit(ascs, "sss disable", 45.0).accepted
     _run(ascs, lambda t: 0.05, 45.0, 30.0)
     assert not ascs.perigee_pass
-    assert ascs.command("sss mode attitude", 75.0).accepted and ascs.command("sss enable", 75.0).accepted
+    assert submit(ascs, "sss mode attitude", 75.0).accepted and submit(ascs, "sss enable", 75.0).accepted
     outs, _ = _run(ascs, lambda t: 0.3, 75.0, 20.0)
     assert [e.kind for o in outs for e in o.events] == ["turn_on"] and outs[-1].mode == "attitude"
     assert all(o.spin_coil == 0 for o in outs) and outs[-1].attitude_coil == 1
@@ -152,12 +153,12 @@ def test_perigee_pass_follows_the_signal_not_the_enable() -> None:
 
 def test_spin_mode_is_inhibited_after_direct_attitude_on_the_same_perigee_pass() -> None:
     ascs = _enabled("spin")
-    assert ascs.command("sss direct_attitude on", 0.0).accepted
+    assert submit(ascs, "sss direct_attitude on", 0.0).accepted
     outs, _ = _run(ascs, lambda t: 0.3, 0.0, 10.0)
     assert all(o.attitude_coil == 1 and o.spin_coil == 0 for o in outs)
     assert [e.kind for o in outs for e in o.events] == ["inhibited"]
     assert "spin mode not activated: this perigee pass already had an attitude-mode pass" in outs[0].events[0].detail
-    assert ascs.command("sss direct_attitude off", 10.0).accepted
+    assert submit(ascs, "sss direct_attitude off", 10.0).accepted
     outs, _ = _run(ascs, lambda t: 0.3, 10.0, 30.0)  # same perigee pass: the spin coil stays off
     assert all(o.spin_coil == 0 and o.attitude_coil == 0 and not o.torquing_active for o in outs)
     assert not [e for o in outs for e in o.events]
@@ -168,22 +169,24 @@ def test_spin_mode_is_inhibited_after_direct_attitude_on_the_same_perigee_pass()
 
 def test_direct_attitude_energises_attitude_coil_without_enable() -> None:
     ascs = SssAscs()
-    assert ascs.command("sss direct_attitude on", 0.0).accepted
+    assert submit(ascs, "sss direct_attitude on", 0.0).accepted
     out = ascs.step(0.0, DT, np.zeros(3))
     assert out.attitude_coil == 1 and out.spin_coil == 0 and out.mode == "direct_attitude"
     assert out.dipole_body_am2 == pytest.approx([0.0, 0.0, 9.08], rel=1e-3)
     assert out.power_w == pytest.approx(28.0 * 0.0776, rel=1e-3)
-    assert ascs.command("sss direct_attitude off", 1.0).accepted
+    assert submit(ascs, "sss direct_attitude off", 1.0).accepted
     assert ascs.step(1.0, DT, np.zeros(3)).attitude_coil == 0
 
 
 def test_unknown_and_malformed_commands_refused() -> None:
     ascs = SssAscs()
-    for text in ("sss fly", "enable", "sss mode orbit", "sss direct_attitude maybe", ""):
-        result = ascs.command(text, 0.0)
-        assert not result.accepted and "unknown command" in result.reason
+    for text, reason in [("sss fly", "usage: sss enable|"), ("enable", "unknown command 'enable'; known: sss"),
+                         ("sss mode orbit", "usage: sss "), ("sss direct_attitude maybe", "usage: sss "),
+                         ("sss enable now", "usage: sss "), ("", "empty command")]:
+        result = submit(ascs, text, 0.0)
+        assert not result.accepted and result.reason.startswith(reason), text
     with pytest.raises(AscsError):
-        ascs.command("sss enable", math.nan)
+        submit(ascs, "sss enable", math.nan)
     with pytest.raises(AscsError):
         ascs.step(0.0, DT, np.array([math.nan, 0.0, 0.0]))
     with pytest.raises(AscsError):
@@ -203,7 +206,7 @@ def test_attitude_coil_held_through_zero_crossings() -> None:
 def test_disable_during_pass_emits_turn_off() -> None:
     ascs = _enabled("attitude")
     _run(ascs, lambda t: 0.3, 0.0, 5.0)
-    assert ascs.command("sss disable", 5.0).accepted
+    assert submit(ascs, "sss disable", 5.0).accepted
     out = ascs.step(5.0, DT, _field(0.3, 5.0))
     assert [e.kind for e in out.events] == ["turn_off"] and "disabled" in out.events[0].detail
     assert out.attitude_coil == 0

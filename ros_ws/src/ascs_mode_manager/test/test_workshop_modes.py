@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 from acds_common.parameters import node_parameters, normalize
 from acds_common.scenario import load_scenario
+from ascs_mode_manager.ground_commands import submit
 from ascs_mode_manager.mode_manager_step import AapModeManagerStep
 from ascs_mode_manager.spin_mechanizations import AscsError
 from ascs_mode_manager.workshop_modes import WorkshopModeManager
@@ -12,11 +13,11 @@ from ascs_mode_manager.workshop_modes import WorkshopModeManager
 
 def test_mode_commands_are_applied_at_the_next_step_and_the_rest_refused() -> None:
     core = WorkshopModeManager('cmg_dump')
-    assert core.command('mode cmg_dump', 0.0).reason == 'wrong mode: already in cmg_dump'
-    ok = core.command('mode cmg_hold', 5.0)
+    assert submit(core, 'mode cmg_dump', 0.0).reason == 'wrong mode: already in cmg_dump'
+    ok = submit(core, 'mode cmg_hold', 5.0)
     assert ok.accepted and ok.command == 'mode cmg_hold' and core.mode == 'cmg_dump'
-    assert not core.command('mode mode_1a', 5.0).accepted
-    assert 'takes only' in core.command('eea_select x B', 5.0).reason
+    assert not submit(core, 'mode mode_1a', 5.0).accepted
+    assert 'takes only' in submit(core, 'eea_select x B', 5.0).reason
     (tr,) = core.step(10.0)
     assert (tr.from_mode, tr.to_mode, core.mode) == ('cmg_dump', 'cmg_hold', 'cmg_hold')
     assert 't=5.0' in tr.cause and core.step(20.0) == []

@@ -22,7 +22,9 @@ from __future__ import annotations
 from typing import Any
 
 from acds_common.cdr import Status
-from acds_common.messages import OK, WARN, diagnostic, mode_status, xyz
+from acds_common.commands import CommandError, GasCommand
+from acds_common.messages import OK, WARN, diagnostic, xyz
+from acds_common.mode_report import mode_status
 from acds_common.stepper import StepError, Stepper
 
 from cold_gas.configuration import build_rcs
@@ -48,7 +50,10 @@ class ColdGasStep(Stepper):
         notes: list[str] = []
         _mode, commands = mode_status(inp['mode'], self.node)
         for text in commands:
-            accepted, what = rcs.command(text)
+            try:
+                accepted, what = rcs.apply(GasCommand.parse(text.split()))  # forwarded without the verb 'gas'
+            except CommandError as exc:
+                accepted, what = False, str(exc)
             notes.append(f'command {text!r} at t={t_s:.1f} s: {what}' if accepted
                          else f'command {text!r} refused at t={t_s:.1f} s: {what}')
         try:

@@ -54,6 +54,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from acds_common.commands import GasCommand
 from acds_common.thrusters import AXIS_NAMES, Arrangement
 from acds_common.units import LB_KG, LBF_N, PSI_PA, STANDARD_GRAVITY_M_S2
 
@@ -267,24 +268,22 @@ class ColdGasRcs:
         return self.tank_kg + self.manifold_kg
 
     # --------------------------------------------------------------- commands
-    def command(self, text: str) -> tuple[bool, str]:
-        """Apply a ground command (Table 5-2): 'isolation <1|2> <open|close>', 'bank <on|off>', 'transducer <on|off>'.
+    def apply(self, cmd: GasCommand) -> tuple[bool, str]:
+        """Apply a ground command (Table 5-2; :class:`acds_common.commands.GasCommand`).
 
         Returns (accepted, what was done or why not). An isolation valve is not opened while the pressure switch
         is actuated (its circuit holds both closed).
         """
-        words = text.lower().split()
-        if len(words) == 3 and words[0] == 'isolation' and words[1] in ('1', '2') and words[2] in ('open', 'close'):
-            i, want = int(words[1]) - 1, words[2] == 'open'
-            if want and self.switch_actuated:
+        if cmd.device == 'isolation':
+            assert cmd.valve is not None
+            i = cmd.valve - 1
+            if cmd.on and self.switch_actuated:
                 return False, (f'isolation valve {i + 1} held closed: pressure switch actuated (feed '
                                f'{self.feed_pa / PSI_PA:.0f} psia ≥ {self.cfg.switch_trip_pa / PSI_PA:g} psia)')
-            self.isolation_open[i] = want
-            return True, f'isolation valve {i + 1} {"open" if want else "closed"}'
-        if len(words) == 2 and words[0] in ('bank', 'transducer') and words[1] in ('on', 'off'):
-            setattr(self, 'bank_power' if words[0] == 'bank' else 'transducer_power', words[1] == 'on')
-            return True, f'{"thruster bank" if words[0] == "bank" else "pressure transducer"} power {words[1]}'
-        return False, ('usage: isolation <1|2> <open|close> | bank <on|off> | transducer <on|off>')
+            self.isolation_open[i] = cmd.on
+            return True, f'isolation valve {i + 1} {"open" if cmd.on else "closed"}'
+        setattr(self, 'bank_power' if cmd.device == 'bank' else 'transducer_power', cmd.on)
+        return True, f'{"thruster bank" if cmd.device == "bank" else "pressure transducer"} power {"on" if cmd.on else "off"}'
 
     # ------------------------------------------------------------------ frame
     def frame(self, t_s: float, dt: float, request_xyz: Sequence[float]) -> FrameResult:

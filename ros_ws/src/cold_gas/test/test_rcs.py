@@ -6,6 +6,7 @@ import math
 import random
 
 import pytest
+from acds_common.commands import CommandError, GasCommand
 from acds_common.thrusters import HEAO_B_DIRECTIONS, HEAO_B_POSITIONS_M, ArrangementError, arrangement
 from acds_common.units import LB_KG, LBF_N, PSI_PA, STANDARD_GRAVITY_M_S2
 from cold_gas.rcs import (
@@ -19,6 +20,11 @@ from cold_gas.rcs import (
 
 ARR = arrangement(HEAO_B_POSITIONS_M, HEAO_B_DIRECTIONS)
 DT = 0.5
+
+
+def _gas(text: str) -> GasCommand:
+    """A forwarded cold-gas command (the text without the verb 'gas')."""
+    return GasCommand.parse(text.split())
 
 
 def rcs(**kw) -> ColdGasRcs:
@@ -131,13 +137,13 @@ def test_a_failed_open_regulator_trips_the_pressure_switch_and_closes_both_isola
     assert any('pressure switch actuated' in e for e in frame.events)
     assert sys_.vented_kg == 0.0
     assert 200 * PSI_PA <= sys_.feed_pa < 250 * PSI_PA
-    accepted, why = sys_.command('isolation 2 open')
+    accepted, why = sys_.apply(_gas('isolation 2 open'))
     assert not accepted and 'pressure switch actuated' in why
     k = 3
     while sys_.switch_actuated:  # the thrusters bleed the trapped gas
         sys_.frame(k * DT, DT, (0.3, 0.0, 0.0))
         k += 1
-    assert sys_.command('isolation 2 open') == (True, 'isolation valve 2 open')
+    assert sys_.apply(_gas('isolation 2 open')) == (True, 'isolation valve 2 open')
     for i in range(4):
         sys_.frame((k + i) * DT, DT, (0.0, 0.0, 0.0))
     assert sys_.feed_pa == pytest.approx(150 * PSI_PA) and not sys_.switch_actuated
@@ -160,7 +166,7 @@ def test_stuck_thruster_valves():
     j = ARR.thruster_of_axis[5]
     assert frame.thrust_time_s[j] == DT and frame.torque_nm[2] == pytest.approx(-2.4 * 0.5 * LBF_N)
     assert not sys_.switch_actuated  # the regulator holds the feed: the switch does not see a stuck thruster
-    assert sys_.command('isolation 1 close')[0] and sys_.command('isolation 2 close')[0]
+    assert sys_.apply(_gas('isolation 1 close'))[0] and sys_.apply(_gas('isolation 2 close'))[0]
     for k in range(1, 40):
         frame = sys_.frame(k * DT, DT, (0.0, 0.0, 0.0))
     assert frame.torque_nm == (0.0, 0.0, 0.0) and sys_.feed_pa == 0.0  # ground closed it: the manifold emptied
@@ -185,8 +191,9 @@ def test_a_tank_below_the_regulator_set_point_is_refused():
 
 def test_ground_commands_and_bank_power():
     sys_ = rcs()
-    assert sys_.command('bank off') == (True, 'thruster bank power off')
+    assert sys_.apply(_gas('bank off')) == (True, 'thruster bank power off')
     assert sum(sys_.frame(0.0, DT, (0.3, 0.3, 0.3)).thrust_time_s) == 0.0
-    assert sys_.command('transducer off')[0] and sys_.telemetry()['gas_pressure_psia'] == 'off'
-    assert not sys_.command('isolation 3 open')[0]
+    assert sys_.apply(_gas('transducer off'))[0] and sys_.telemetry()['gas_pressure_psia'] == 'off'
+    with pytest.raises(CommandError, match='usage: gas isolation'):
+        _gas('isolation 3 open')
     assert math.isfinite(float(sys_.telemetry()['feed_pressure_psia']))

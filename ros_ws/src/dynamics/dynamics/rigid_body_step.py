@@ -5,8 +5,8 @@ outputs of step k (the em_driver's step-average achieved dipole, the wheels' mom
 h(t_k) and rate ḣ over [t_k, t_k+1]; absent nodes mean zero) and the step's ``mode``,
 integrates t_k → t_k+1 and returns the truth of step k + 1. With the cold-gas subsystem in the graph its
 step-average thruster torque (``cold_gas/wrench``, step k) is applied as well. The run ends after step k
-when the total step count is reached or when the ``mode`` of step k carries
-``run_complete: true`` (stop at acquisition capture). A non-finite actuator input, or one
+when the total step count is reached or when the ``mode`` of step k asks it
+(:attr:`~acds_common.mode_report.ModeReport.run_complete`: stop at acquisition capture). A non-finite actuator input, or one
 beyond what the hardware can produce (:func:`~dynamics.configuration.actuator_limits`),
 fails the run naming the topic and the step.
 
@@ -37,7 +37,8 @@ from typing import Any
 import numpy as np
 from acds_common import topics
 from acds_common.cdr import OdometryValue
-from acds_common.messages import MODE_STATUS, OK, WALL_CLOCK_PREFIX, WARN, diagnostic, status_value, xyz
+from acds_common.messages import OK, WALL_CLOCK_PREFIX, WARN, diagnostic, xyz
+from acds_common.mode_report import run_complete
 from acds_common.stepper import StepError, Stepper
 
 from dynamics import integration_accuracy as accuracy
@@ -55,11 +56,6 @@ QUATERNION_NORM_TOLERANCE = 1e-9
 DRIFT_TOLERANCE = 1e-6
 _ZERO_COV = (0.0,) * 9  # a truth field's covariance: unknown
 _ZERO = (0.0, 0.0, 0.0)
-
-
-def run_complete(mode: Any) -> bool:
-    """Whether the step's ``mode`` value asks to end the run (key ``run_complete`` = 'true')."""
-    return status_value(mode, MODE_STATUS, 'run_complete') == 'true'
 
 
 def truth_outputs(truth: Truth) -> dict[str, Any]:

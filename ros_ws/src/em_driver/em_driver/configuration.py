@@ -14,8 +14,8 @@ by ``driver_kind``:
   the node, its topics and the commands below are the same; ``mismatch_settle`` applies to the
   electromagnets only (a rod settles within milliseconds, one control period decides).
 
-Commands forwarded by ascs_mode_manager in the ``mode`` array (key ``command/em_driver``),
-whitespace separated, keywords case-insensitive::
+Commands forwarded by ascs_mode_manager in the ``mode`` report (key ``command/em_driver``),
+whitespace separated, keywords case-insensitive (:class:`acds_common.commands.EeaSelect`, :class:`EeaFailure`)::
 
     eea_select <x|y|z> <A|B>                                          active driver + winding
     eea_failure <x|y|z> <A|B> <open_winding|stuck_on_bridge|dead_driver|none>
@@ -26,20 +26,21 @@ tools and tests that talk to the node directly).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
+from acds_common.commands import AXES, UNITS, CommandError, EeaSelect, decode
 from acds_common.torque_rod_record import TorqueRodRecordError, read_torque_rod_record
 from acds_common.validation import scenario_key
 
 from em_driver.bridge_switch import CoilFault, CoilParams, DriverParams, EmDriverError
-from em_driver.drive_assembly import UNITS, AxisConfig, DriveAssembly
+from em_driver.drive_assembly import AxisConfig, DriveAssembly
 from em_driver.torque_rod import PwmDriverParams, TorqueRodAssembly
 from em_driver.torque_rod_design import load_rod
 
-__all__ = ['DriverCommand', 'axis_configs', 'build_assembly', 'build_torque_rods', 'parse_command']
+__all__ = ['EeaFailure', 'apply_command', 'axis_configs', 'build_assembly', 'build_torque_rods', 'parse_command']
 
-_AXES = {'x': 0, 'y': 1, 'z': 2}
 _FAILURES = tuple(f.value for f in CoilFault)
 
 
@@ -87,36 +88,48 @@ def build_torque_rods(section: dict[str, Any]) -> TorqueRodAssembly:
 
 
 @dataclass(frozen=True)
-class DriverCommand:
-    """A parsed command: verb 'select' or 'failure', axis 0…2, unit 'A'/'B', failure kind (None clears)."""
+class EeaFailure:
+    """``eea_failure <x|y|z> <A|B> <kind|none>``: a failure of one axis's unit injected (``failure`` None:
+    cleared); for tools and tests that talk to the node directly (the ground grammar has no such command)."""
 
-    verb: str
     axis: int
     unit: str
-    failure: str | None = None
+    failure: str | None
+    verb: ClassVar[str] = 'eea_failure'
+    route: ClassVar[str] = 'em_driver'
 
-    def apply(self, assembly: DriveAssembly | TorqueRodAssembly) -> str:
-        """Apply to the assembly; return the event text for telemetry."""
-        name = 'xyz'[self.axis]
-        if self.verb == 'select':
-            assembly.select_eea(self.axis, self.unit)
-            return f'eea_select: axis {name} unit {self.unit} active'
-        assembly.inject_failure(self.axis, self.unit, self.failure)
-        return f'axis {name} unit {self.unit}: failure {self.failure or "cleared"}'
+    @classmethod
+    def parse(cls, args: Sequence[str]) -> EeaFailure:
+        """The words after the verb → the command."""
+        if (len(args) != 3 or args[0].lower() not in AXES or args[1].upper() not in UNITS
+                or args[2].lower() not in (*_FAILURES, 'none')):
+            raise CommandError(f'usage: eea_failure <x|y|z> <A|B> <{"|".join(_FAILURES)}|none>')
+        kind = args[2].lower()
+        return cls(AXES.index(args[0].lower()), args[1].upper(), None if kind == 'none' else kind)
+
+    @property
+    def text(self) -> str:
+        """The normalised command."""
+        return f'eea_failure {AXES[self.axis]} {self.unit} {self.failure or "none"}'
 
 
-def parse_command(text: str) -> DriverCommand:
+#: The commands the node applies (forwarded in the ``mode`` report, key ``command/em_driver``).
+GRAMMAR = (EeaSelect, EeaFailure)
+
+
+def parse_command(text: str) -> EeaSelect | EeaFailure:
     """Parse one forwarded command (grammar in the module docstring); EmDriverError says what is wrong."""
-    words = str(text).split()
-    verb = words[0].lower() if words else ''
-    if verb == 'eea_select':
-        if len(words) != 3 or words[1].lower() not in _AXES or words[2].upper() not in UNITS:
-            raise EmDriverError(f'usage: eea_select <x|y|z> <A|B>, got {text!r}')
-        return DriverCommand('select', _AXES[words[1].lower()], words[2].upper())
-    if verb == 'eea_failure':
-        if (len(words) != 4 or words[1].lower() not in _AXES or words[2].upper() not in UNITS
-                or words[3].lower() not in (*_FAILURES, 'none')):
-            raise EmDriverError(f'usage: eea_failure <x|y|z> <A|B> <{"|".join(_FAILURES)}|none>, got {text!r}')
-        kind = words[3].lower()
-        return DriverCommand('failure', _AXES[words[1].lower()], words[2].upper(), None if kind == 'none' else kind)
-    raise EmDriverError(f'unknown em_driver command {text!r}; known: eea_select, eea_failure')
+    try:
+        return decode(text, GRAMMAR, 'em_driver command')
+    except CommandError as exc:
+        raise EmDriverError(str(exc)) from None
+
+
+def apply_command(cmd: EeaSelect | EeaFailure, assembly: DriveAssembly | TorqueRodAssembly) -> str:
+    """Apply a parsed command to the assembly; return the event text for telemetry."""
+    name = AXES[cmd.axis]
+    if isinstance(cmd, EeaSelect):
+        assembly.select_eea(cmd.axis, cmd.unit)
+        return f'eea_select: axis {name} unit {cmd.unit} active'
+    assembly.inject_failure(cmd.axis, cmd.unit, cmd.failure)
+    return f'axis {name} unit {cmd.unit}: failure {cmd.failure or "cleared"}'

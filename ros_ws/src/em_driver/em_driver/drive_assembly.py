@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from acds_common.commands import UNITS  # redundant unit names per axis (driver + winding)
 
 from em_driver.bridge_switch import (
     BridgeSwitchCoil,
@@ -50,8 +51,6 @@ __all__ = ['DRIVE_TYPES', 'UNITS', 'AxisConfig', 'AssemblyResult', 'DriveAssembl
 
 #: Drive types selectable per axis.
 DRIVE_TYPES = ('bridge_switch', 'constant_level', 'none')
-#: Redundant unit names per axis (driver + winding).
-UNITS = ('A', 'B')
 
 
 def axis_of(axes: Sequence[Any], axis: int) -> Any:

@@ -23,12 +23,13 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from acds_common.messages import ERROR, OK, WARN, diagnostic, mode_status, vector3
+from acds_common.messages import ERROR, OK, WARN, diagnostic, vector3
+from acds_common.mode_report import mode_status
 from acds_common.stepper import Stepper
 from acds_common.validation import scenario_key
 
 from em_driver.bridge_switch import EmDriverError
-from em_driver.configuration import build_assembly, parse_command
+from em_driver.configuration import apply_command, build_assembly, parse_command
 from em_driver.drive_assembly import AssemblyResult
 
 
@@ -55,7 +56,7 @@ class EmDriverStep(Stepper):
         rejected: list[str] = []
         for text in mode_status(inp['mode'], self.node)[1]:
             try:
-                events.append(parse_command(text).apply(self.assembly))
+                events.append(apply_command(parse_command(text), self.assembly))
             except EmDriverError as exc:
                 rejected.append(f'rejected command {text!r}: {exc}')
         if self._failure_pending and t_s >= self.cfg['failure_time']:

@@ -8,10 +8,11 @@ from typing import Any
 
 import numpy as np
 import pytest
+from acds_common.commands import EeaSelect
 from acds_common.scenario import SCHEMA
 from acds_common.torque_rod_record import dipole_bound_am2, read_torque_rod_record
 from em_driver.bridge_switch import EmDriverError
-from em_driver.configuration import DriverCommand, axis_configs, build_assembly, parse_command
+from em_driver.configuration import EeaFailure, apply_command, axis_configs, build_assembly, parse_command
 from em_driver.torque_rod import TorqueRodAssembly
 from em_driver.torque_rod_design import DesignRequest, design_torque_rod
 
@@ -51,25 +52,25 @@ def test_bench_command_default_and_settle_key_reach_the_assembly() -> None:
 
 
 def test_parse_commands() -> None:
-    assert parse_command('eea_select X b') == DriverCommand('select', 0, 'B')
-    assert parse_command('eea_failure z A open_winding') == DriverCommand('failure', 2, 'A', 'open_winding')
-    assert parse_command('EEA_FAILURE y B none') == DriverCommand('failure', 1, 'B', None)
+    assert parse_command('eea_select X b') == EeaSelect(0, 'B')
+    assert parse_command('eea_failure z A open_winding') == EeaFailure(2, 'A', 'open_winding')
+    assert parse_command('EEA_FAILURE y B none') == EeaFailure(1, 'B', None)
 
 
 @pytest.mark.parametrize('text', ['', 'eea_select', 'eea_select w A', 'eea_select x C', 'eea_select x A B',
                                   'eea_failure x A melted', 'magnetometer_select B'])
 def test_bad_commands_are_refused_with_a_reason(text: str) -> None:
-    with pytest.raises(EmDriverError, match='usage|unknown'):
+    with pytest.raises(EmDriverError, match='usage|unknown|empty'):
         parse_command(text)
 
 
 def test_commands_apply_to_the_assembly() -> None:
     assembly = build_assembly(section())
-    assert parse_command('eea_select y B').apply(assembly) == 'eea_select: axis y unit B active'
+    assert apply_command(parse_command('eea_select y B'), assembly) == 'eea_select: axis y unit B active'
     assert assembly.active_units == ('A', 'B', 'A')
-    parse_command('eea_failure x A dead_driver').apply(assembly)
+    apply_command(parse_command('eea_failure x A dead_driver'), assembly)
     assert assembly.unit_fault(0, 'A') == 'dead_driver'
-    parse_command('eea_failure x A none').apply(assembly)
+    apply_command(parse_command('eea_failure x A none'), assembly)
     assert assembly.unit_fault(0, 'A') is None
 
 
@@ -93,7 +94,7 @@ def test_torque_rod_kind_builds_three_designed_rods_on_pwm_bridges(rod_record) -
     np.testing.assert_allclose(result.avg_dipole_am2, command, atol=2e-3)
     assert np.all(result.power_w >= 0.0) and result.power_w[2] == 0.0 and result.duty[0] == pytest.approx(
         0.1 / design.moment_am2, abs=1e-3)
-    DriverCommand('select', 1, 'B').apply(assembly)
+    apply_command(EeaSelect(1, 'B'), assembly)
     assert assembly.active_units == ('A', 'B', 'A')
 
 

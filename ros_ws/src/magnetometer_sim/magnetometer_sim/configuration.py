@@ -5,8 +5,9 @@ SI values ({field: value}, see ``acds_common.scenario.SCHEMA['magnetometer']``) 
 builds the :class:`~magnetometer_sim.fluxgate.Magnetometer` here, so the mapping
 from presets to the coupling matrix Δ is testable without ROS.
 
-Commands forwarded by ascs_mode_manager in the ``mode`` array (key
-``command/magnetometer_sim``), whitespace separated, keywords case-insensitive::
+Commands forwarded by ascs_mode_manager in the ``mode`` report (key
+``command/magnetometer_sim``), whitespace separated, keywords case-insensitive
+(:class:`acds_common.commands.MagnetometerSelect`, :class:`MagnetometerFault`)::
 
     magnetometer_select <A|B>                                    active assembly
     magnetometer_fault <A|B> <bias_shift|stuck_axis|dead_unit> [x|y|z|all] [volts]
@@ -19,24 +20,22 @@ fault form is for tools and tests that talk to the node directly).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
+from acds_common.commands import AXES, UNITS, CommandError, MagnetometerSelect, decode
 from acds_common.coupling import CouplingError, coupling_from_section
 from acds_common.units import GAUSS_T
 
 from magnetometer_sim.fluxgate import (
     FAULT_KINDS,
-    UNITS,
     FluxgateAxisParams,
     Magnetometer,
     MagnetometerError,
 )
 
-__all__ = ['MagnetometerCommand', 'build_magnetometer', 'parse_command']
-
-_AXES = {'x': 0, 'y': 1, 'z': 2, 'all': None}
-
+__all__ = ['MagnetometerFault', 'apply_command', 'build_magnetometer', 'parse_command']
 
 def build_magnetometer(section: dict[str, Any], seed: int) -> Magnetometer:
     """The two-assembly magnetometer the section describes (faults are injected later, at fault_time)."""
@@ -52,59 +51,71 @@ def build_magnetometer(section: dict[str, Any], seed: int) -> Magnetometer:
 
 
 @dataclass(frozen=True)
-class MagnetometerCommand:
-    """A parsed command: verb 'select' or 'fault'; unit; fault kind ('clear' clears), axis (None = all), volts."""
+class MagnetometerFault:
+    """``magnetometer_fault <A|B> <kind|clear> [x|y|z|all] [volts]``: a fault of one unit injected (``kind``
+    'clear' removes that unit's faults; ``axis`` None = all; ``value_v`` the bias shift); for tools and tests
+    that talk to the node directly (the ground grammar has no such command)."""
 
-    verb: str
     unit: str
-    kind: str | None = None
+    kind: str
     axis: int | None = None
     value_v: float | None = None
+    verb: ClassVar[str] = 'magnetometer_fault'
+    route: ClassVar[str] = 'magnetometer_sim'
 
-    def apply(self, mag: Magnetometer) -> str:
-        """Apply to the model; return the event text for telemetry."""
-        if self.verb == 'select':
-            mag.select_unit(self.unit)
-            return f'magnetometer_select: unit {self.unit} active'
-        if self.kind == 'clear':
-            mag.clear_faults(self.unit)
-            return f'unit {self.unit}: faults cleared'
-        assert self.kind is not None
-        mag.inject_fault(self.unit, self.kind, self.axis, self.value_v)
-        where = 'all axes' if self.axis is None else f'axis {"xyz"[self.axis]}'
-        size = f' {self.value_v:+g} V' if self.value_v is not None else ''
-        return f'unit {self.unit}: {self.kind}{size} on {where}'
-
-
-def parse_command(text: str) -> MagnetometerCommand:
-    """Parse one forwarded command (grammar in the module docstring); MagnetometerError says what is wrong."""
-    words = str(text).split()
-    verb = words[0].lower() if words else ''
-    if verb == 'magnetometer_select':
-        if len(words) != 2 or words[1].upper() not in UNITS:
-            raise MagnetometerError(f'usage: magnetometer_select <A|B>, got {text!r}')
-        return MagnetometerCommand('select', words[1].upper())
-    if verb == 'magnetometer_fault':
-        usage = f'usage: magnetometer_fault <A|B> <{"|".join(FAULT_KINDS)}|clear> [x|y|z|all] [volts], got {text!r}'
-        if not 3 <= len(words) <= 5 or words[1].upper() not in UNITS:
-            raise MagnetometerError(usage)
-        unit, kind = words[1].upper(), words[2].lower()
-        if kind not in (*FAULT_KINDS, 'clear'):
-            raise MagnetometerError(usage)
-        axis_word = words[3].lower() if len(words) >= 4 else 'all'
-        if axis_word not in _AXES:
-            raise MagnetometerError(usage)
+    @classmethod
+    def parse(cls, args: Sequence[str]) -> MagnetometerFault:
+        """The words after the verb → the command."""
+        usage = f'usage: magnetometer_fault <A|B> <{"|".join(FAULT_KINDS)}|clear> [x|y|z|all] [volts]'
+        if not 2 <= len(args) <= 4 or args[0].upper() not in UNITS or args[1].lower() not in (*FAULT_KINDS, 'clear'):
+            raise CommandError(usage)
+        unit, kind = args[0].upper(), args[1].lower()
+        axis_word = args[2].lower() if len(args) >= 3 else 'all'
+        if axis_word not in (*AXES, 'all'):
+            raise CommandError(usage)
         value = None
         if kind == 'bias_shift':
-            if len(words) != 5:
-                raise MagnetometerError(f'bias_shift needs a size in volts: {usage}')
+            if len(args) != 4:
+                raise CommandError(f'bias_shift needs a size in volts: {usage}')
             try:
-                value = float(words[4])
+                value = float(args[3])
             except ValueError:
-                raise MagnetometerError(f'bias_shift size {words[4]!r} is not a number') from None
+                raise CommandError(f'bias_shift size {args[3]!r} is not a number') from None
             if not math.isfinite(value):
-                raise MagnetometerError(f'bias_shift size {words[4]!r} is not finite')
-        elif len(words) == 5:
-            raise MagnetometerError(usage)
-        return MagnetometerCommand('fault', unit, kind, _AXES[axis_word], value)
-    raise MagnetometerError(f'unknown magnetometer command {text!r}; known: magnetometer_select, magnetometer_fault')
+                raise CommandError(f'bias_shift size {args[3]!r} is not finite')
+        elif len(args) == 4:
+            raise CommandError(usage)
+        return cls(unit, kind, None if axis_word == 'all' else AXES.index(axis_word), value)
+
+    @property
+    def text(self) -> str:
+        """The normalised command."""
+        axis = 'all' if self.axis is None else AXES[self.axis]
+        return ' '.join(('magnetometer_fault', self.unit, self.kind, axis, *(() if self.value_v is None
+                                                                                else (repr(self.value_v),))))
+
+
+#: The commands the node applies (forwarded in the ``mode`` report, key ``command/magnetometer_sim``).
+GRAMMAR = (MagnetometerSelect, MagnetometerFault)
+
+
+def parse_command(text: str) -> MagnetometerSelect | MagnetometerFault:
+    """Parse one forwarded command (grammar in the module docstring); MagnetometerError says what is wrong."""
+    try:
+        return decode(text, GRAMMAR, 'magnetometer command')
+    except CommandError as exc:
+        raise MagnetometerError(str(exc)) from None
+
+
+def apply_command(cmd: MagnetometerSelect | MagnetometerFault, mag: Magnetometer) -> str:
+    """Apply a parsed command to the model; return the event text for telemetry."""
+    if isinstance(cmd, MagnetometerSelect):
+        mag.select_unit(cmd.unit)
+        return f'magnetometer_select: unit {cmd.unit} active'
+    if cmd.kind == 'clear':
+        mag.clear_faults(cmd.unit)
+        return f'unit {cmd.unit}: faults cleared'
+    mag.inject_fault(cmd.unit, cmd.kind, cmd.axis, cmd.value_v)
+    where = 'all axes' if cmd.axis is None else f'axis {AXES[cmd.axis]}'
+    size = f' {cmd.value_v:+g} V' if cmd.value_v is not None else ''
+    return f'unit {cmd.unit}: {cmd.kind}{size} on {where}'

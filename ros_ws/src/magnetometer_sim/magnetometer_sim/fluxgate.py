@@ -36,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from acds_common import validation
+from acds_common.commands import UNITS  # assembly names: active/standby pair
 from acds_common.units import GAUSS_T
 from acds_common.vec3 import Vec3, mat3, mv
 
@@ -51,8 +52,6 @@ __all__ = [
 
 #: Fault kinds accepted by ``inject_fault``.
 FAULT_KINDS = ('bias_shift', 'stuck_axis', 'dead_unit')
-#: Assembly names: active/standby pair.
-UNITS = ('A', 'B')
 
 
 class MagnetometerError(ValueError):

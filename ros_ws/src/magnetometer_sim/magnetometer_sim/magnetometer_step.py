@@ -15,11 +15,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from acds_common.messages import ERROR, OK, WARN, diagnostic, mode_status, xyz
+from acds_common.messages import ERROR, OK, WARN, diagnostic, xyz
+from acds_common.mode_report import mode_status
 from acds_common.stepper import Stepper
 from acds_common.validation import all_finite, scenario_key
 
-from magnetometer_sim.configuration import build_magnetometer, parse_command
+from magnetometer_sim.configuration import apply_command, build_magnetometer, parse_command
 from magnetometer_sim.fluxgate import MagnetometerError, MagnetometerReading
 
 #: Telemetered bias voltage further than this from 2.5 V raises a WARN (a shift reads as field).
@@ -46,7 +47,7 @@ class MagnetometerStep(Stepper):
         errors: list[str] = []
         for text in mode_status(inp['mode'], self.node)[1]:
             try:
-                events.append(parse_command(text).apply(self.mag))
+                events.append(apply_command(parse_command(text), self.mag))
             except MagnetometerError as exc:
                 errors.append(f'rejected command {text!r}: {exc}')
         if self._fault_pending and t_s >= self.cfg['fault_time']:

@@ -6,10 +6,12 @@ from typing import Any
 
 import numpy as np
 import pytest
+from acds_common.commands import MagnetometerSelect
 from acds_common.coupling import coupling_from_section
 from acds_common.scenario import SCHEMA
 from magnetometer_sim.configuration import (
-    MagnetometerCommand,
+    MagnetometerFault,
+    apply_command,
     build_magnetometer,
     parse_command,
 )
@@ -55,11 +57,12 @@ def test_build_applies_unit_residual_and_noise_seed() -> None:
 
 
 def test_parse_select_and_faults() -> None:
-    assert parse_command('magnetometer_select b') == MagnetometerCommand('select', 'B')
-    assert parse_command('MAGNETOMETER_FAULT A bias_shift y 0.25') == MagnetometerCommand(
-        'fault', 'A', 'bias_shift', 1, 0.25)
-    assert parse_command('magnetometer_fault B stuck_axis') == MagnetometerCommand('fault', 'B', 'stuck_axis')
-    assert parse_command('magnetometer_fault A clear') == MagnetometerCommand('fault', 'A', 'clear')
+    for text in ('magnetometer_fault a bias_shift Y 0.25', 'magnetometer_fault B stuck_axis', 'magnetometer_select b'):
+        assert parse_command(parse_command(text).text) == parse_command(text)  # the text encodes the command
+    assert parse_command('magnetometer_select b') == MagnetometerSelect('B')
+    assert parse_command('MAGNETOMETER_FAULT A bias_shift y 0.25') == MagnetometerFault('A', 'bias_shift', 1, 0.25)
+    assert parse_command('magnetometer_fault B stuck_axis') == MagnetometerFault('B', 'stuck_axis')
+    assert parse_command('magnetometer_fault A clear') == MagnetometerFault('A', 'clear')
 
 
 @pytest.mark.parametrize('text', ['', 'magnetometer_select', 'magnetometer_select C', 'eea_select x B',
@@ -67,19 +70,19 @@ def test_parse_select_and_faults() -> None:
                                   'magnetometer_fault A melted', 'magnetometer_fault A stuck_axis w',
                                   'magnetometer_fault A dead_unit all 1'])
 def test_bad_commands_are_refused_with_a_reason(text: str) -> None:
-    with pytest.raises(MagnetometerError, match='usage|unknown|number|finite'):
+    with pytest.raises(MagnetometerError, match='usage|unknown|number|finite|empty'):
         parse_command(text)
 
 
 def test_commands_apply_to_the_model() -> None:
     mag = build_magnetometer(section(), seed=1)
-    assert 'unit B active' in parse_command('magnetometer_select B').apply(mag)
+    assert 'unit B active' in apply_command(parse_command('magnetometer_select B'), mag)
     assert mag.active_unit == 'B'
-    event = parse_command('magnetometer_fault B bias_shift all 0.1').apply(mag)
+    event = apply_command(parse_command('magnetometer_fault B bias_shift all 0.1'), mag)
     assert event == 'unit B: bias_shift +0.1 V on all axes'
     np.testing.assert_allclose(mag.read([0.0, 0.0, 0.0]).bias_volts, 2.6)
-    parse_command('magnetometer_select A').apply(mag)
+    apply_command(parse_command('magnetometer_select A'), mag)
     np.testing.assert_allclose(mag.read([0.0, 0.0, 0.0]).bias_volts, 2.5)
-    parse_command('magnetometer_fault B clear').apply(mag)
-    parse_command('magnetometer_select B').apply(mag)
+    apply_command(parse_command('magnetometer_fault B clear'), mag)
+    apply_command(parse_command('magnetometer_select B'), mag)
     np.testing.assert_allclose(mag.read([0.0, 0.0, 0.0]).bias_volts, 2.5)

@@ -5,12 +5,9 @@ frame), Figs. 4-15 … 4-17 (roll/pitch/yaw responses: body rate deg/s, wheel
 momentum ft-lb-sec, magnetic moment A·m²), Fig. 4-18 / 4-43 / 4-51 (magnetic
 moments and the angle between the Earth field and the momentum vector), the
 sun angle (body z to the sun line, with the capture cone), plus the mode
-timeline. SSS (seed 001): spin rate (rpm) and the magnetic torque about the
-spin axis (dyne-cm). Torque-rod runs (seed 003, the bag holds ``em_driver/power``):
-body rates and |ω| (deg/s, with the summary's 0.1°/s threshold), dipole commands (A·m²)
-and rod currents (mA). Cold-gas acquisitions (seed 002 §5): ``cold_gas_plots``. Formations (seed 004):
-``formation_plots``. A figure whose topics
-are absent is skipped.
+timeline. A figure whose topics are absent is skipped. Each mission's own figures (SSS spin
+rate and torque, torque-rod detumble, cold-gas acquisition, formations) are plug-ins,
+:mod:`acds_cli.bag.mission_plots`, chosen by the nodes that ran and the sections they received.
 
 What an ACS engineer reads at a glance: every time plot marks the mode
 transitions and the acquisition capture (labelled vertical lines, from the
@@ -34,12 +31,13 @@ from typing import Any
 import numpy as np
 import yaml
 from acds_common import topics, units
+from acds_common.mode_report import ModeReport
 from acds_common.parameters import ConfigError, normalize, section
 from acds_runtime.bag.reader import Bag, open_bag
 from acds_runtime.bag.writer import BagError, check_out_dir, typestore
 from acds_runtime.summaries.heao import transitions
 
-from . import FORMATS, cold_gas_plots, formation_plots
+from . import FORMATS, mission_plots
 
 AXES = (('x', 'roll'), ('y', 'pitch'), ('z', 'yaw'))
 #: The sun-angle plot's sections of the time owner's parameters (the rigid body's environment).
@@ -120,8 +118,15 @@ class RunContext:
     scenario: str
     run_id: str
     params: dict[str, dict[str, Any]] = field(default_factory=dict)
+    #: Every node that ran, as the bag records its parameters (a vehicle's: ``<vehicle>/<node>``).
+    nodes: tuple[str, ...] = ()
     #: Mode transitions and capture: [{t_min, from, to, cause}] (``acds_runtime.summaries.heao.transitions``).
     events: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def vehicles(self) -> list[str]:
+        """The formation's vehicles (the prefixes of the vehicles' nodes), by name; [] for a single vehicle."""
+        return sorted({node.rpartition('/')[0] for node in self.nodes if '/' in node})
 
     def section(self, node: str, name: str) -> dict[str, Any] | None:
         """{field: SI value} of scenario section ``name`` as node ``node`` received it (None: not recorded)."""
@@ -169,7 +174,7 @@ def run_context(bag: Bag) -> RunContext:
         except (ConfigError, KeyError):
             continue
     name = bag.info.get('scenario_name', bag.path.name)
-    return RunContext(name, bag.info.get('run_id') or bag.path.name, params)
+    return RunContext(name, bag.info.get('run_id') or bag.path.name, params, tuple(sorted(recorded)))
 
 
 def _mark_events(axs: list[Any], events: list[dict[str, Any]]) -> None:
@@ -209,23 +214,15 @@ def figures(bag: Bag) -> list[tuple[str, Any]]:
     }
     if not bag.has(topics.TRUTH_ODOMETRY):
         vectors[topics.GYRO] = lambda m: _v3(m.angular_velocity)
-    sss = ctx.scenario.startswith('sss') or (ctx.section('ascs_mode_manager', 'modes') or {}).get('system') == 'sss'
-    if sss:
-        vectors[topics.TRUTH_TORQUE_MAG] = lambda m: _v3(m.vector)
-    rods = bag.has(topics.COIL_POWER)
-    if rods:
-        vectors[topics.MOMENT_COMMAND] = lambda m: _v3(m.vector)
-        vectors[topics.COIL_CURRENT] = lambda m: _v3(m.vector)
-    formation = formation_plots.vehicles(bag)
-    vectors.update(formation_plots.formation_vectors(formation))
-    gas = bag.has(topics.COLD_GAS_STATE)
-    if gas:
-        vectors[topics.COLD_GAS_STATE] = cold_gas_plots.state_vector
+    missions = mission_plots.chosen(ctx)
+    for mission in missions:
+        vectors.update(mission.vectors(ctx))
 
     def mode_of(m: Any) -> tuple[str, str, bool]:
-        kv = {v.key: v.value for v in m.status[0].values} if m.status else {}
-        return (kv.get('mode', m.status[0].message if m.status else ''), kv.get('cause', ''),
-                kv.get('captured') == 'true')
+        if not m.status:
+            return '', '', False
+        report = ModeReport.from_values(m.status[0].message, ((v.key, v.value) for v in m.status[0].values))
+        return report.mode, report.cause, report.captured
 
     data = _gather(bag, vectors, {topics.MODE: mode_of})
     mode_stamps, mode_values = data.get(topics.resolve(topics.MODE), ((), []))
@@ -340,51 +337,12 @@ def figures(bag: Bag) -> list[tuple[str, Any]]:
         ax.grid(alpha=0.3)
         finish(fig, [ax], 'mode_timeline', 'Mode timeline')
 
-    # SSS: spin rate and magnetic torque about the spin axis
-    if sss and len(t_w):
-        rows2 = [(t_w, units.rad_s_to_rpm(w[:, 2]), 'spin rate ωz, rpm')]
-        if bag.has(topics.TRUTH_TORQUE_MAG):
-            t_q, q = _series(data, topics.TRUTH_TORQUE_MAG)
-            rows2.append((t_q, units.nm_to_dyne_cm(q[:, 2]), 'magnetic torque Tz, dyne-cm'))
-        fig, axs = plt.subplots(len(rows2), 1, figsize=(8, 2.6 * len(rows2) + 0.8), sharex=True, squeeze=False)
-        for ax, (tt, y, ylabel) in zip(axs[:, 0], rows2, strict=True):
-            ax.plot(tt, y, lw=0.8)
-            ax.set_ylabel(ylabel)
-            ax.grid(alpha=0.3)
-        finish(fig, list(axs[:, 0]), 'sss_spin_rate_torque', 'SSS spin rate and magnetic spin torque')
-
-    # Torque rods (seed 003): rates, |ω|, dipole commands, rod currents
-    if rods and len(t_w):
-        from acds_runtime.summaries.oresat import DETUMBLED_RATE_DEG_S
-        t_c, cmd = _series(data, topics.MOMENT_COMMAND)
-        t_i, cur = _series(data, topics.COIL_CURRENT)
-        rate = np.degrees(w)
-        fig, axs = plt.subplots(4, 1, figsize=(8, 10), sharex=True)
-        for i, (a, _) in enumerate(AXES):
-            axs[0].plot(t_w, rate[:, i], lw=0.8, label=f'ω{a}')
-        axs[0].set_ylabel('body rate, deg/s')
-        axs[1].semilogy(t_w, np.linalg.norm(rate, axis=1), lw=0.8, label='|ω|')
-        axs[1].axhline(DETUMBLED_RATE_DEG_S, color='k', ls='--', lw=0.8, label=f'{DETUMBLED_RATE_DEG_S:g}°/s')
-        axs[1].set_ylabel('|ω|, deg/s')
-        for ax, (tt, y, ylabel, lab) in zip(axs[2:], ((t_c, cmd, 'dipole command, A·m²', 'M'),
-                                                    (t_i, cur * 1e3, 'rod current, mA', 'I')), strict=True):
-            for i, (a, _) in enumerate(AXES):
-                if len(tt):
-                    ax.plot(tt, y[:, i], lw=0.6, label=f'{lab}{a}')
-            ax.set_ylabel(ylabel)
-        for ax in axs:
-            ax.legend(fontsize=8, loc='upper right')
-            ax.grid(alpha=0.3)
-        finish(fig, list(axs), 'torque_rod_detumble', 'Torque-rod detumble: rates, |ω|, dipole commands, rod currents')
-
-    if gas:
-        cold_gas_plots.plot(lambda topic, width: _series(data, topic, width), (t_w, w),
-                            sun_angle_deg(quat, sun) if len(quat) and sun is not None else None,
-                            (bag.control_period_ns or 0) / 1e9, ctx.section('cold_gas', 'cold_gas'), plt, finish)
-
-    if formation:  # no mode stream: no event lines
-        formation_plots.plot_formation(formation, lambda topic: _series(data, topic), plt,
-                                       lambda fig, stem, title: finish(fig, [], stem, title))
+    # the mission's own figures (plug-ins)
+    kit = mission_plots.PlotKit(ctx, lambda topic, width: _series(data, topic, width), (t_w, w),
+                                sun_angle_deg(quat, sun) if len(quat) and sun is not None else None,
+                                (bag.control_period_ns or 0) / 1e9, plt, finish)
+    for mission in missions:
+        mission.plot(kit)
     return out
 
 

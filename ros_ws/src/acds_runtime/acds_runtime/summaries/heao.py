@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 from acds_common import topics
+from acds_common.mode_report import ModeReport
 from acds_common.modes import GAS_MODES
 from acds_common.units import nms_to_ftlbs
 
@@ -110,11 +111,9 @@ class Accumulator:
     def step(self, k: int, values: dict[str, Any]) -> None:
         """One step: keep the mode history's change points and the running peaks."""
         t = k * self.dt_s
-        mode = values.get(_MODE)
-        status = next((st for st in mode or () if st.name == 'ascs_mode_manager'), None)
-        if status is not None:
-            kv = dict(status.values)
-            entry = (t, kv.get('mode', status.message), kv.get('cause', ''), kv.get('captured') == 'true')
+        report = ModeReport.decode(values.get(_MODE))
+        if report is not None:
+            entry = (t, report.mode, report.cause, report.captured)
             if (entry[1], entry[3]) != self._last_state or entry[2]:
                 self.history.append(entry)
                 self._last_state = (entry[1], entry[3])

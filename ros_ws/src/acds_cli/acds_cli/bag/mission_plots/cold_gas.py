@@ -1,4 +1,5 @@
-"""Cold-gas acquisition figures (seed 002 §3.1, §5), from ``cold_gas/state`` and the truth.
+"""Cold-gas acquisition figures (seed 002 §3.1, §5), from ``cold_gas/state`` and the truth: runs in which the
+cold_gas node ran.
 
 * ``cold_gas_thruster_raster``: one row per thruster T1…T6 (its signed axis), a mark at every control step it
   fired, its shade the fraction of the step it thrust;
@@ -27,13 +28,22 @@ def state_vector(m: Any) -> list[float]:
     return [float(kv[k]) for k in STATE_KEYS]
 
 
-def plot(series: Callable[[str, int], tuple[np.ndarray, np.ndarray]], rates: tuple[np.ndarray, np.ndarray],
-         sun_angle: np.ndarray | None, dt_s: float, gas: dict[str, Any] | None, plt: Any,
-         finish: Callable[[Any, list[Any], str, str], None]) -> None:
-    """Draw the three figures; ``series(topic, width)`` gives (t min, values); ``gas`` the cold_gas section."""
-    t, s = series(topics.COLD_GAS_STATE, len(STATE_KEYS))
+def applies(ctx: Any) -> bool:
+    """Runs with the cold-gas subsystem in the graph."""
+    return 'cold_gas' in ctx.nodes
+
+
+def vectors(_ctx: Any) -> dict[str, Callable[[Any], list[float]]]:
+    """The subsystem's state."""
+    return {topics.COLD_GAS_STATE: state_vector}
+
+
+def plot(kit: Any) -> None:
+    """Draw the three figures (module docstring)."""
+    t, s = kit.series(topics.COLD_GAS_STATE, len(STATE_KEYS))
     if not len(t):
         return
+    gas, plt, finish, dt_s = kit.ctx.section('cold_gas', 'cold_gas'), kit.plt, kit.finish, kit.dt_s
     arr = arrangement(*(((gas['thruster_positions'], gas['thruster_directions'], gas['max_cross_coupling']))
                         if gas else (HEAO_B_POSITIONS_M, HEAO_B_DIRECTIONS)))
     fig, ax = plt.subplots(figsize=(8, 3.6))
@@ -62,7 +72,7 @@ def plot(series: Callable[[str, int], tuple[np.ndarray, np.ndarray]], rates: tup
         ax.grid(alpha=0.3)
     finish(fig, list(axs), 'cold_gas_propellant_pressure', 'Cold-gas propellant and pressures')
 
-    t_w, w = rates
+    (t_w, w), sun_angle = kit.rates, kit.sun_angle
     if not len(t_w):
         return
     panels = 2 if sun_angle is not None else 1

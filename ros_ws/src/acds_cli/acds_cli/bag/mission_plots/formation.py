@@ -2,8 +2,8 @@
 
 ``emff_formation_plane``: every vehicle's track in the formation frame's x–y plane (start ○, end ●) and
 the baseline length |r_b − r_a| against time; ``emff_dipoles``: each vehicle's achieved dipole |μ| and its
-wheel momentum |h| against time. Drawn when the bag holds a formation (``/acds/<vehicle>/truth/odometry``
-topics); time axes in sim minutes, SI otherwise.
+wheel momentum |h| against time. Drawn when the bag's run has vehicles (nodes ``<vehicle>/<node>`` ran); time
+axes in sim minutes, SI otherwise.
 """
 
 from __future__ import annotations
@@ -13,22 +13,17 @@ from typing import Any
 
 import numpy as np
 from acds_common import topics
-from acds_runtime.bag.reader import Bag
-
-_SUFFIX = '/' + topics.TRUTH_ODOMETRY
 
 
-def vehicles(bag: Bag) -> list[str]:
-    """The formation's vehicle names, from the bag's per-vehicle odometry topics."""
-    prefix = topics.NAMESPACE + '/'
-    return sorted(t[len(prefix):-len(_SUFFIX)] for t in bag.types
-                  if t.startswith(prefix) and t.endswith(_SUFFIX) and t.count('/') == _SUFFIX.count('/') + 2)
+def applies(ctx: Any) -> bool:
+    """Formation runs: nodes of named vehicles ran."""
+    return bool(ctx.vehicles)
 
 
-def formation_vectors(names: list[str]) -> dict[str, Callable[[Any], list[float]]]:
+def vectors(ctx: Any) -> dict[str, Callable[[Any], list[float]]]:
     """The series the figures read, per vehicle: position, dipole, wheel momentum."""
     out: dict[str, Callable[[Any], list[float]]] = {}
-    for v in names:
+    for v in ctx.vehicles:
         out[f'{v}/{topics.TRUTH_ODOMETRY}'] = lambda m: [m.pose.pose.position.x, m.pose.pose.position.y,
                                                           m.pose.pose.position.z]
         out[f'{v}/{topics.DIPOLE_AVG}'] = lambda m: [m.vector.x, m.vector.y, m.vector.z]
@@ -36,13 +31,13 @@ def formation_vectors(names: list[str]) -> dict[str, Callable[[Any], list[float]
     return out
 
 
-def plot_formation(names: list[str], series: Callable[[str], tuple[np.ndarray, np.ndarray]], plt: Any,
-                   save: Callable[[Any, str, str], None]) -> None:
-    """Draw the two formation figures; ``series(topic)`` gives (t min, (n, 3) values)."""
+def plot(kit: Any) -> None:
+    """Draw the two formation figures (no mode stream: no event lines)."""
+    names, series, plt = kit.ctx.vehicles, kit.series, kit.plt
     fig, (ax_xy, ax_d) = plt.subplots(2, 1, figsize=(8, 9), gridspec_kw={'height_ratios': [2, 1]})
     tracks = {}
     for v in names:
-        t, p = series(f'{v}/{topics.TRUTH_ODOMETRY}')
+        t, p = series(f'{v}/{topics.TRUTH_ODOMETRY}', 3)
         if not len(t):
             continue
         tracks[v] = (t, p)
@@ -60,14 +55,14 @@ def plot_formation(names: list[str], series: Callable[[str], tuple[np.ndarray, n
         ax_d.plot(ta[:n], np.linalg.norm(pb[:n] - pa[:n], axis=1), lw=1.0)
         ax_d.set_ylabel(f'|r_{names[1]} − r_{names[0]}|, m')
     ax_d.grid(alpha=0.3)
-    save(fig, 'emff_formation_plane', 'Formation in the plane, and the baseline length')
+    kit.finish(fig, [], 'emff_formation_plane', 'Formation in the plane, and the baseline length')
 
     fig, (ax_m, ax_h) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     for v in names:
-        t, m = series(f'{v}/{topics.DIPOLE_AVG}')
+        t, m = series(f'{v}/{topics.DIPOLE_AVG}', 3)
         if len(t):
             ax_m.plot(t, np.linalg.norm(m, axis=1), lw=0.8, label=v)
-        t, h = series(f'{v}/{topics.WHEEL_MOMENTUM}')
+        t, h = series(f'{v}/{topics.WHEEL_MOMENTUM}', 3)
         if len(t):
             ax_h.plot(t, np.linalg.norm(h, axis=1), lw=0.8, label=v)
     ax_m.set_ylabel('|μ| achieved, A·m²')
@@ -76,4 +71,4 @@ def plot_formation(names: list[str], series: Callable[[str], tuple[np.ndarray, n
         if ax.get_legend_handles_labels()[0]:  # no wheels in the formation (the airtrack): nothing to label
             ax.legend(fontsize=8)
         ax.grid(alpha=0.3)
-    save(fig, 'emff_dipoles', 'Dipoles and wheel momentum of each vehicle')
+    kit.finish(fig, [], 'emff_dipoles', 'Dipoles and wheel momentum of each vehicle')

@@ -1,0 +1,105 @@
+"""The mode manager's report of one step, typed: mode, run control and forwarded commands (spec §8).
+
+On the wire it is the ``mode`` DiagnosticArray (standard ``diagnostic_msgs``): one status named
+:data:`~acds_common.messages.MODE_STATUS` whose message is the mode and whose key/value pairs are, in this
+order, ``mode``, ``cause`` (this step's transition causes, '' if none), ``captured`` ('true'/'false':
+acquisition capture latched), the mode logic's own status keys, ``run_complete`` ('true'/'false'; absent
+for a mode logic that never ends a run, the SSS ASCS) and one ``command/<node>`` pair per ground command
+forwarded to ``node`` (in acceptance order). :meth:`ModeReport.encode` and :meth:`ModeReport.decode` are the
+one place that layout is written and read: the mode manager encodes, every other node decodes, and no
+one compares the text 'true' itself.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+from acds_common.cdr import Status
+from acds_common.messages import MODE_STATUS, OK
+
+#: Key prefix of a forwarded ground command: ``command/<node>``.
+COMMAND_PREFIX = 'command/'
+_FLAG = {True: 'true', False: 'false'}
+_RESERVED = ('mode', 'cause', 'captured', 'run_complete')
+
+
+@dataclass(frozen=True)
+class ModeReport:
+    """One step of the mode manager (module docstring).
+
+    ``status``: the mode logic's own (key, text) telemetry. ``run_complete``: the time owner ends the run
+    after this step; None for a mode logic that never asks it (the key is then not sent). ``forwarded``:
+    (node, command text) pairs, the text as :mod:`acds_common.commands` encodes it.
+    """
+
+    mode: str
+    cause: str = ''
+    captured: bool = False
+    status: tuple[tuple[str, str], ...] = ()
+    run_complete: bool | None = False
+    forwarded: tuple[tuple[str, str], ...] = ()
+
+    def encode(self, level: int = OK) -> tuple[Status]:
+        """The ``mode`` DiagnosticArray value."""
+        values = [('mode', self.mode), ('cause', self.cause), ('captured', _FLAG[self.captured]), *self.status]
+        if self.run_complete is not None:
+            values.append(('run_complete', _FLAG[self.run_complete]))
+        values.extend((COMMAND_PREFIX + node, text) for node, text in self.forwarded)
+        return (Status(level, MODE_STATUS, self.mode, MODE_STATUS, tuple(values)),)
+
+    @classmethod
+    def from_values(cls, message: str, values: Iterable[tuple[str, str]]) -> ModeReport:
+        """The report from the mode status's message and key/value pairs (a bag reader's view too)."""
+        keyed: dict[str, str] = {}
+        status, forwarded = [], []
+        for key, value in values:
+            if key.startswith(COMMAND_PREFIX):
+                forwarded.append((key[len(COMMAND_PREFIX):], value))
+            elif key in _RESERVED:
+                keyed.setdefault(key, value)
+            else:
+                status.append((key, value))
+        run_complete = keyed.get('run_complete')
+        return cls(keyed.get('mode', message), keyed.get('cause', ''), keyed.get('captured') == _FLAG[True],
+                   tuple(status), None if run_complete is None else run_complete == _FLAG[True], tuple(forwarded))
+
+    @classmethod
+    def decode(cls, value: Sequence[Status] | None) -> ModeReport | None:
+        """The report in a ``mode`` DiagnosticArray value; None when absent (no mode manager, or before it speaks)."""
+        status = _mode_status(value)
+        return None if status is None else cls.from_values(status.message, status.values)
+
+    def commands_for(self, node: str) -> list[str]:
+        """The command texts forwarded to ``node`` this step, in order."""
+        return [text for route, text in self.forwarded if route == node]
+
+
+def _mode_status(value: Sequence[Status] | None) -> Status | None:
+    for status in value or ():
+        if status.name == MODE_STATUS:
+            return status
+    return None
+
+
+def mode_status(value: Sequence[Status] | None, node: str) -> tuple[str | None, list[str]]:
+    """(mode, commands forwarded to ``node`` in order) from the step's ``mode`` value; (None, []) if absent.
+
+    What every node reads each step: the two fields alone, without building the whole :class:`ModeReport`.
+    """
+    status = _mode_status(value)
+    if status is None:
+        return None, []
+    keyed = dict(status.values)  # the mode is written once; commands may repeat
+    key = COMMAND_PREFIX + node
+    return keyed.get('mode', status.message), ([v for k, v in status.values if k == key] if key in keyed else [])
+
+
+def run_complete(value: Sequence[Status] | None) -> bool:
+    """Whether the step's ``mode`` value asks the time owner to end the run (read each step: the one key alone)."""
+    status = _mode_status(value)
+    if status is not None:
+        for key, text in status.values:
+            if key == 'run_complete':
+                return text == _FLAG[True]
+    return False
