@@ -197,16 +197,23 @@ class GasCommand:
         return f'{self.device} {"on" if self.on else "off"}'
 
 
-def decode(text: str, grammar: Sequence[type], what: str = 'command') -> Command:
-    """``text`` as one of the ``grammar``'s commands (chosen by its verb); :class:`CommandError` says why not.
+def decode(text: str, grammar: Sequence[type], what: str = 'command',
+           error: type[Exception] = CommandError) -> Command:
+    """``text`` as one of the ``grammar``'s commands (chosen by its verb); ``error`` (a node's own error type,
+    :class:`CommandError` by default) says why not.
 
     ``what`` names the grammar in the refusal of an unknown verb ("unknown <what> '<verb>'; known: …").
     """
     words = str(text).split()
-    if not words:
-        raise CommandError('empty command')
-    verb = words[0].lower()
-    for family in grammar:
-        if family.verb == verb:
-            return family.parse(words[1:])
-    raise CommandError(f"unknown {what} '{verb}'; known: {', '.join(f.verb for f in grammar)}")
+    try:
+        if not words:
+            raise CommandError('empty command')
+        verb = words[0].lower()
+        for family in grammar:
+            if family.verb == verb:
+                return family.parse(words[1:])
+        raise CommandError(f"unknown {what} '{verb}'; known: {', '.join(f.verb for f in grammar)}")
+    except CommandError as exc:
+        if error is CommandError:
+            raise
+        raise error(str(exc)) from None

@@ -27,7 +27,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from acds_common.commands import CommandError, GainCommand, LawCommand, decode
+from acds_common.commands import GainCommand, LawCommand, decode
 from acds_common.messages import WARN, diagnostic, xyz
 from acds_common.mode_report import mode_status
 from acds_common.modes import HEAO_MODES
@@ -50,10 +50,7 @@ GRAMMAR = (LawCommand, GainCommand)
 
 def parse_command(text: str) -> LawCommand | GainCommand:
     """Parse a forwarded command; :class:`ControllerError` says what is wrong (the stepper makes it a diagnostic)."""
-    try:
-        return decode(text, GRAMMAR, 'acds_controller command')
-    except CommandError as exc:
-        raise ControllerError(str(exc)) from None
+    return decode(text, GRAMMAR, 'acds_controller command', ControllerError)
 
 
 def apply_command(dpa: Dpa, cmd: LawCommand | GainCommand) -> str:

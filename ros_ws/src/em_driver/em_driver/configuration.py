@@ -119,10 +119,7 @@ GRAMMAR = (EeaSelect, EeaFailure)
 
 def parse_command(text: str) -> EeaSelect | EeaFailure:
     """Parse one forwarded command (grammar in the module docstring); EmDriverError says what is wrong."""
-    try:
-        return decode(text, GRAMMAR, 'em_driver command')
-    except CommandError as exc:
-        raise EmDriverError(str(exc)) from None
+    return decode(text, GRAMMAR, 'em_driver command', EmDriverError)
 
 
 def apply_command(cmd: EeaSelect | EeaFailure, assembly: DriveAssembly | TorqueRodAssembly) -> str:

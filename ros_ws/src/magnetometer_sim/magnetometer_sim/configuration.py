@@ -101,10 +101,7 @@ GRAMMAR = (MagnetometerSelect, MagnetometerFault)
 
 def parse_command(text: str) -> MagnetometerSelect | MagnetometerFault:
     """Parse one forwarded command (grammar in the module docstring); MagnetometerError says what is wrong."""
-    try:
-        return decode(text, GRAMMAR, 'magnetometer command')
-    except CommandError as exc:
-        raise MagnetometerError(str(exc)) from None
+    return decode(text, GRAMMAR, 'magnetometer command', MagnetometerError)
 
 
 def apply_command(cmd: MagnetometerSelect | MagnetometerFault, mag: Magnetometer) -> str:
