@@ -51,6 +51,7 @@ class GroundCommandQueue:
         out = []
         while self._scheduled and self._scheduled[0][0] <= t_s + 1e-9:
             out.append((self._scheduled.pop(0)[1], 'scheduled'))
-        out.extend((text, 'live') for text in self._live)
-        self._live = []
+        if self._live:
+            out.extend((text, 'live') for text in self._live)
+            self._live = []
         return out

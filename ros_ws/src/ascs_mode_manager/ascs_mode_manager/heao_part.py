@@ -123,11 +123,12 @@ class HeaoPart:
             events.append(text)
         values = [
             ('mode', self.core.mode),
-            ('cause', '; '.join(tr.cause for tr in transitions)),
+            ('cause', '; '.join([tr.cause for tr in transitions]) if transitions else ''),
             *((key, str(v)) for key, v in self.core.status().items() if key != 'mode'),
             ('run_complete', 'true' if self.run_complete else 'false'),
-            *((f'command/{route}', text) for route, text in forwarded),
         ]
+        if forwarded:
+            values.extend((f'command/{route}', text) for route, text in forwarded)
         out: dict[str, Any] = {'mode': (Status(OK, MODE_STATUS, self.core.mode, MODE_STATUS, tuple(values)),)}
         if events:
             out['events'] = events
