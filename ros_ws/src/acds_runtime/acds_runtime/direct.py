@@ -7,6 +7,8 @@ every stage in :meth:`~acds_common.graph.Graph.firing_order` (each lag-0 input p
 before its consumer fires; the time owner closes the step), handing each stage the values its
 inputs carry for step k − lag. Values never leave memory unless a bag is recorded; then each
 message is encoded with the same codec the nodes publish with, so the bag holds the same bytes.
+Without a bag or a live view, a node's periodic telemetry that no input and no summary reads is not
+built at all (:attr:`~acds_common.stepper.Stepper.telemetry_wanted`).
 The run summary is the same streaming :class:`~acds_runtime.summary.RunObserver` the run monitor
 feeds, given values instead of bytes (and the bytes of the truth topics, for the digest).
 """
@@ -128,6 +130,11 @@ class DirectRun:
             if feed is not None:
                 feed(topic, step, item)
 
+    def _read(self, key: str, node: str) -> bool:
+        """Whether anything takes ``node``'s output ``key`` in memory (an input's store, the run observer)."""
+        route = self._routes[node].get(key)
+        return route is not None and (route[0] is not None or route[3] is not None or route[5] is not None)
+
     def _clock_tick(self, k: int) -> None:
         if self._writer is not None or self.live_sink is not None:
             data = self._clock.encode(k * self.dt_ns)
@@ -147,6 +154,8 @@ class DirectRun:
             except BagError as exc:
                 raise LaunchError(str(exc)) from None
         self._bytes_out = self._writer is not None or self.live_sink is not None
+        for name, stepper in self.steppers.items():  # periodic telemetry nobody reads is not built
+            stepper.telemetry_wanted = self._bytes_out or self._read('diagnostics', name)
         t0 = time.monotonic()
         try:
             final = self._loop(t0)

@@ -80,7 +80,7 @@ class EmDriverStep(Stepper):
             out['duty'] = result.xyz('duty')
         alarm_changed = result.alarm_flags != self._alarms
         self._alarms = result.alarm_flags
-        if events or rejected or alarm_changed or k % self.cfg['telemetry_every'] == 0:
+        if events or rejected or alarm_changed or (self.telemetry_wanted and k % self.cfg['telemetry_every'] == 0):
             out['diagnostics'] = self.telemetry(result, command, events, rejected)
         for line in rejected:
             self.log('warn', f't={t_s:g} s: {line}')
