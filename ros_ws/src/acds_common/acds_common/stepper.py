@@ -54,6 +54,11 @@ class Stepper:
         self._log = log or _print_log
         #: Set by the stepper to end the run after the current stage (time owner).
         self.finished = False
+        #: Whether anyone reads this node's periodic telemetry (``diagnostics`` every N steps): the host clears
+        #: it when nobody does (the direct engine with no bag recorded, no live view and no input or summary on
+        #: the topic), and the stepper then leaves its periodic telemetry out; what a step reports because
+        #: something happened (an event, a warning, an alarm change) it returns regardless.
+        self.telemetry_wanted = True
 
     def section(self, name: str, vehicle: str = '') -> dict[str, Any]:
         """{field: SI value} of a scenario section this node receives (``vehicle``: that vehicle's copy)."""

@@ -121,7 +121,7 @@ class DpaStep(Stepper):
         b = self.ta.sense_xyz(volts, bias)
         out = self.dpa.step(mode, b, omega, sun, h, q, dt)
         result: dict[str, Any] = {'moment': out.moment_xyz, 'volts': out.volts_xyz}
-        if k % self.telemetry_period == 0:
+        if self.telemetry_wanted and k % self.telemetry_period == 0:
             alarms = [abs(i) > self.excess_current_a for i in coil]
             telemetry = {**out.telemetry, **self.ta.telemetry(b, out.moment_xyz, bias, coil, alarms)}
             result['diagnostics'] = diagnostic(self.node, telemetry)

@@ -22,6 +22,7 @@ numpy function.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -74,7 +75,7 @@ def check_gain(value: float, name: str, lo: float, hi: float) -> float:
         v = float(value)
     except (TypeError, ValueError) as exc:
         raise ControllerError(f'{name} must be a number, got {value!r}') from exc
-    if not np.isfinite(v) or not lo <= v <= hi:
+    if not math.isfinite(v) or not lo <= v <= hi:
         raise ControllerError(f'{name} = {value!r} is out of range [{lo:g}, {hi:g}]')
     return v
 

@@ -7,6 +7,8 @@ every stage in :meth:`~acds_common.graph.Graph.firing_order` (each lag-0 input p
 before its consumer fires; the time owner closes the step), handing each stage the values its
 inputs carry for step k − lag. Values never leave memory unless a bag is recorded; then each
 message is encoded with the same codec the nodes publish with, so the bag holds the same bytes.
+Without a bag or a live view, a node's periodic telemetry that no input and no summary reads is not
+built at all (:attr:`~acds_common.stepper.Stepper.telemetry_wanted`).
 The run summary is the same streaming :class:`~acds_runtime.summary.RunObserver` the run monitor
 feeds, given values instead of bytes (and the bytes of the truth topics, for the digest).
 """
@@ -71,17 +73,23 @@ class DirectRun:
                                                                                   out.child_frame_id), out)
                         for spec, out in self.graph.outputs()}
         self._clock = Codec(topics.TYPES[topics.CLOCK])
+        # A store per per-step topic an input of the graph reads (the values its consumers take).
+        read = {spec.topic(i.topic) for spec in self.graph.nodes.values() for st in spec.stages for i in st.inputs}
         self._store: dict[str, dict[int, Any]] = {topic: {} for topic, _codec, out in self._codecs.values()
-                                                  if out.every_step}
-        # Per node and output key, what _emit needs every step: (topic, codec, stamp offset, its store or None,
-        # many, the observer's sink for its bytes (truth: hashed) or None, for its value or None).
+                                                  if out.every_step and topic in read}
+        # Per node and output key, what _emit needs every step: (its store or None, stamp offset, many, the
+        # observer's sink for its bytes (truth: hashed) or None, the codec's encode, the observer's sink for its
+        # value or None, topic, codec).
         self._routes: dict[str, dict[str, tuple[Any, ...]]] = {name: {} for name in self.graph.nodes}
         for (node, key), (topic, codec, out) in self._codecs.items():
-            self._routes[node][key] = (topic, codec, out.stamp_offset, self._store[topic] if out.every_step else None,
-                                       out.many, self.observer.truth_sink(topic), self.observer.value_sink(topic))
+            self._routes[node][key] = (self._store.get(topic), out.stamp_offset, out.many,
+                                       self.observer.truth_sink(topic), codec.encode, self.observer.value_sink(topic),
+                                       topic, codec)
         self._max_lag = max((i.lag for spec in self.graph.nodes.values() for st in spec.stages for i in st.inputs),
                             default=0)
         self._writer: Any = None
+        #: Every message is encoded (a bag is recorded or a live view fed): set when the run starts.
+        self._bytes_out = False
         #: Live view (as for :class:`~acds_runtime.launcher.GraphRun`): fed (topic, CDR, value), closed after the run.
         self.live_sink = live(self.params) if live is not None else None
 
@@ -89,13 +97,13 @@ class DirectRun:
         """Hand a stage's outputs of step k on: to their stores (the consumers' inputs), to the run observer
         (the bytes of truth topics only: nothing else is encoded unless a bag is recorded or a live view fed)."""
         routes = self._routes[node]
-        bytes_out = self._writer is not None or self.live_sink is not None
+        bytes_out = self._bytes_out
         dt_ns = self.dt_ns
         for key, value in outputs.items():
-            route = routes.get(key)
-            if route is None:
-                raise LaunchError(f'{node}: stepper returned undeclared output {key!r}')
-            topic, codec, offset, store, many, truth, feed = route
+            try:
+                store, offset, many, truth, encode, feed, topic, codec = routes[key]
+            except KeyError:
+                raise LaunchError(f'{node}: stepper returned undeclared output {key!r}') from None
             step = k if initial else k + offset
             if store is not None:
                 store[step] = value
@@ -107,7 +115,7 @@ class DirectRun:
                         feed(topic, step, item)
             else:
                 if truth is not None:
-                    truth(codec.encode(step * dt_ns, value))
+                    truth(encode(step * dt_ns, value))
                 if feed is not None:
                     feed(topic, step, value)
 
@@ -124,6 +132,11 @@ class DirectRun:
                 truth(data)
             if feed is not None:
                 feed(topic, step, item)
+
+    def _read(self, key: str, node: str) -> bool:
+        """Whether anything takes ``node``'s output ``key`` in memory (an input's store, the run observer)."""
+        route = self._routes[node].get(key)
+        return route is not None and (route[0] is not None or route[3] is not None or route[5] is not None)
 
     def _clock_tick(self, k: int) -> None:
         if self._writer is not None or self.live_sink is not None:
@@ -143,6 +156,9 @@ class DirectRun:
                                          compression=self.record_compression)
             except BagError as exc:
                 raise LaunchError(str(exc)) from None
+        self._bytes_out = self._writer is not None or self.live_sink is not None
+        for name, stepper in self.steppers.items():  # periodic telemetry nobody reads is not built
+            stepper.telemetry_wanted = self._bytes_out or self._read('diagnostics', name)
         t0 = time.monotonic()
         try:
             final = self._loop(t0)
@@ -175,7 +191,8 @@ class DirectRun:
                 store.update(dict.fromkeys(range(-lag, 0)))
             plan.append((name, stage.name, getattr(self.steppers[name], stage.name), absent, live))
         buffers = list(self._store.values())
-        emit, progress, steps, dt_ns = self._emit, self.progress, self.steps, self.dt_ns
+        emit, progress, steps, dt_ns, bytes_out = self._emit, self.progress, self.steps, self.dt_ns, self._bytes_out
+        flush_truth = self.observer.flush_truth
         self._clock_tick(0)
         self._emit(owner_name, owner.start(), 0, initial=True)
         k = 0
@@ -200,10 +217,12 @@ class DirectRun:
             if owner.finished:
                 return k
             k += 1
-            self._clock_tick(k)
+            if bytes_out:
+                self._clock_tick(k)
             if progress is not None:
                 progress(k, steps, time.monotonic() - t0)
-            if not k % PRUNE_EVERY:  # values no input can still read
+            if not k % PRUNE_EVERY:  # values no input can still read; the truth kept for the digest hashed
+                flush_truth()
                 oldest = k - self._max_lag
                 for buf in buffers:
                     for old in [s for s in buf if s < oldest]:

@@ -106,7 +106,9 @@ class DynamicsSummary:
         odom = values.get(ODOMETRY)
         if odom is not None:
             self._last = (odom, values.get(WHEEL_H))
-            self.max_omega = max(self.max_omega, norm(odom.angular))
+            omega = norm(odom.angular)
+            if omega > self.max_omega:  # max(max_omega, omega), without the call (every step)
+                self.max_omega = omega
             if self.h0 is None or self.torque_free:
                 h, e = self._h_e(*self._last)
                 if self.h0 is None:
@@ -116,7 +118,10 @@ class DynamicsSummary:
         b = values.get(B_BODY)
         if b is not None:
             g = tesla_to_gauss(norm(b[0]))
-            self.b_min, self.b_max = min(self.b_min, g), max(self.b_max, g)
+            if g < self.b_min:  # min(b_min, g) and max(b_max, g), without the calls
+                self.b_min = g
+            if g > self.b_max:
+                self.b_max = g
 
     def contribute(self, summary: dict[str, Any]) -> None:
         """Add the dynamics keys."""
@@ -156,6 +161,10 @@ class RunObserver:
         self._pending: dict[int, dict[str, Any]] = {}
         self._next = 0
         self._digests = {t: hashlib.sha256() for t in self.truth}
+        #: The direct engine's truth messages not hashed yet (:meth:`truth_sink`, :meth:`flush_truth`).
+        self._truth_buffers: dict[str, list[bytes]] = {}
+        self._per_step_count = len(self.per_step)
+        self._event_parts = [part for part in self.parts if hasattr(part, 'event')]
         self.truth_messages = 0
 
     # ---- feeding ------------------------------------------------------------------------------------
@@ -172,37 +181,50 @@ class RunObserver:
 
     def truth_sink(self, topic: str) -> Callable[[bytes], None] | None:
         """For the direct engine: what takes each serialized message of ``topic`` (absolute) when it is a truth
-        topic (hashed into the digest, counted), else None: the engine encodes nothing else it does not record."""
-        digest = self._digests.get(topic)
-        if digest is None:
+        topic, else None: the engine encodes nothing else it does not record. The messages are kept until
+        :meth:`flush_truth` hashes them into the digest in one update (the same digest: SHA-256 streams)."""
+        if topic not in self._digests:
             return None
-        update = digest.update
+        return self._truth_buffers.setdefault(topic, []).append
 
-        def sink(data: bytes) -> None:
-            update(data)
-            self.truth_messages += 1
-        return sink
+    def flush_truth(self) -> None:
+        """Hash and count the messages :meth:`truth_sink` kept (the engine calls it now and then: bounded memory)."""
+        for topic, buffer in self._truth_buffers.items():
+            if buffer:
+                self._digests[topic].update(b''.join(buffer))
+                self.truth_messages += len(buffer)
+                buffer.clear()
 
     def value_sink(self, topic: str) -> Callable[[str, int, Any], None] | None:
-        """For the direct engine: :meth:`feed_value` when the summaries read ``topic``, else None."""
-        return self.feed_value if topic in self.codecs else None
+        """For the direct engine: :meth:`feed_value` of ``topic``'s kind (event or per-step) when the summaries
+        read it, else None."""
+        if topic not in self.codecs:
+            return None
+        return self._feed_event if topic in self.events else self._feed_step
 
     def feed_value(self, topic: str, k: int, value: Any) -> None:
         """A decoded value of step k."""
         if topic in self.events:
-            for part in self.parts:
-                if hasattr(part, 'event'):
-                    part.event(topic, value)
-            return
-        values = self._pending.setdefault(k, {})
+            self._feed_event(topic, k, value)
+        else:
+            self._feed_step(topic, k, value)
+
+    def _feed_event(self, topic: str, _k: int, value: Any) -> None:
+        for part in self._event_parts:
+            part.event(topic, value)
+
+    def _feed_step(self, topic: str, k: int, value: Any) -> None:
+        values = self._pending.get(k)
+        if values is None:
+            values = self._pending[k] = {}
         values[topic] = value
-        if len(values) >= len(self.per_step):  # step k complete: it (and what waited for it) can go
+        if len(values) >= self._per_step_count:  # step k complete: it (and what waited for it) can go
             self._drain(final=False)
 
     def _drain(self, final: bool) -> None:
         while self._next in self._pending:
             values = self._pending[self._next]
-            if not final and len(values) < len(self.per_step):
+            if not final and len(values) < self._per_step_count:
                 return
             del self._pending[self._next]
             for part in self.parts:
@@ -215,6 +237,7 @@ class RunObserver:
     # ---- result -------------------------------------------------------------------------------------
     def truth_digest(self) -> str:
         """The run's truth digest (module docstring)."""
+        self.flush_truth()
         h = hashlib.sha256()
         for topic in self.truth:
             h.update(topic.encode())
@@ -235,6 +258,7 @@ class RunObserver:
             part.contribute(summary)
         for module in _summary_modules():
             module.null_keys(summary)
+        self.flush_truth()
         summary['truth_messages'] = self.truth_messages
         summary['truth_digest'] = self.truth_digest()
         return summary

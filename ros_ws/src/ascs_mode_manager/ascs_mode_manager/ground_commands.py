@@ -112,6 +112,7 @@ class GroundCommandQueue:
         while self._scheduled and self._scheduled[0][0] <= t_s + 1e-9:
             _, text, parsed = self._scheduled.pop(0)
             out.append((text, parsed, 'scheduled'))
-        out.extend((text, parsed, 'live') for text, parsed in self._live)
-        self._live = []
+        if self._live:
+            out.extend((text, parsed, 'live') for text, parsed in self._live)
+            self._live = []
         return out

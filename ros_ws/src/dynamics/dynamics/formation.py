@@ -42,7 +42,7 @@ Seed 004 (MIT SSL / Lockheed Martin EMFF final review, 2003). What is modelled, 
 * Rotational equations per vehicle (body axes), as in ``rigid_body_model``:
   I ω̇ = −ω × (I ω + h) − ḣ + τ_EM + τ_Earth + τ_gg, q̇ = ½ q ⊗ (ω, 0), with h(τ) = h0 + ḣ·τ over
   the step. In ``planar`` the table keeps ω along z and d(I_zz ω_z + h_z)/dt = τ_z.
-* Integration: fixed-step RK4 (``dynamics.integrator.rk4_step``, the rigid body's), ``substeps`` per
+* Integration: fixed-step RK4 (``dynamics.integrator.rk4_step``, as the rigid body's), ``substeps`` per
   ``advance`` call, deterministic (no randomness, fixed evaluation order); quaternions renormalised
   after each substep.
 * Momentum bookkeeping (``FormationDynamics.momentum``): in ``free_space`` the total linear momentum

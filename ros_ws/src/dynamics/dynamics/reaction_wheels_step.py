@@ -44,7 +44,7 @@ class ReactionWheelsStep(Stepper):
         self._last_volts = volts
         h_start, hdot = self.wheels.step_xyz(volts, self.control_period_s)
         out: dict[str, Any] = {'momentum': h_start, 'torque': hdot}
-        if warning is not None or k % TELEMETRY_EVERY == 0:
+        if warning is not None or (self.telemetry_wanted and k % TELEMETRY_EVERY == 0):
             values = {**{f'wheel_{i}_momentum_nms': f'{h:.6g}' for i, h in enumerate(self.wheels.wheel_momenta_nms())},
                       **{f'drive_{a}_volts': f'{v:.4g}' for a, v in zip('xyz', volts, strict=True)}}
             out['diagnostics'] = (diagnostic(self.node, values) if warning is None

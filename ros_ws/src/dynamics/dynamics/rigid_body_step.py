@@ -178,7 +178,7 @@ class RigidBodyStep(Stepper):
         wall = time.perf_counter() - wall0
         self._wall_s += wall
         self._wall_steps += 1
-        if k % DIAGNOSTICS_EVERY == 0:
+        if self.telemetry_wanted and k % DIAGNOSTICS_EVERY == 0:
             out['diagnostics'] = self.health(truth, wall)
         return out
 

@@ -288,6 +288,7 @@ class BridgeSwitchCoil:
         self._i_on = _on_current_a(coil, driver)
         self._i_off = _off_current_a(coil, driver)
         self._tau = coil.tau_s
+        self._supply_v = driver.supply_v
         #: One band cycle's (t_on, t_off, areas) for the last band (lo, hi): a held command reuses it.
         self._cycle: tuple[float, float, tuple[float, float, float, float]] | None = None
         #: The (all-zero) result of an idle period, built once.
@@ -368,7 +369,7 @@ class BridgeSwitchCoil:
         if not (math.isfinite(duration_s) and duration_s > 0.0):
             raise EmDriverError(f'duration_s must be a finite positive time, got {duration_s!r}')
         tau = self._tau
-        supply = self.driver.supply_v
+        supply = self._supply_v
         recorder = None
         if record:
             step = tau / 200.0 if record_step_s is None else record_step_s
@@ -376,11 +377,12 @@ class BridgeSwitchCoil:
                 raise EmDriverError(f'record_step_s must be a finite positive time, got {record_step_s!r}')
             recorder = _Recorder(step)
 
-        if self.fault is CoilFault.OPEN_WINDING:
+        fault = self.fault
+        if fault is CoilFault.OPEN_WINDING:
             return self._open_winding_result(active, duration_s, recorder)
-        if self.fault is CoilFault.DEAD_DRIVER or not self.powered:
+        if fault is CoilFault.DEAD_DRIVER or not self.powered:
             active = False
-        elif self.fault is CoilFault.STUCK_ON_BRIDGE:
+        elif fault is CoilFault.STUCK_ON_BRIDGE:
             active, lo, hi = True, math.inf, math.inf
 
         s = self._polarity
@@ -394,6 +396,7 @@ class BridgeSwitchCoil:
             return self._idle
         i_on, i_off = self._i_on, self._i_off
         time_to_reach, segment = rl_circuit.time_to_reach_s, rl_circuit.segment
+        band = recorder is None and 0.0 < lo < hi < i_on  # a band the bridge can hold: whole cycles in closed form
         t = 0.0
         integral_i = 0.0
         on_time = 0.0
@@ -418,7 +421,7 @@ class BridgeSwitchCoil:
                 transistor = False
             else:  # off at zero current: the diodes block, nothing happens
                 i_inf, target, transistor = 0.0, 0.0, False
-            if transistor and x == lo and recorder is None and 0.0 < lo < hi < i_on:
+            if transistor and x == lo and band:
                 # Settled in the band at the turn-on edge: the waveform is exactly periodic until the
                 # period ends, so the whole on/off cycles that end before it are added in closed form.
                 n, cycle = self._whole_cycles(lo, hi, t, duration_s)
@@ -431,8 +434,9 @@ class BridgeSwitchCoil:
                     returned += n * supply * area_off
                     switches += 2 * n
             remaining = duration_s - t
-            dt = min(remaining, time_to_reach(i, i_inf, target, tau))
-            hit = dt < remaining
+            reach = time_to_reach(i, i_inf, target, tau)
+            hit = reach < remaining
+            dt = reach if hit else remaining
             i_free, area = segment(i, i_inf, tau, dt)  # area = ∫ i dt over the segment
             i_end = target if hit else i_free
             if recorder is not None:
@@ -489,17 +493,9 @@ class BridgeSwitchCoil:
     def _result(self, avg_current_a: float, duty: float, switches: int, drawn_j: float, returned_j: float,
                 duration_s: float, waveform: Waveform | None) -> PeriodResult:
         k = self.coil.moment_per_amp_am2
-        return PeriodResult(
-            avg_current_a=avg_current_a,
-            end_current_a=self._current_a,
-            avg_moment_am2=k * avg_current_a,
-            end_moment_am2=k * self._current_a,
-            duty=duty,
-            switch_count=switches,
-            energy_drawn_j=drawn_j,
-            energy_returned_j=returned_j,
-            energy_from_bus_j=drawn_j - returned_j,
-            power_w=drawn_j / duration_s,
-            e_ft_v=self.e_ft_v(),
-            waveform=waveform,
-        )
+        i = self._current_a
+        # PeriodResult's fields in order (avg/end current, avg/end moment, duty, switches, drawn, returned,
+        # from bus, power, e_ft, waveform), positional: this runs for every unit every step.
+        return PeriodResult(avg_current_a, i, k * avg_current_a, k * i, duty, switches, drawn_j, returned_j,
+                            drawn_j - returned_j, drawn_j / duration_s, self.driver.current_sense_gain_v_per_a * i,
+                            waveform)

@@ -31,7 +31,7 @@ Conventions:
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -60,11 +60,15 @@ def axis_of(axes: Sequence[Any], axis: int) -> Any:
     return axes[axis]
 
 
-def alarm_events(k: int, ax: Any, alarm: bool, measured: str, expected: str, switch: bool) -> list[str]:
+def alarm_events(k: int, ax: Any, alarm: bool, readings: Callable[[], tuple[str, str]], switch: bool) -> list[str]:
     """The mismatch alarm's edges on axis ``k`` (spec §6 failure detection; ``ax`` has ``alarm`` and ``active``),
-    and, when it trips with ``switch``, the automatic switch to the standby unit; returns the events."""
+    and, when it trips with ``switch``, the automatic switch to the standby unit; returns the events.
+    ``readings()`` gives the (measured, expected) texts of an event: formatted only when there is one."""
+    if alarm == ax.alarm and not switch:  # no edge, no switch: the common case
+        return []
     events: list[str] = []
     if alarm and not ax.alarm:
+        measured, expected = readings()
         events.append(f'axis {k}: excess coil current / mismatch alarm on unit {ax.active} '
                       f'(measured {measured}, expected {expected})')
     elif ax.alarm and not alarm:
@@ -143,6 +147,10 @@ class AssemblyResult:
         x, y, z = self._values[name]
         return float(x), float(y), float(z)
 
+    def per_axis(self, name: str) -> Sequence[Any]:
+        """One per-axis quantity (by its attribute name) as given (the telemetry's path: no array built)."""
+        return self._values[name]
+
     @property
     def avg_dipole_am2(self) -> np.ndarray:
         """Time-averaged dipole, A·m²."""
@@ -203,6 +211,11 @@ class _Axis:
         #: Mismatch monitor: the current the bridge can hold and the axis full-scale current, A.
         self.on_current_a = on_current_a
         self.full_scale_a = on_current_a if config.drive_type == 'constant_level' else config.coil.max_current_a
+        self.sense_gain_v_per_a = config.driver.current_sense_gain_v_per_a
+        # What every step reads, looked up once.
+        self.constant_level = config.drive_type == 'constant_level'
+        self.max_moment_am2 = config.coil.max_moment_am2
+        self.moment_per_amp_am2 = config.coil.moment_per_amp_am2
 
     def level(self) -> int:
         """Sign of the held command: −1, 0 or +1 (the constant-level drive's level)."""
@@ -210,18 +223,18 @@ class _Axis:
 
     def current_command_a(self) -> float:
         """Current command for the held moment / level command, A (signed)."""
-        coil = self.config.coil
-        if self.config.drive_type == 'constant_level':
+        if self.constant_level:
             return self.level() * self.units[self.active].on_current_a
-        limit = coil.max_moment_am2
-        return min(max(self.command, -limit), limit) / coil.moment_per_amp_am2
+        limit, command = self.max_moment_am2, self.command
+        # min(max(command, −limit), limit), without the two calls
+        return (-limit if command < -limit else limit if command > limit else command) / self.moment_per_amp_am2
 
     def run_unit(self, name: str, dt_s: float, command_a: float) -> PeriodResult:
         """Run one unit for the period; ``command_a`` is :meth:`current_command_a` (the active one's)."""
         unit = self.units[name]
         powered = name == self.active
         unit.powered = powered
-        if self.config.drive_type == 'constant_level':
+        if self.constant_level:
             return unit.run_constant_level(self.level() if powered else 0, dt_s)
         return unit.run(command_a if powered else 0.0, dt_s)
 
@@ -294,40 +307,46 @@ class DriveAssembly:
         diagnostics: list[str] = []
         events, self._pending_events = self._pending_events, []
         rows: list[tuple[float, float, float, float, float, float, float, int]] = []
+        unit_a, unit_b = UNITS
         for k, ax in enumerate(self._axes):
             if ax.config.drive_type == 'none':  # no coil on this axis: nothing to drive, nothing to monitor
                 rows.append((0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0))
                 continue
-            if math.isfinite(command[k]):
-                ax.command = command[k]
+            c = command[k]
+            if math.isfinite(c):
+                ax.command = c
             else:
-                diagnostics.append(f'axis {k}: rejected non-finite moment command {command[k]!r}; '
+                diagnostics.append(f'axis {k}: rejected non-finite moment command {c!r}; '
                                    f'holding last valid command {ax.command:g}')
             command_a = ax.current_command_a()
-            a, b = ax.run_unit(UNITS[0], dt_s, command_a), ax.run_unit(UNITS[1], dt_s, command_a)
-            active = a if ax.active == UNITS[0] else b
+            a, b = ax.run_unit(unit_a, dt_s, command_a), ax.run_unit(unit_b, dt_s, command_a)
+            active = a if ax.active == unit_a else b
             rows.append((a.avg_moment_am2 + b.avg_moment_am2, a.end_moment_am2 + b.end_moment_am2,
                          active.end_current_a, command_a, active.e_ft_v, active.duty,
                          a.power_w + b.power_w, active.switch_count))
-            events.extend(self._monitor(k, ax, active, command_a, dt_s))
+            monitored = self._monitor(k, ax, active, command_a, dt_s)
+            if monitored:
+                events.extend(monitored)
         avg, end, cur, cmd, eft, duty, power, switches = zip(*rows, strict=True)
+        x, y, z = self._axes
         return AssemblyResult(
             avg_dipole_am2=avg, end_dipole_am2=end, coil_current_a=cur, commanded_current_a=cmd, e_ft_v=eft, duty=duty,
-            switch_count=switches, power_w=power, alarms=tuple(a.alarm for a in self._axes),
-            active_units=self.active_units, events=tuple(events), diagnostics=tuple(diagnostics))
+            switch_count=switches, power_w=power, alarms=(x.alarm, y.alarm, z.alarm),
+            active_units=(x.active, y.active, z.active), events=tuple(events), diagnostics=tuple(diagnostics))
 
     def _monitor(self, k: int, ax: _Axis, active: PeriodResult, command_a: float, dt_s: float) -> list[str]:
         """Mismatch alarm: e_ft against the expected current (``command_a`` limited to what the supply
         reaches); optional auto switch to standby."""
-        measured_a = active.e_ft_v / ax.config.driver.current_sense_gain_v_per_a
-        expected_a = min(max(command_a, -ax.on_current_a), ax.on_current_a)
+        measured_a = active.e_ft_v / ax.sense_gain_v_per_a
+        on_a = ax.on_current_a
+        expected_a = -on_a if command_a < -on_a else on_a if command_a > on_a else command_a  # min(max(…))
         if abs(measured_a - expected_a) > self.mismatch_tolerance_frac * ax.full_scale_a:
             ax.mismatch_time_s += dt_s
         else:
             ax.mismatch_time_s = 0.0
         alarm = ax.mismatch_time_s > self.mismatch_settle_s
         switch = alarm and self.auto_switch_to_standby
-        events = alarm_events(k, ax, alarm, f'{measured_a:.4f} A', f'{expected_a:.4f} A', switch)
+        events = alarm_events(k, ax, alarm, lambda: (f'{measured_a:.4f} A', f'{expected_a:.4f} A'), switch)
         if switch:
             ax.mismatch_time_s = 0.0
         return events

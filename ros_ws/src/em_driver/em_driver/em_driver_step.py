@@ -22,7 +22,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
 from acds_common.messages import ERROR, OK, WARN, diagnostic, vector3
 from acds_common.mode_report import mode_status
 from acds_common.stepper import Stepper
@@ -82,7 +81,7 @@ class EmDriverStep(Stepper):
             out['duty'] = result.xyz('duty')
         alarm_changed = result.alarm_flags != self._alarms
         self._alarms = result.alarm_flags
-        if events or rejected or alarm_changed or k % self.cfg['telemetry_every'] == 0:
+        if events or rejected or alarm_changed or (self.telemetry_wanted and k % self.cfg['telemetry_every'] == 0):
             out['diagnostics'] = self.telemetry(result, command, events, rejected)
         for line in rejected:
             self.log('warn', f't={t_s:g} s: {line}')
@@ -95,20 +94,22 @@ class EmDriverStep(Stepper):
         level, message = OK, 'ok'
         if rejected:
             level, message = WARN, rejected[0]
-        if np.any(r.alarms):
-            axes = ', '.join(a for a, on in zip('xyz', r.alarms, strict=True) if on)
+        cmd_a, coil_a, eft, duty, switches, power, alarms = (r.per_axis(name) for name in (
+            'commanded_current_a', 'coil_current_a', 'e_ft_v', 'duty', 'switch_count', 'power_w', 'alarms'))
+        if any(alarms):
+            axes = ', '.join(a for a, on in zip('xyz', alarms, strict=True) if on)
             level, message = ERROR, f'excess coil current / mismatch alarm on axis {axes}'
         values: dict[str, object] = {}
         for i, a in enumerate('xyz'):
             values.update({
                 f'command_am2_{a}': f'{command[i]:.6g}',
-                f'commanded_current_a_{a}': f'{r.commanded_current_a[i]:.6g}',
-                f'coil_current_a_{a}': f'{r.coil_current_a[i]:.6g}',
-                f'e_ft_v_{a}': f'{r.e_ft_v[i]:.6g}',
-                f'duty_{a}': f'{r.duty[i]:.4f}',
-                f'switch_count_{a}': int(r.switch_count[i]),
-                f'power_w_{a}': f'{r.power_w[i]:.4g}',
-                f'alarm_{a}': 'true' if r.alarms[i] else 'false',
+                f'commanded_current_a_{a}': f'{cmd_a[i]:.6g}',
+                f'coil_current_a_{a}': f'{coil_a[i]:.6g}',
+                f'e_ft_v_{a}': f'{eft[i]:.6g}',
+                f'duty_{a}': f'{duty[i]:.4f}',
+                f'switch_count_{a}': int(switches[i]),
+                f'power_w_{a}': f'{power[i]:.4g}',
+                f'alarm_{a}': 'true' if alarms[i] else 'false',
                 f'active_unit_{a}': r.active_units[i],
             })
         values.update({f'event_{i}': e for i, e in enumerate(events)})

@@ -632,7 +632,7 @@ class TorqueRodAssembly:
     def _monitor(self, k: int, ax: _Axis, measured_a: float, expected_a: float) -> list[str]:
         """Mismatch alarm on the active winding; optional switch to the standby winding."""
         alarm = abs(measured_a - expected_a) > self.mismatch_tolerance_frac * ax.full_current_a
-        return alarm_events(k, ax, alarm, f'{measured_a * 1e3:.3f} mA', f'{expected_a * 1e3:.3f} mA',
+        return alarm_events(k, ax, alarm, lambda: (f'{measured_a * 1e3:.3f} mA', f'{expected_a * 1e3:.3f} mA'),
                             alarm and self.auto_switch_to_standby and len(ax.units) == 2)
 
     def _axis(self, axis: int) -> _Axis:

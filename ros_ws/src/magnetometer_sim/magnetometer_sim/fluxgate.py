@@ -192,6 +192,9 @@ class FluxgateAssembly:
         self._dead = False
         self._last_v = (p.bias_v, p.bias_v, p.bias_v)
         self._step_v = p.step_v
+        #: What :meth:`_volts` reads every sample: the curve's constants (the same values as from the params).
+        self._curve = (0.5 * p.nonlinearity_frac, p.range_g ** 2, p.bias_v, p.scale_v_per_g, p.rail_low_v,
+                       p.rail_high_v, self._step_v)
 
     def clear_faults(self) -> None:
         """Remove every injected fault."""
@@ -217,11 +220,10 @@ class FluxgateAssembly:
 
     def _volts(self, b_g: float, bias_v: float) -> float:
         """One axis: field (G) → output volts about ``bias_v``, clipped to the rails, quantised."""
-        p = self.params
-        c = 0.5 * p.nonlinearity_frac
-        v = p.bias_v + p.scale_v_per_g * (b_g + c * (b_g ** 3 - b_g * p.range_g ** 2)) - p.bias_v + bias_v
-        v = p.rail_low_v if v < p.rail_low_v else p.rail_high_v if v > p.rail_high_v else v  # the rails
-        return round(v / self._step_v) * self._step_v
+        c, range2, bias, scale, low, high, step = self._curve
+        v = bias + scale * (b_g + c * (b_g ** 3 - b_g * range2)) - bias + bias_v
+        v = low if v < low else high if v > high else v  # the rails
+        return round(v / step) * step
 
     def sample_xyz(self, b_sensed_t: Sequence[float]) -> tuple[Vec3, Vec3]:
         """:meth:`sample` on a float triple: (axis volts, bias volts) as float triples."""
@@ -233,7 +235,8 @@ class FluxgateAssembly:
         if p.noise_std_g > 0.0:
             nx, ny, nz = self._rng.normal(0.0, p.noise_std_g, 3).tolist()
             bx, by, bz = bx + nx, by + ny, bz + nz
-        ex, ey, ez = (p.bias_v + shift for shift in self._bias_shift_v)
+        shift_x, shift_y, shift_z = self._bias_shift_v
+        ex, ey, ez = p.bias_v + shift_x, p.bias_v + shift_y, p.bias_v + shift_z
         if any(self._stuck):  # a stuck axis repeats its last output
             last, stuck = self._last_v, self._stuck
             out: Vec3 = (last[0] if stuck[0] else self._volts(bx, ex), last[1] if stuck[1] else self._volts(by, ey),
@@ -243,8 +246,9 @@ class FluxgateAssembly:
         self._last_v = out
         if self._dead:
             return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
-        lo, hi = p.rail_low_v, p.rail_high_v
-        return out, (min(max(ex, lo), hi), min(max(ey, lo), hi), min(max(ez, lo), hi))
+        lo, hi = p.rail_low_v, p.rail_high_v  # each clipped as min(max(e, lo), hi), without the two calls
+        return out, (lo if ex < lo else hi if ex > hi else ex, lo if ey < lo else hi if ey > hi else ey,
+                     lo if ez < lo else hi if ez > hi else ez)
 
     def sample(self, b_sensed_t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Output (axis volts, bias volts), V, for the field at the sensor b_sensed_t (T, body axes)."""

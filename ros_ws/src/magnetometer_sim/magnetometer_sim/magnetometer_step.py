@@ -74,7 +74,7 @@ class MagnetometerStep(Stepper):
             'bias_volts': reading.bias_xyz,
             'field': (reading.field_xyz, reading.covariance9),
         }
-        if events or errors or k % self.cfg['telemetry_every'] == 0:
+        if events or errors or (self.telemetry_wanted and k % self.cfg['telemetry_every'] == 0):
             out['diagnostics'] = self.telemetry(reading, events, errors)
         for line in errors:
             self.log('error', f't={t_s:g} s: {line}')

@@ -103,10 +103,16 @@ class Accumulator:
 
     def _wheel(self, t_s: float, h: tuple[float, ...]) -> None:
         ph = self.peak_h
-        self.peak_h = (max(ph[0], abs(h[0])), max(ph[1], abs(h[1])), max(ph[2], abs(h[2])))
-        self.peak_rss = max(self.peak_rss, math.sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]))
-        if self.saturation_s is None and any(abs(x) >= c for x, c in zip(h, self._saturation_at, strict=True)):
-            self.saturation_s = t_s
+        ax, ay, az = abs(h[0]), abs(h[1]), abs(h[2])
+        # Running maxima as max(peak, value) gives them (the peak unless the value is larger), without the calls.
+        self.peak_h = (ax if ax > ph[0] else ph[0], ay if ay > ph[1] else ph[1], az if az > ph[2] else ph[2])
+        rss = math.sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2])
+        if rss > self.peak_rss:
+            self.peak_rss = rss
+        if self.saturation_s is None:
+            cx, cy, cz = self._saturation_at
+            if ax >= cx or ay >= cy or az >= cz:
+                self.saturation_s = t_s
 
     def step(self, k: int, values: dict[str, Any]) -> None:
         """One step: keep the mode history's change points and the running peaks."""
@@ -127,7 +133,8 @@ class Accumulator:
         m = values.get(_MOMENT_COMMAND)
         if m is not None:
             pm = self.peak_m or (0.0, 0.0, 0.0)
-            self.peak_m = (max(pm[0], abs(m[0])), max(pm[1], abs(m[1])), max(pm[2], abs(m[2])))
+            mx, my, mz = abs(m[0]), abs(m[1]), abs(m[2])
+            self.peak_m = (mx if mx > pm[0] else pm[0], my if my > pm[1] else pm[1], mz if mz > pm[2] else pm[2])
 
     def contribute(self, summary: dict[str, Any]) -> None:
         """Add the HEAO keys (Table 4-7 columns, peaks, transitions)."""
