@@ -99,8 +99,11 @@ STOP_GRACE_S = 10.0
 #: A node still running this long after its main loop ended (its flush takes at most 5 s) prints every thread's
 #: stack to its output, so the launcher's report of a hung exit says where it hung.
 STUCK_TRACE_S = 7.0
-#: How a node announces a lockstep failure on stderr (the launcher names the first node to print it).
+#: How a node announces a lockstep failure on stderr, and the other lines that mean a node has failed (a
+#: configuration error, an uncaught exception): the launcher names the first node to print one, even if the
+#: process is still leaving.
 FAILURE_MARK = 'LOCKSTEP FAILURE: '
+FAILURE_LINES = (FAILURE_MARK, 'CONFIGURATION ERROR: ', 'Traceback (most recent call last):')
 #: The signal that makes a node print its Python stack (faulthandler): the launcher asks a node the graph
 #: waited on for it, so a hang is reported with where it hangs.
 STACK_SIGNAL = signal.SIGUSR1

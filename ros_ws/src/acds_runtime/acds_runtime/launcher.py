@@ -31,7 +31,7 @@ from acds_common import topics
 from acds_common.graph import Graph, build_graph
 from acds_common.lockstep import (
     EXIT_LOCKSTEP,
-    FAILURE_MARK,
+    FAILURE_LINES,
     LAUNCHER_PID_ENV,
     READY_TIMEOUT_S,
     STACK_SIGNAL,
@@ -98,6 +98,10 @@ class RunResult:
     #: Each node's step wall times (p50/p99/max ms, steps over its deadline), by instance: the machine's, never
     #: the data's, so kept out of the summary (and of its truth digest); None for a node that left no report.
     timing: dict[str, dict[str, Any] | None] = field(default_factory=dict)
+
+
+#: How long a node that printed its failure is given to exit before it is reported as failed but still running.
+FAILED_EXIT_S = 3.0
 
 
 class DomainLease:
@@ -346,7 +350,7 @@ class GraphRun:
             if timing is not None:
                 proc.timing = timing
                 continue
-            if proc.failed_at is None and FAILURE_MARK in line:
+            if proc.failed_at is None and any(mark in line for mark in FAILURE_LINES):
                 proc.failed_at = time.monotonic()
             proc.tail.append(line)
             self.echo(f'[{proc.name}] {line}')
@@ -371,7 +375,12 @@ class GraphRun:
             if failed:
                 first = min(failed, key=lambda p: p.failed_at if p.failed_at is not None else math.inf)
                 code = ended[first.name]
-                raise LaunchError(self._death_report(first, EXIT_LOCKSTEP if code is None else code))
+                if code is None:  # it said it failed: its exit code, when it leaves within a moment
+                    try:
+                        code = first.popen.wait(timeout=FAILED_EXIT_S)
+                    except subprocess.TimeoutExpired:
+                        code = EXIT_LOCKSTEP
+                raise LaunchError(self._death_report(first, code))
             try:
                 owner.popen.wait(timeout=0.05)
             except subprocess.TimeoutExpired:
