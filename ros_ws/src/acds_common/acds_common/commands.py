@@ -136,6 +136,17 @@ class LawCommand:
         return f'law {self.slot} {self.name}'
 
 
+def finite_number(word: str, what: str) -> float:
+    """A command's numeric word as a finite float; :class:`CommandError` naming ``what`` otherwise."""
+    try:
+        value = float(word)
+    except ValueError:
+        raise CommandError(f'{what} {word!r} is not a number') from None
+    if not math.isfinite(value):
+        raise CommandError(f'{what} {word!r} is not finite')
+    return value
+
+
 @dataclass(frozen=True)
 class GainCommand:
     """``gain <name> <value>``: a DPA run-time gain, study units (:data:`acds_common.dpa_commands.GAIN_TABLE`)."""
@@ -150,13 +161,7 @@ class GainCommand:
         """The words after the verb → the command (a finite number)."""
         if len(args) != 2:
             raise CommandError('usage: gain <name> <value>')
-        try:
-            value = float(args[1])
-        except ValueError:
-            raise CommandError(f"gain value '{args[1]}' is not a number") from None
-        if not math.isfinite(value):
-            raise CommandError(f'gain value {args[1]} is not finite')
-        return cls(args[0].lower(), value)
+        return cls(args[0].lower(), finite_number(args[1], 'gain value'))
 
     @property
     def text(self) -> str:

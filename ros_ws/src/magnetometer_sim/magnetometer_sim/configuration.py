@@ -19,12 +19,11 @@ fault form is for tools and tests that talk to the node directly).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from acds_common.commands import AXES, UNITS, CommandError, MagnetometerSelect, decode
+from acds_common.commands import AXES, UNITS, CommandError, MagnetometerSelect, decode, finite_number
 from acds_common.coupling import CouplingError, coupling_from_section
 from acds_common.units import GAUSS_T
 
@@ -77,12 +76,7 @@ class MagnetometerFault:
         if kind == 'bias_shift':
             if len(args) != 4:
                 raise CommandError(f'bias_shift needs a size in volts: {usage}')
-            try:
-                value = float(args[3])
-            except ValueError:
-                raise CommandError(f'bias_shift size {args[3]!r} is not a number') from None
-            if not math.isfinite(value):
-                raise CommandError(f'bias_shift size {args[3]!r} is not finite')
+            value = finite_number(args[3], 'bias_shift size')
         elif len(args) == 4:
             raise CommandError(usage)
         return cls(unit, kind, None if axis_word == 'all' else AXES.index(axis_word), value)
