@@ -18,14 +18,22 @@ def node_processes(run_dir: Path) -> list[str]:
     return out.stdout.split()
 
 
-@pytest.mark.parametrize('sig', [signal.SIGTERM, signal.SIGINT, signal.SIGHUP])
-def test_signal_stops_every_node(tmp_path, sig):
+def _ignore_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@pytest.mark.parametrize(('sig', 'inherited'), [(signal.SIGTERM, None), (signal.SIGINT, None), (signal.SIGHUP, None),
+                                                (signal.SIGINT, _ignore_sigint)],
+                         ids=['SIGTERM', 'SIGINT', 'SIGHUP', 'SIGINT-ignored-by-the-parent'])
+def test_signal_stops_every_node(tmp_path, sig, inherited):
+    """Also when the parent ignored SIGINT (a job started with & from a script, a harness): Python would keep
+    it ignored, and the run would go on."""
     run_dir = tmp_path / 'run'
     proc = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'run', 'free_tumble_heao_b', '--steps', '1000000',
                              '--run-dir', str(run_dir), '--quiet'],
                             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={'PATH': '/usr/bin:/bin',
-                                 'ROS_LOG_DIR': str(tmp_path / 'log')})
+                                 'ROS_LOG_DIR': str(tmp_path / 'log')}, preexec_fn=inherited)
     assert proc.stderr is not None
     for line in proc.stderr:  # wait on the run's own progress output, not on a timer
         if '[progress]' in line and 'step 0/' not in line:

@@ -99,8 +99,12 @@ def main(argv: list[str] | None = None) -> int:
     """Parse the verb and run it; usage and scenario errors are one line, exit 2.
 
     SIGTERM and SIGHUP stop like Ctrl-C; a stopped verb exits 128 + the signal number
-    (130 SIGINT, 143 SIGTERM, 129 SIGHUP), the shell convention.
+    (130 SIGINT, 143 SIGTERM, 129 SIGHUP), the shell convention. SIGINT is set to Ctrl-C's KeyboardInterrupt
+    whatever the process inherited: Python leaves it ignored when the parent ignored it (a job started with
+    ``&`` from a script, or a harness that ignores it), and a run would then never stop on it (measured: three
+    interrupt tests ran on to their timeouts under such a harness).
     """
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, _terminate)
     signal.signal(signal.SIGHUP, _terminate)
     parser = build_parser()
