@@ -171,6 +171,12 @@ class _Port:
     diagnostics: bool = False
 
 
+def publisher_name(info: Any) -> str:
+    """The graph name of an endpoint discovery reports (rclpy ``TopicEndpointInfo``): its node's instance name, or
+    :data:`UNNAMED` while discovery has not learnt the node's name."""
+    return UNNAMED if info.node_name == UNNAMED else instance_name(info.node_namespace, info.node_name)
+
+
 class PublisherCheck:
     """Who publishes a topic against who may (one rule for the nodes and the run monitor).
 
@@ -187,7 +193,7 @@ class PublisherCheck:
 
     def strangers(self, topic: str, infos: Any, declared: set[str], now: float) -> list[str]:
         """The publishers of ``topic`` (rclpy endpoint infos) the graph does not declare, as sorted phrases."""
-        names = [UNNAMED if i.node_name == UNNAMED else instance_name(i.node_namespace, i.node_name) for i in infos]
+        names = [publisher_name(i) for i in infos]
         named = [n for n in names if n != UNNAMED]
         out = sorted({n for n in named if n not in declared})
         out += [f'a second node named {s}' for s in sorted(declared) if named.count(s) > 1]
@@ -431,7 +437,7 @@ class LockstepNode(Node):
         if k is None:
             return
         if k in entry.buffer or k < entry.consumed_below:
-            names = sorted({instance_name(i.node_namespace, i.node_name)
+            names = sorted({publisher_name(i)
                             for i in self.get_publishers_info_by_topic(self.resolve_topic_name(topic))})
             self.fail(f'a second message for step {k} on {self.resolve_topic_name(topic)}: a publisher other '
                       f'than {entry.source} injects data (publishers seen: {", ".join(names) or "none left"}); '

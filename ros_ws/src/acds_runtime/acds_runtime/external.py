@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from acds_common import topics
-from acds_common.graph import Graph, instance_name
-from acds_common.lockstep import sequence_error
+from acds_common.graph import Graph
+from acds_common.lockstep import publisher_name, sequence_error
 from acds_common.timing import StepTimes, overrun
 
 
@@ -77,7 +77,7 @@ class ExternalWatch:
             unread: list[str] = []
             absent = []
             for topic in ext.outputs:
-                seen = [i for i in node.get_publishers_info_by_topic(topic) if _identity(i) == ext.identity]
+                seen = [i for i in node.get_publishers_info_by_topic(topic) if publisher_name(i) == ext.identity]
                 if not seen:
                     absent.append(topic)
                 elif matched.get(topic, 0) < 1:
@@ -89,7 +89,7 @@ class ExternalWatch:
                 parts.append('publishers the graph cannot read, QoS not RELIABLE/TRANSIENT_LOCAL as the contract '
                              'says: ' + ', '.join(unread))
             for inputs in ext.stage_inputs:  # which of its inputs it reads is its own business; at least one
-                if not any(_identity(i) == ext.identity for t in inputs for i in node.get_subscriptions_info_by_topic(t)):
+                if not any(publisher_name(i) == ext.identity for t in inputs for i in node.get_subscriptions_info_by_topic(t)):
                     parts.append('no subscription to any of its inputs ' + ', '.join(inputs))
             if parts:
                 out.append(f'external node {inst} (ROS node {ext.identity}): ' + '; '.join(parts))
@@ -127,7 +127,3 @@ class ExternalWatch:
     def timing(self) -> dict[str, dict[str, Any]]:
         """{instance: p50/p99/max report} of the external nodes."""
         return {inst: ext.times.report() for inst, ext in self.nodes.items()}
-
-
-def _identity(info: Any) -> str:
-    return instance_name(info.node_namespace, info.node_name)
