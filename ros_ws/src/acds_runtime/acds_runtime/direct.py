@@ -20,7 +20,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from acds_common import topics
+from acds_common import kernels, topics
 from acds_common.cdr import Codec
 from acds_common.graph import Graph, build_graph
 from acds_common.parameters import node_parameters, normalize
@@ -67,6 +67,7 @@ class DirectRun:
         self.graph = build_graph(self.params)
         self.observer = RunObserver(scenario, self.graph)
         self.dt_ns = round(scenario.control_period_s * 1e9)
+        kernels.enable()  # the models' kernels compiled (acds_common.kernels: the same bits as the graph's)
         self.steppers = build_steppers(self.graph, self.params,
                                        lambda node, level, text: self.echo(f'[{node}] [{level.upper()}] {text}'))
         self._codecs = {(spec.instance, out.key): (spec.topic(out.topic), Codec(out.msg_type, out.frame_id,

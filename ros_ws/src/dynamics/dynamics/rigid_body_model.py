@@ -15,10 +15,11 @@ is RK4 (:func:`dynamics.integrator.rk4_step`, written out on floats) with a fixe
 per call, the end one shared with ``truth`` and the next call's start); the quaternion is renormalised
 after every substep.
 
-Speed: the kernel is written on plain Python floats (one derivative is ~200 float operations on
-3-vectors, where numpy's per-call overhead would dominate); IEEE doubles without fused operations
-give the same bits on every machine. Numpy appears only at the API edge (``Truth``'s arrays are
-built when read).
+Speed: the kernel (:func:`attitude_rk4`) is written on plain Python floats (one derivative is ~200 float
+operations on 3-vectors, where numpy's per-call overhead would dominate); IEEE doubles without fused
+operations give the same bits on every machine. The direct engine runs it compiled
+(:mod:`acds_common.kernels`: the same bits, 8× faster). Numpy appears only at the API edge
+(``Truth``'s arrays are built when read).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from acds_common import units
+from acds_common import kernels, units
 from acds_common.attitude import dcm
 from acds_common.environment import MagneticFieldModel, Orbit, Sun, field_xyz, sun_frame_dcm
 from acds_common.environment import ecliptic_normal_eci as default_ecliptic_normal_eci
@@ -178,8 +179,102 @@ class Truth:
         return math.degrees(math.acos(max(-1.0, min(1.0, self.sun_cosines_xyz[2]))))
 
 
-#: One RK4 stage's attitude-independent environment: (r_eci, b_eci), None when not needed.
-_Env = tuple[Vec3 | None, Vec3 | None]
+#: One RK4 stage's attitude-independent environment: r_eci (m) and b_eci (T) as six floats.
+_Env = tuple[float, float, float, float, float, float]
+Quat = tuple[float, float, float, float]
+
+
+#: A stage that needs no environment (no field, no gravity gradient): r and B unused.
+_NO_ENV: _Env = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+def attitude_rk4(q: Quat, w: Vec3, n: int, sub: float, env: tuple[_Env, ...], inertia: Mat3, inertia_inv: Mat3,
+                 m: Vec3, h0: Vec3, hdot: Vec3, td: Vec3, gg: bool, field: bool) -> tuple[Quat, Vec3, Vec3, Vec3]:
+    """``n`` RK4 substeps of ``sub`` s of the attitude equations (module docstring) from (q, ω): the new q
+    (renormalised after each substep), ω and the RK4-weighted sums Σ (T_mag, T_gg) (divide by 6n for the mean).
+
+    ``env`` the stage environment (r_eci m, B_eci T as 6 floats) at the 2n+1 stage times; dipole ``m`` A·m²;
+    wheel momentum h0 + hdot·τ N·m·s; disturbance ``td`` N·m; ``gg`` gravity gradient on; ``field`` T_mag on.
+    :func:`dynamics.integrator.rk4_step` written out on the seven floats (the same operations in the same
+    order, so the same bits): a kernel (:mod:`acds_common.kernels`), compiled in the direct engine.
+    """
+    (i00, i01, i02), (i10, i11, i12), (i20, i21, i22) = inertia
+    (j00, j01, j02), (j10, j11, j12), (j20, j21, j22) = inertia_inv
+    mx, my, mz = m
+    hx0, hy0, hz0 = h0
+    hdx, hdy, hdz = hdot
+    tdx, tdy, tdz = td
+    pos = gg or field
+    k_gg = 3.0 * units.EARTH_MU_M3_S2
+
+    def deriv(qx: float, qy: float, qz: float, qw: float, wx: float, wy: float, wz: float, tau: float,
+              stage: _Env) -> tuple[float, ...]:
+        """(q̇, ω̇, T_mag, T_gg) as 13 floats at attitude q, rate ω, ``tau`` into the step."""
+        ex, ey, ez, bx, by, bz = stage
+        tmx = tmy = tmz = tgx = tgy = tgz = 0.0
+        if pos:
+            # R (body → ECI) of q, acds_common.attitude.dcm inlined; a vector's body components are Rᵀ v.
+            xx, yy, zz = qx * qx, qy * qy, qz * qz
+            xy, xz, yz, xw, yw, zw = qx * qy, qx * qz, qy * qz, qx * qw, qy * qw, qz * qw
+            r00, r01, r02 = 1.0 - 2.0 * (yy + zz), 2.0 * (xy - zw), 2.0 * (xz + yw)
+            r10, r11, r12 = 2.0 * (xy + zw), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - xw)
+            r20, r21, r22 = 2.0 * (xz - yw), 2.0 * (yz + xw), 1.0 - 2.0 * (xx + yy)
+            if field:  # T_mag = M × B_body
+                ux = r00 * bx + r10 * by + r20 * bz
+                uy = r01 * bx + r11 * by + r21 * bz
+                uz = r02 * bx + r12 * by + r22 * bz
+                tmx, tmy, tmz = my * uz - mz * uy, mz * ux - mx * uz, mx * uy - my * ux
+            if gg:  # T_gg = 3μ/|r|⁵ · r_b × (I r_b)
+                sx = r00 * ex + r10 * ey + r20 * ez
+                sy = r01 * ex + r11 * ey + r21 * ez
+                sz = r02 * ex + r12 * ey + r22 * ez
+                r2 = sx * sx + sy * sy + sz * sz
+                c = k_gg / (r2 * r2 * math.sqrt(r2))
+                isx = i00 * sx + i01 * sy + i02 * sz
+                isy = i10 * sx + i11 * sy + i12 * sz
+                isz = i20 * sx + i21 * sy + i22 * sz
+                tgx, tgy, tgz = c * (sy * isz - sz * isy), c * (sz * isx - sx * isz), c * (sx * isy - sy * isx)
+        # Total momentum I ω + h(τ); net torque −ω × H − ḣ + T_mag + T_gg + T_d; ω̇ = I⁻¹ net.
+        hx = i00 * wx + i01 * wy + i02 * wz + hx0 + hdx * tau
+        hy = i10 * wx + i11 * wy + i12 * wz + hy0 + hdy * tau
+        hz = i20 * wx + i21 * wy + i22 * wz + hz0 + hdz * tau
+        nx = -(wy * hz - wz * hy) - hdx + tmx + tgx + tdx
+        ny = -(wz * hx - wx * hz) - hdy + tmy + tgy + tdy
+        nz = -(wx * hy - wy * hx) - hdz + tmz + tgz + tdz
+        return (0.5 * (qw * wx + (qy * wz - qz * wy)), 0.5 * (qw * wy + (qz * wx - qx * wz)),
+                0.5 * (qw * wz + (qx * wy - qy * wx)), -0.5 * (qx * wx + qy * wy + qz * wz),
+                j00 * nx + j01 * ny + j02 * nz, j10 * nx + j11 * ny + j12 * nz, j20 * nx + j21 * ny + j22 * nz,
+                tmx, tmy, tmz, tgx, tgy, tgz)
+
+    qx, qy, qz, qw = q
+    wx, wy, wz = w
+    smx = smy = smz = sgx = sgy = sgz = 0.0  # Σ stage weight · (T_mag, T_gg)
+    half, sixth = 0.5 * sub, sub / 6.0
+    for k in range(n):
+        e0, eh, e1 = env[2 * k], env[2 * k + 1], env[2 * k + 2]
+        a = deriv(qx, qy, qz, qw, wx, wy, wz, k * sub, e0)
+        b = deriv(qx + half * a[0], qy + half * a[1], qz + half * a[2], qw + half * a[3],
+                  wx + half * a[4], wy + half * a[5], wz + half * a[6], (k + 0.5) * sub, eh)
+        c = deriv(qx + half * b[0], qy + half * b[1], qz + half * b[2], qw + half * b[3],
+                  wx + half * b[4], wy + half * b[5], wz + half * b[6], (k + 0.5) * sub, eh)
+        d = deriv(qx + sub * c[0], qy + sub * c[1], qz + sub * c[2], qw + sub * c[3],
+                  wx + sub * c[4], wy + sub * c[5], wz + sub * c[6], (k + 1.0) * sub, e1)
+        qx += sixth * (a[0] + 2.0 * b[0] + 2.0 * c[0] + d[0])
+        qy += sixth * (a[1] + 2.0 * b[1] + 2.0 * c[1] + d[1])
+        qz += sixth * (a[2] + 2.0 * b[2] + 2.0 * c[2] + d[2])
+        qw += sixth * (a[3] + 2.0 * b[3] + 2.0 * c[3] + d[3])
+        wx += sixth * (a[4] + 2.0 * b[4] + 2.0 * c[4] + d[4])
+        wy += sixth * (a[5] + 2.0 * b[5] + 2.0 * c[5] + d[5])
+        wz += sixth * (a[6] + 2.0 * b[6] + 2.0 * c[6] + d[6])
+        norm = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+        qx, qy, qz, qw = qx / norm, qy / norm, qz / norm, qw / norm
+        smx += a[7] + 2.0 * b[7] + 2.0 * c[7] + d[7]
+        smy += a[8] + 2.0 * b[8] + 2.0 * c[8] + d[8]
+        smz += a[9] + 2.0 * b[9] + 2.0 * c[9] + d[9]
+        sgx += a[10] + 2.0 * b[10] + 2.0 * c[10] + d[10]
+        sgy += a[11] + 2.0 * b[11] + 2.0 * c[11] + d[11]
+        sgz += a[12] + 2.0 * b[12] + 2.0 * c[12] + d[12]
+    return (qx, qy, qz, qw), (wx, wy, wz), (smx, smy, smz), (sgx, sgy, sgz)
 
 
 class RigidBodyModel:
@@ -228,6 +323,7 @@ class RigidBodyModel:
         self._tmag_avg = ZERO
         self._tgg_avg = ZERO
         self.disturbance = disturbance
+        self._rk4 = kernels.compiled(attitude_rk4)
         #: The environment (t, r, v, b) at the last time it was needed in full: an ``advance`` ends
         #: where ``truth`` and the next ``advance`` start.
         self._env_cache: tuple[float, Vec3, Vec3, Vec3] | None = None
@@ -257,21 +353,22 @@ class RigidBodyModel:
         self._env_cache = (t_s, r, v, b)
         return r, v, b
 
-    def _stage_environment(self, t0: float, dt: float, need_pos: bool, need_field: bool) -> list[_Env]:
+    def _stage_environment(self, t0: float, dt: float, need_pos: bool, need_field: bool) -> tuple[_Env, ...]:
         """The attitude-independent environment at the 2n+1 distinct stage times t0 + dt·j/(2n)."""
         m = 2 * self.substeps
         env: list[_Env] = []
         for j in range(m + 1):
             tj = t0 + dt * (j / m)
+            if not need_pos:
+                env.append(_NO_ENV)
+                continue
             if j == 0 or j == m:
                 r, _v, b = self._environment(tj)
-                env.append((r if need_pos else None, b if need_field else None))
-            elif need_pos:
-                r = self.orbit.position_xyz(tj)
-                env.append((r, self._b_eci(r, tj) if need_field else None))
             else:
-                env.append((None, None))
-        return env
+                r = self.orbit.position_xyz(tj)
+                b = self._b_eci(r, tj) if need_field else ZERO
+            env.append((*r, *b) if need_field else (*r, 0.0, 0.0, 0.0))
+        return tuple(env)
 
     def advance(self, dt_s: float, dipole_body_am2: Sequence[float], wheel_h_body_nms: Sequence[float],
                 wheel_hdot_body_nm: Sequence[float], thruster_torque_body_nm: Sequence[float] | None = None) -> None:
@@ -287,103 +384,28 @@ class RigidBodyModel:
         dt = finite_float("dt_s", dt_s)
         if dt <= 0.0:
             raise DynamicsError(f"dt_s must be > 0 s, got {dt}")
-        mx, my, mz = finite_xyz("dipole_body_am2", dipole_body_am2)
-        hx0, hy0, hz0 = finite_xyz("wheel_h_body_nms", wheel_h_body_nms)
-        hdx, hdy, hdz = finite_xyz("wheel_hdot_body_nm", wheel_hdot_body_nm)
-        n = self.substeps
-        sub = dt / n
+        m = finite_xyz("dipole_body_am2", dipole_body_am2)
+        h0 = finite_xyz("wheel_h_body_nms", wheel_h_body_nms)
+        hdot = finite_xyz("wheel_hdot_body_nm", wheel_hdot_body_nm)
         t0 = self._t
-        tdx = tdy = tdz = 0.0
+        td = ZERO
         if self.disturbance is not None:
-            tdx, tdy, tdz = finite_xyz("disturbance torque", self.disturbance.momentum_nms(t0, t0 + dt) / dt)
+            td = finite_xyz("disturbance torque", self.disturbance.momentum_nms(t0, t0 + dt) / dt)
         if thruster_torque_body_nm is not None:
             gx, gy, gz = finite_xyz("thruster_torque_body_nm", thruster_torque_body_nm)
-            tdx, tdy, tdz = tdx + gx, tdy + gy, tdz + gz
-        need_field = mx != 0.0 or my != 0.0 or mz != 0.0
+            td = (td[0] + gx, td[1] + gy, td[2] + gz)
+        need_field = m[0] != 0.0 or m[1] != 0.0 or m[2] != 0.0
         gg = self.gravity_gradient
         env = self._stage_environment(t0, dt, need_field or gg, need_field)
-        (i00, i01, i02), (i10, i11, i12), (i20, i21, i22) = self._inertia_t
-        (j00, j01, j02), (j10, j11, j12), (j20, j21, j22) = self._inertia_inv_t
-        k_gg = 3.0 * units.EARTH_MU_M3_S2
-
-        def deriv(qx: float, qy: float, qz: float, qw: float, wx: float, wy: float, wz: float, tau: float,
-                  stage: _Env) -> tuple[float, ...]:
-            """(q̇, ω̇, T_mag, T_gg) as 13 floats at attitude q, rate ω, ``tau`` into the step."""
-            r, b = stage
-            tmx = tmy = tmz = tgx = tgy = tgz = 0.0
-            if r is not None:
-                # R (body → ECI) of q, acds_common.attitude.dcm inlined; a vector's body components are Rᵀ v.
-                xx, yy, zz = qx * qx, qy * qy, qz * qz
-                xy, xz, yz, xw, yw, zw = qx * qy, qx * qz, qy * qz, qx * qw, qy * qw, qz * qw
-                r00, r01, r02 = 1.0 - 2.0 * (yy + zz), 2.0 * (xy - zw), 2.0 * (xz + yw)
-                r10, r11, r12 = 2.0 * (xy + zw), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - xw)
-                r20, r21, r22 = 2.0 * (xz - yw), 2.0 * (yz + xw), 1.0 - 2.0 * (xx + yy)
-                if b is not None:  # T_mag = M × B_body
-                    bx, by, bz = b
-                    ux = r00 * bx + r10 * by + r20 * bz
-                    uy = r01 * bx + r11 * by + r21 * bz
-                    uz = r02 * bx + r12 * by + r22 * bz
-                    tmx, tmy, tmz = my * uz - mz * uy, mz * ux - mx * uz, mx * uy - my * ux
-                if gg:  # T_gg = 3μ/|r|⁵ · r_b × (I r_b)
-                    ex, ey, ez = r
-                    sx = r00 * ex + r10 * ey + r20 * ez
-                    sy = r01 * ex + r11 * ey + r21 * ez
-                    sz = r02 * ex + r12 * ey + r22 * ez
-                    r2 = sx * sx + sy * sy + sz * sz
-                    c = k_gg / (r2 * r2 * math.sqrt(r2))
-                    isx = i00 * sx + i01 * sy + i02 * sz
-                    isy = i10 * sx + i11 * sy + i12 * sz
-                    isz = i20 * sx + i21 * sy + i22 * sz
-                    tgx, tgy, tgz = c * (sy * isz - sz * isy), c * (sz * isx - sx * isz), c * (sx * isy - sy * isx)
-            # Total momentum I ω + h(τ); net torque −ω × H − ḣ + T_mag + T_gg + T_d; ω̇ = I⁻¹ net.
-            hx = i00 * wx + i01 * wy + i02 * wz + hx0 + hdx * tau
-            hy = i10 * wx + i11 * wy + i12 * wz + hy0 + hdy * tau
-            hz = i20 * wx + i21 * wy + i22 * wz + hz0 + hdz * tau
-            nx = -(wy * hz - wz * hy) - hdx + tmx + tgx + tdx
-            ny = -(wz * hx - wx * hz) - hdy + tmy + tgy + tdy
-            nz = -(wx * hy - wy * hx) - hdz + tmz + tgz + tdz
-            return (0.5 * (qw * wx + (qy * wz - qz * wy)), 0.5 * (qw * wy + (qz * wx - qx * wz)),
-                    0.5 * (qw * wz + (qx * wy - qy * wx)), -0.5 * (qx * wx + qy * wy + qz * wz),
-                    j00 * nx + j01 * ny + j02 * nz, j10 * nx + j11 * ny + j12 * nz, j20 * nx + j21 * ny + j22 * nz,
-                    tmx, tmy, tmz, tgx, tgy, tgz)
-
-        # dynamics.integrator.rk4_step written out on the seven floats (the same operations in the same order, so
-        # the same bits): the generic step's per-stage lists and zips cost the kernel a fifth of its time.
-        qx, qy, qz, qw = self._q
-        wx, wy, wz = self._w
-        smx = smy = smz = sgx = sgy = sgz = 0.0  # Σ stage weight · (T_mag, T_gg)
-        half, sixth = 0.5 * sub, sub / 6.0
-        for k in range(n):
-            e0, eh, e1 = env[2 * k], env[2 * k + 1], env[2 * k + 2]
-            a = deriv(qx, qy, qz, qw, wx, wy, wz, k * sub, e0)
-            b = deriv(qx + half * a[0], qy + half * a[1], qz + half * a[2], qw + half * a[3],
-                      wx + half * a[4], wy + half * a[5], wz + half * a[6], (k + 0.5) * sub, eh)
-            c = deriv(qx + half * b[0], qy + half * b[1], qz + half * b[2], qw + half * b[3],
-                      wx + half * b[4], wy + half * b[5], wz + half * b[6], (k + 0.5) * sub, eh)
-            d = deriv(qx + sub * c[0], qy + sub * c[1], qz + sub * c[2], qw + sub * c[3],
-                      wx + sub * c[4], wy + sub * c[5], wz + sub * c[6], (k + 1.0) * sub, e1)
-            qx += sixth * (a[0] + 2.0 * b[0] + 2.0 * c[0] + d[0])
-            qy += sixth * (a[1] + 2.0 * b[1] + 2.0 * c[1] + d[1])
-            qz += sixth * (a[2] + 2.0 * b[2] + 2.0 * c[2] + d[2])
-            qw += sixth * (a[3] + 2.0 * b[3] + 2.0 * c[3] + d[3])
-            wx += sixth * (a[4] + 2.0 * b[4] + 2.0 * c[4] + d[4])
-            wy += sixth * (a[5] + 2.0 * b[5] + 2.0 * c[5] + d[5])
-            wz += sixth * (a[6] + 2.0 * b[6] + 2.0 * c[6] + d[6])
-            norm = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
-            qx, qy, qz, qw = qx / norm, qy / norm, qz / norm, qw / norm
-            smx += a[7] + 2.0 * b[7] + 2.0 * c[7] + d[7]
-            smy += a[8] + 2.0 * b[8] + 2.0 * c[8] + d[8]
-            smz += a[9] + 2.0 * b[9] + 2.0 * c[9] + d[9]
-            sgx += a[10] + 2.0 * b[10] + 2.0 * c[10] + d[10]
-            sgy += a[11] + 2.0 * b[11] + 2.0 * c[11] + d[11]
-            sgz += a[12] + 2.0 * b[12] + 2.0 * c[12] + d[12]
-        if not math.isfinite(qx + qy + qz + qw + wx + wy + wz):  # a finite sum: every component finite
+        q, w, smag, sgg = self._rk4(self._q, self._w, self.substeps, dt / self.substeps, env, self._inertia_t,
+                                    self._inertia_inv_t, m, h0, hdot, td, gg, need_field)
+        if not math.isfinite(sum(q) + sum(w)):  # a finite sum: every component finite
             raise DynamicsError("integration diverged (non-finite state): reduce dt_s or raise substeps")
-        self._q, self._w = (qx, qy, qz, qw), (wx, wy, wz)
+        self._q, self._w = q, w
         self._t = t0 + dt
-        w6 = 6.0 * n
-        self._tmag_avg = (smx / w6, smy / w6, smz / w6)
-        self._tgg_avg = (sgx / w6, sgy / w6, sgz / w6)
+        w6 = 6.0 * self.substeps
+        self._tmag_avg = (smag[0] / w6, smag[1] / w6, smag[2] / w6)
+        self._tgg_avg = (sgg[0] / w6, sgg[1] / w6, sgg[2] / w6)
 
     def truth(self, wheel_h_body_nms: Sequence[float]) -> Truth:
         """Truth at the current time; ``wheel_h_body_nms`` (N·m·s, body) for the total momentum."""

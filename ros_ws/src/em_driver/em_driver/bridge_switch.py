@@ -46,6 +46,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from acds_common import kernels
+
 from em_driver import rl_circuit
 
 __all__ = [
@@ -272,6 +274,92 @@ class _Recorder:
         return Waveform(np.array(self.times), np.array(self.currents), np.array(self.states, dtype=bool))
 
 
+def coil_period(s: float, i: float, on: bool, active: bool, lo: float, hi: float, duration_s: float, tau: float,
+                supply: float, i_on: float, i_off: float, recorder: _Recorder | None
+                ) -> tuple[float, bool, float, float, float, float, int]:
+    """Event-driven exact integration of one winding over one period (module docstring): polarity ``s``, start
+    current ``i`` (A) and comparator state ``on``; ``active`` drives the band [lo, hi] (A along the polarity;
+    inf, inf: the switch held on); τ (s), supply E (V), I_on and I_off (A). Returns the end current and
+    comparator state, ∫ i dt (A·s), the on time (s), the energy drawn and returned (J) and the switch count.
+
+    A kernel (:mod:`acds_common.kernels`): compiled in the direct engine; ``recorder`` (a waveform) only on the
+    plain function.
+    """
+    band = recorder is None and 0.0 < lo < hi < i_on  # a band the bridge can hold: whole cycles in closed form
+    t = 0.0
+    integral_i = 0.0
+    on_time = 0.0
+    drawn = 0.0
+    returned = 0.0
+    switches = 0
+    while True:
+        # Comparator: switch at the thresholds (decided on the present current).
+        x = s * i
+        new_on = active and (x <= lo or (on and x < hi))
+        if new_on != on:
+            switches += 1
+            on = new_on
+        # The path and the event that ends this segment.
+        if on and x >= 0.0:  # transistor path along the polarity
+            i_inf, target, transistor = s * i_on, s * hi, True
+        elif on:  # reversal: opposite pair's diodes carry the current down to zero
+            i_inf, target, transistor = s * i_off, 0.0, False
+        elif i != 0.0:  # freewheel through the diodes
+            i_inf = -math.copysign(i_off, i)
+            target = s * lo if (active and s * i > lo) else 0.0
+            transistor = False
+        else:  # off at zero current: the diodes block, nothing happens
+            i_inf, target, transistor = 0.0, 0.0, False
+        if transistor and x == lo and band:
+            # Settled in the band at the turn-on edge: the waveform is exactly periodic until the
+            # period ends, so the whole on/off cycles that end before it are added in closed form.
+            n, t_on, t_off, area_on, area_off = whole_cycles(lo, hi, t, duration_s, tau, i_on, i_off)
+            if n > 0:
+                t += n * (t_on + t_off)
+                integral_i += n * s * (area_on + area_off)
+                on_time += n * t_on
+                drawn += n * supply * area_on
+                returned += n * supply * area_off
+                switches += 2 * n
+        remaining = duration_s - t
+        reach = rl_circuit.time_to_reach_s(i, i_inf, target, tau)
+        hit = reach < remaining
+        dt = reach if hit else remaining
+        i_free, area = rl_circuit.segment(i, i_inf, tau, dt)  # area = ∫ i dt over the segment
+        i_end = target if hit else i_free
+        if recorder is not None:
+            recorder.segment(t, dt, i, i_inf, tau, on)
+        integral_i += area
+        if on:
+            on_time += dt
+        if transistor:
+            drawn += supply * abs(area)
+        else:
+            returned += supply * abs(area)
+        t += dt
+        i = i_end
+        if not hit:
+            break
+    return i, on, integral_i, on_time, drawn, returned, switches
+
+
+@kernels.helper
+def whole_cycles(lo: float, hi: float, t_s: float, duration_s: float, tau: float, i_on: float,
+                 i_off: float) -> tuple[int, float, float, float, float]:
+    """Number of whole band cycles from ``t_s`` that end strictly before ``duration_s`` (the rest is
+    integrated edge by edge) and one cycle's t_on, t_off, ∫|i| dt on, ∫|i| dt off, from the same
+    exponentials as eq. 4-27."""
+    t_on = tau * math.log((i_on - lo) / (i_on - hi))
+    t_off = tau * math.log((hi + i_off) / (lo + i_off))
+    area_on = i_on * t_on + (lo - i_on) * tau * (1.0 - math.exp(-t_on / tau))
+    area_off = -i_off * t_off + (hi + i_off) * tau * (1.0 - math.exp(-t_off / tau))
+    period = t_on + t_off
+    n = int((duration_s - t_s) / period)
+    if n > 0 and t_s + n * period >= duration_s:  # rounding: keep the period's end for the edges
+        n -= 1
+    return n, t_on, t_off, area_on, area_off
+
+
 class BridgeSwitchCoil:
     """One winding with its bridge-switch driver, integrated exactly between switching events (spec §6).
 
@@ -289,8 +377,7 @@ class BridgeSwitchCoil:
         self._i_off = _off_current_a(coil, driver)
         self._tau = coil.tau_s
         self._supply_v = driver.supply_v
-        #: One band cycle's (t_on, t_off, areas) for the last band (lo, hi): a held command reuses it.
-        self._cycle: tuple[float, float, tuple[float, float, float, float]] | None = None
+        self._period = kernels.compiled(coil_period)
         #: The (all-zero) result of an idle period, built once.
         self._idle: PeriodResult | None = None
         self._current_a = float(current0_a)
@@ -368,11 +455,9 @@ class BridgeSwitchCoil:
         """Event-driven exact integration over one period (see the module docstring)."""
         if not (math.isfinite(duration_s) and duration_s > 0.0):
             raise EmDriverError(f'duration_s must be a finite positive time, got {duration_s!r}')
-        tau = self._tau
-        supply = self._supply_v
         recorder = None
         if record:
-            step = tau / 200.0 if record_step_s is None else record_step_s
+            step = self._tau / 200.0 if record_step_s is None else record_step_s
             if not (math.isfinite(step) and step > 0.0):
                 raise EmDriverError(f'record_step_s must be a finite positive time, got {record_step_s!r}')
             recorder = _Recorder(step)
@@ -385,7 +470,6 @@ class BridgeSwitchCoil:
         elif fault is CoilFault.STUCK_ON_BRIDGE:
             active, lo, hi = True, math.inf, math.inf
 
-        s = self._polarity
         i = self._current_a
         on = self._bridge_on
         if not (active or on or i) and recorder is None:
@@ -394,90 +478,15 @@ class BridgeSwitchCoil:
             if self._idle is None:
                 self._idle = self._result(0.0, 0.0, 0, 0.0, 0.0, duration_s, None)  # all zeros, any duration
             return self._idle
-        i_on, i_off = self._i_on, self._i_off
-        time_to_reach, segment = rl_circuit.time_to_reach_s, rl_circuit.segment
-        band = recorder is None and 0.0 < lo < hi < i_on  # a band the bridge can hold: whole cycles in closed form
-        t = 0.0
-        integral_i = 0.0
-        on_time = 0.0
-        drawn = 0.0
-        returned = 0.0
-        switches = 0
-        while True:
-            # Comparator: switch at the thresholds (decided on the present current).
-            x = s * i
-            new_on = active and (x <= lo or (on and x < hi))
-            if new_on != on:
-                switches += 1
-                on = new_on
-            # The path and the event that ends this segment.
-            if on and x >= 0.0:  # transistor path along the polarity
-                i_inf, target, transistor = s * i_on, s * hi, True
-            elif on:  # reversal: opposite pair's diodes carry the current down to zero
-                i_inf, target, transistor = s * i_off, 0.0, False
-            elif i != 0.0:  # freewheel through the diodes
-                i_inf = -math.copysign(i_off, i)
-                target = s * lo if (active and s * i > lo) else 0.0
-                transistor = False
-            else:  # off at zero current: the diodes block, nothing happens
-                i_inf, target, transistor = 0.0, 0.0, False
-            if transistor and x == lo and band:
-                # Settled in the band at the turn-on edge: the waveform is exactly periodic until the
-                # period ends, so the whole on/off cycles that end before it are added in closed form.
-                n, cycle = self._whole_cycles(lo, hi, t, duration_s)
-                if n > 0:
-                    t_on, t_off, area_on, area_off = cycle
-                    t += n * (t_on + t_off)
-                    integral_i += n * s * (area_on + area_off)
-                    on_time += n * t_on
-                    drawn += n * supply * area_on
-                    returned += n * supply * area_off
-                    switches += 2 * n
-            remaining = duration_s - t
-            reach = time_to_reach(i, i_inf, target, tau)
-            hit = reach < remaining
-            dt = reach if hit else remaining
-            i_free, area = segment(i, i_inf, tau, dt)  # area = ∫ i dt over the segment
-            i_end = target if hit else i_free
-            if recorder is not None:
-                recorder.segment(t, dt, i, i_inf, tau, on)
-            integral_i += area
-            if on:
-                on_time += dt
-            if transistor:
-                drawn += supply * abs(area)
-            else:
-                returned += supply * abs(area)
-            t += dt
-            i = i_end
-            if not hit:
-                break
+        period = self._period if recorder is None else coil_period  # the recorder: the plain function
+        i, on, integral_i, on_time, drawn, returned, switches = period(
+            self._polarity, i, on, active, lo, hi, duration_s, self._tau, self._supply_v, self._i_on, self._i_off,
+            recorder)
         self._current_a = i
         self._bridge_on = on
         waveform = recorder.finish(duration_s, i, on) if recorder is not None else None
         return self._result(integral_i / duration_s, on_time / duration_s, switches, drawn, returned,
                             duration_s, waveform)
-
-    def _whole_cycles(self, lo: float, hi: float, t_s: float,
-                      duration_s: float) -> tuple[int, tuple[float, float, float, float]]:
-        """Number of whole band cycles from ``t_s`` that end strictly before ``duration_s`` (the rest is
-        integrated edge by edge) and one cycle's (t_on, t_off, ∫|i| dt on, ∫|i| dt off), from the same
-        exponentials as eq. 4-27."""
-        if self._cycle is not None and self._cycle[0] == lo and self._cycle[1] == hi:
-            cycle = self._cycle[2]
-        else:
-            tau, i_on, i_off = self._tau, self._i_on, self._i_off
-            t_on = tau * math.log((i_on - lo) / (i_on - hi))
-            t_off = tau * math.log((hi + i_off) / (lo + i_off))
-            area_on = i_on * t_on + (lo - i_on) * tau * (1.0 - math.exp(-t_on / tau))
-            area_off = -i_off * t_off + (hi + i_off) * tau * (1.0 - math.exp(-t_off / tau))
-            cycle = (t_on, t_off, area_on, area_off)
-            self._cycle = (lo, hi, cycle)
-        period = cycle[0] + cycle[1]
-        n = int((duration_s - t_s) / period)
-        if n > 0 and t_s + n * period >= duration_s:  # rounding: keep the period's end for the edges
-            n -= 1
-        return n, cycle
 
     def _open_winding_result(self, active: bool, duration_s: float, recorder: _Recorder | None) -> PeriodResult:
         """Open winding: no current flows; the comparator sees zero current and holds the bridge on."""

@@ -20,16 +20,19 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from acds_common import kernels
 
 __all__ = ['segment', 'time_to_reach_s', 'PwmPeriods', 'pwm_periods', 'pwm_cumulative_charge']
 
 
+@kernels.helper
 def segment(i0_a: float, i_inf_a: float, tau_s: float, dt_s: float) -> tuple[float, float]:
     """(current at dt_s, ∫ i dt over [0, dt_s]) of one exponential segment from i0_a toward i_inf_a."""
     decay = math.exp(-dt_s / tau_s)
     return i_inf_a + (i0_a - i_inf_a) * decay, i_inf_a * dt_s + (i0_a - i_inf_a) * tau_s * (1.0 - decay)
 
 
+@kernels.helper
 def time_to_reach_s(i0_a: float, i_inf_a: float, target_a: float, tau_s: float) -> float:
     """Time for the segment from i0_a toward i_inf_a to reach target_a, s (math.inf if it never does)."""
     if i_inf_a != i0_a:
