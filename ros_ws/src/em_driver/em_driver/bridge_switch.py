@@ -45,7 +45,6 @@ from enum import StrEnum
 from typing import NamedTuple
 
 import numpy as np
-
 from acds_common import kernels
 
 from em_driver import rl_circuit
