@@ -49,7 +49,7 @@ def test_short_acquisition_reaches_capture_and_is_deterministic(launch_graph):
     for _ in range(2):
         with launch_graph(sc) as graph:
             result = graph.wait()
-            assert set(result.exit_codes) == NODES and set(result.exit_codes.values()) == {0}
+            assert set(result.exit_codes) == NODES and set(result.exit_codes.values()) == {0}, result.warnings
             assert result.steps < sc.total_steps(), 'the run must end at capture, before the time limit'
             summary = result.summary
             digests.append({**stream_digests(result.monitor), topics.resolve(topics.DIAGNOSTICS): diagnostics_by_node(

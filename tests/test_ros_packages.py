@@ -31,7 +31,8 @@ VENV_BIN = Path(sys.executable).parent
 PYTHON_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml', 'matplotlib': 'python3-matplotlib',
                'pytest': 'python3-pytest', 'rosbags': 'python3-rosbags-pip', 'rclpy': 'rclpy',
                'dask': 'python3-dask', 'tqdm': 'python3-tqdm', 'ppigrf': 'python3-ppigrf-pip',
-               'foxglove': 'python3-foxglove-sdk-pip', 'websockets': 'python3-websockets', 'mcap': 'python3-mcap-pip'}
+               'foxglove': 'python3-foxglove-sdk-pip', 'websockets': 'python3-websockets', 'mcap': 'python3-mcap-pip',
+               'numba': 'python3-numba'}
 #: Packages whose code publishes or subscribes to any graph topic by its type name
 #: (``acds_common.lockstep.message_class``: the node host, the runtime's monitor and recorder, the CLI's recorder and player).
 EVERY_TOPIC = {'acds_common', 'acds_runtime', 'acds_cli'}
