@@ -102,6 +102,27 @@ def test_a_node_that_hangs_on_its_way_out_is_killed_and_reported_and_the_run_sta
         f'node {stuck[0]} did not stop within 1 s of SIGINT (the launcher killed it)']
 
 
+def test_a_running_node_that_does_not_stop_is_reported_with_its_stack(launch_graph):
+    """A node still running when the grace period ends (here: it never got the SIGINT) has its Python stack
+    asked for before the SIGKILL, so the report says where it hung, not only that it did."""
+    with launch_graph('free_tumble_heao_b', steps=20) as graph:
+        stop_children, deaf = graph._stop_children, []
+
+        def signal_all_but_one(sig: signal.Signals) -> None:
+            running = [(n, p) for n, p in graph.processes.items() if p.popen.poll() is None]
+            deaf.append(running[0][0])
+            for _name, proc in running[1:]:
+                os.killpg(proc.popen.pid, sig)
+
+        graph._signal_nodes = signal_all_but_one
+        graph._stop_children = lambda grace_s=10.0: stop_children(grace_s=1.0)
+        result = graph.wait()
+    assert result.steps == 20 and result.exit_codes[deaf[0]] == -signal.SIGKILL
+    report = result.warnings[0]
+    assert report.splitlines()[0] == f'node {deaf[0]} did not stop within 1 s of SIGINT (the launcher killed it)'
+    assert '(its Python stack, asked for by the launcher:)' in report and 'File "' in report, report
+
+
 def test_publisher_check_counts_unnamed_publishers_against_the_declared_nodes_not_yet_named():
     """A node stopped before discovery learnt its name stays unnamed: not an intruder while a declared node is
     unaccounted for; one more unnamed publisher than that is, after the grace; a named stranger at once."""

@@ -431,8 +431,13 @@ class GraphRun:
         return head + report
 
     def _stack_of(self, proc: NodeProcess) -> str:
-        """The last lines of a node the graph waited on; when it still runs, with its Python stack
-        (:data:`~acds_common.lockstep.STACK_SIGNAL`, a faulthandler dump), awaited at most 5 s."""
+        """The last lines of a node the graph waited on, with its Python stack (:meth:`_ask_stack`)."""
+        self._ask_stack(proc)
+        return f'\n  last lines of {proc.name}:\n' + '\n'.join(f'    {line}' for line in proc.tail)
+
+    def _ask_stack(self, proc: NodeProcess) -> None:
+        """Add a running node's Python stack to its tail (:data:`~acds_common.lockstep.STACK_SIGNAL`, a faulthandler
+        dump, awaited at most 5 s); a stopped process is said to be stopped."""
         if proc.popen.poll() is None and is_stopped(proc.popen.pid):
             proc.tail.append('(the process is stopped: SIGSTOP, a debugger or a Ctrl-Z outside the launcher)')
         elif proc.popen.poll() is None and proc.failed_at is None:
@@ -446,7 +451,6 @@ class GraphRun:
             while time.monotonic() < deadline and not any('File "' in line for line in list(proc.tail)[before:]):
                 if proc.reader is not None:
                     proc.reader.join(timeout=0.1)
-        return f'\n  last lines of {proc.name}:\n' + '\n'.join(f'    {line}' for line in proc.tail)
 
     def _complete(self) -> RunResult:
         """The time owner finished: drain the monitor (and so the recorder) through the owner's last step, stop the
@@ -501,6 +505,7 @@ class GraphRun:
             try:
                 codes[name] = proc.popen.wait(timeout=max(0.1, deadline - time.monotonic()))
             except subprocess.TimeoutExpired:
+                self._ask_stack(proc)  # where it hangs, into the tail the report of the kill shows
                 os.killpg(proc.popen.pid, signal.SIGKILL)
                 proc.killed_after_s = grace_s
                 codes[name] = proc.popen.wait()
