@@ -9,14 +9,10 @@
 
 from __future__ import annotations
 
-import time
-
 from acds_common import topics
-from acds_common.lockstep import COMMAND_QOS
 from acds_common.messages import WALL_CLOCK_PREFIX
 from acds_common.scenario import load_scenario
-from acds_runtime.testing import stream_digests, wait_for_messages
-from std_msgs.msg import String
+from acds_runtime.testing import ground_command, stream_digests, wait_for_messages
 
 NODES = {'rigid_body', 'reaction_wheels', 'magnetometer_sim', 'em_driver', 'acds_controller', 'ascs_mode_manager'}
 
@@ -82,19 +78,10 @@ def test_ground_commands_refusal_reason_and_scheduled_step(launch_graph):
     ]
     dt = sc.control_period_s
     with launch_graph(sc, steps=10_000) as graph:
-        node = graph.monitor.node
-        pub = node.create_publisher(String, topics.GROUND_COMMAND, COMMAND_QOS)
-        deadline = time.monotonic() + 60.0
-        acks: list[str] = []
-        while time.monotonic() < deadline and not any('warp_drive' in a for a in acks):
-            pub.publish(String(data='warp_drive on'))
-            time.sleep(0.5)
-            acks = [m.data for m in graph.monitor.messages(topics.GROUND_ACK)]
+        refused_live = ground_command(graph, 'warp_drive on')
         modes = wait_for_messages(graph, topics.MODE, 30)
         diags = graph.monitor.messages(topics.DIAGNOSTICS)
-    refused_live = [a for a in acks if 'warp_drive' in a]
-    assert refused_live, f'no answer to the live command; acks: {acks}'
-    assert refused_live[0].startswith('refused') and "unknown command 'warp_drive'" in refused_live[0]
+    assert refused_live.startswith('refused') and "unknown command 'warp_drive'" in refused_live, refused_live
     # the scheduled refusal, from the mode manager's diagnostics (lockstep QoS: none can be missed)
     refusals = [(_step(d, dt), {kv.key: kv.value for kv in st.values}) for d in diags for st in d.status
                 if st.name == 'ascs_mode_manager' and st.message == 'ground command refused']

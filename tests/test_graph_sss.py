@@ -9,12 +9,8 @@ mode never both on one pass).
 
 from __future__ import annotations
 
-import time
-
 from acds_common import topics
-from acds_common.lockstep import COMMAND_QOS
-from acds_runtime.testing import wait_for_messages
-from std_msgs.msg import String
+from acds_runtime.testing import ground_command, wait_for_messages
 
 
 def _turn_events(monitor, kind: str) -> list[str]:
@@ -28,17 +24,10 @@ def test_one_perigee_pass_spins_up_with_one_turn_on_and_one_turn_off(launch_grap
             wait_for_messages(graph, topics.EVENTS, 1, timeout_s=1.0)  # fails naming what arrived
             raise AssertionError(f'no turn_on event; events: {[m.data for m in monitor.messages(topics.EVENTS)]}')
         # A live attitude-mode request during the spin-mode pass: refused, with the reason.
-        pub = monitor.node.create_publisher(String, topics.GROUND_COMMAND, COMMAND_QOS)
-        refused: list[str] = []
-        deadline = time.monotonic() + 30.0
-        while not refused and time.monotonic() < deadline:
-            pub.publish(String(data='sss mode attitude'))
-            monitor.wait_for(lambda: bool(monitor.messages(topics.GROUND_ACK)), timeout_s=0.5)
-            refused = [m.data for m in monitor.messages(topics.GROUND_ACK) if "'sss mode attitude'" in m.data]
+        refused = ground_command(graph, 'sss mode attitude')
         result = graph.wait()
 
-    assert refused, 'no acknowledgement of the live ground command'
-    assert 'refused' in refused[0] and 'spin-mode pass' in refused[0], refused[0]
+    assert 'refused' in refused and 'spin-mode pass' in refused, refused
     on, off = _turn_events(result.monitor, 'turn_on'), _turn_events(result.monitor, 'turn_off')
     assert len(on) == 1 and len(off) == 1, (on, off)
     t_on, t_off = (float(e.split(' ')[0].removeprefix('t=')) for e in (on[0], off[0]))

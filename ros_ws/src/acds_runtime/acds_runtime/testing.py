@@ -53,6 +53,36 @@ def wait_for_messages(graph: GraphRun, topic: str, count: int, timeout_s: float 
     return monitor.messages(topic)
 
 
+def ground_command(graph: GraphRun, text: str, timeout_s: float = 60.0) -> str:
+    """Send one live ground command to the running graph and return the mode manager's answer to it (the
+    ``ground/ack`` line that names it). The command is published once, after the publisher has matched the
+    mode manager's subscription (reliable QoS: it then arrives); fail naming what was missing."""
+    from acds_common.lockstep import COMMAND_QOS
+    from std_msgs.msg import String
+
+    monitor = graph.monitor
+    assert monitor is not None
+    pub = monitor.node.create_publisher(String, topics.GROUND_COMMAND, COMMAND_QOS)
+    try:
+        if not monitor.wait_for(lambda: pub.get_subscription_count() > 0 or graph.exit_report() is not None,
+                                timeout_s) or pub.get_subscription_count() == 0:
+            pytest.fail(f'no node subscribed to {topics.resolve(topics.GROUND_COMMAND)} within {timeout_s:g} s; '
+                        f'{graph.exit_report() or "every node still runs"}')
+        pub.publish(String(data=text))
+
+        def answers() -> list[str]:
+            return [m.data for m in monitor.messages(topics.GROUND_ACK) if text in m.data]
+
+        monitor.wait_for(lambda: bool(answers()) or graph.exit_report() is not None, timeout_s)
+        if not answers():
+            acks = [m.data for m in monitor.messages(topics.GROUND_ACK)]
+            pytest.fail(f'no answer to the ground command {text!r} within {timeout_s:g} s; answers seen: {acks}; '
+                        f'{graph.exit_report() or "every node still runs"}')
+        return answers()[0]
+    finally:
+        monitor.node.destroy_publisher(pub)
+
+
 def stream_digests(monitor: Any) -> dict[str, str]:
     """SHA-256 of each topic's kept message stream (for comparing two runs topic by topic).
 
