@@ -58,11 +58,6 @@ def enable() -> None:
     _enabled = True
 
 
-def enabled() -> bool:
-    """Whether :func:`enable` was called in this process."""
-    return _enabled
-
-
 def compiled(fn: F) -> F:
     """The form of kernel ``fn`` this process runs: compiled once :func:`enable` was called, else ``fn``."""
     if not _enabled:

@@ -29,7 +29,7 @@ from collections.abc import Sequence
 
 import numpy as np
 from acds_common import kernels, units
-from acds_common.attitude import dcm
+from acds_common.attitude import Quat, dcm
 from acds_common.environment import MagneticFieldModel, Orbit, Sun, field_xyz, sun_frame_dcm
 from acds_common.environment import ecliptic_normal_eci as default_ecliptic_normal_eci
 from acds_common.environment import gravity_gradient_torque_nm as gravity_gradient_torque_nm  # the public form
@@ -181,7 +181,6 @@ class Truth:
 
 #: One RK4 stage's attitude-independent environment: r_eci (m) and b_eci (T) as six floats.
 _Env = tuple[float, float, float, float, float, float]
-Quat = tuple[float, float, float, float]
 
 
 #: A stage that needs no environment (no field, no gravity gradient): r and B unused.
