@@ -95,6 +95,23 @@ def mode_status(value: Sequence[Status] | None, node: str) -> tuple[str | None, 
     return keyed.get('mode', status.message), ([v for k, v in status.values if k == key] if key in keyed else [])
 
 
+def mode_state(value: Sequence[Status] | None) -> tuple[str, str, bool] | None:
+    """(mode, cause, captured) of the step's ``mode`` value, as :meth:`ModeReport.decode` gives them; None if
+    absent. What a run summary reads each step: the three keys alone, without building the whole report."""
+    status = _mode_status(value)
+    if status is None:
+        return None
+    mode = cause = captured = None
+    for key, text in status.values:
+        if key == 'mode':
+            mode = text if mode is None else mode
+        elif key == 'cause':
+            cause = text if cause is None else cause
+        elif key == 'captured':
+            captured = text if captured is None else captured
+    return (status.message if mode is None else mode), cause or '', captured == _FLAG[True]
+
+
 def run_complete(value: Sequence[Status] | None) -> bool:
     """Whether the step's ``mode`` value asks the time owner to end the run (read each step: the one key alone)."""
     status = _mode_status(value)

@@ -15,7 +15,7 @@ from acds_common.commands import (
     decode,
 )
 from acds_common.messages import MODE_STATUS, OK
-from acds_common.mode_report import ModeReport, mode_status, run_complete
+from acds_common.mode_report import ModeReport, mode_state, mode_status, run_complete
 
 GROUND = (ModeCommand, EeaSelect, MagnetometerSelect, LawCommand, GainCommand, GasCommand)
 
@@ -74,3 +74,16 @@ def test_a_mode_logic_that_never_ends_a_run_sends_no_run_complete():
     assert 'run_complete' not in dict(value[0].values)
     assert ModeReport.decode(value).run_complete is None and not run_complete(value)
     assert ModeReport.decode(()) is None and mode_status(None, 'em_driver') == (None, [])
+
+
+@pytest.mark.parametrize('values', [
+    (('mode', 'mode_1b'), ('cause', 'capture'), ('captured', 'true')),
+    (('cause', ''), ('captured', 'false')),  # no mode key: the status message
+    (('mode', 'mode_1a'), ('captured', 'maybe'), ('mode', 'mode_2'), ('cause', 'x'), ('cause', 'y')),  # first wins
+    (),
+])
+def test_mode_state_reads_what_decode_reads(values):
+    value = (Status(OK, MODE_STATUS, 'cruise', MODE_STATUS, values),)
+    report = ModeReport.decode(value)
+    assert mode_state(value) == (report.mode, report.cause, report.captured)
+    assert mode_state(None) is None and mode_state(()) is None

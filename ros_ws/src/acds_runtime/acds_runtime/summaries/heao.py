@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 from acds_common import topics
-from acds_common.mode_report import ModeReport
+from acds_common.mode_report import mode_state
 from acds_common.modes import GAS_MODES
 from acds_common.units import nms_to_ftlbs
 
@@ -117,12 +117,12 @@ class Accumulator:
     def step(self, k: int, values: dict[str, Any]) -> None:
         """One step: keep the mode history's change points and the running peaks."""
         t = k * self.dt_s
-        report = ModeReport.decode(values.get(_MODE))
-        if report is not None:
-            entry = (t, report.mode, report.cause, report.captured)
-            if (entry[1], entry[3]) != self._last_state or entry[2]:
-                self.history.append(entry)
-                self._last_state = (entry[1], entry[3])
+        state = mode_state(values.get(_MODE))
+        if state is not None:
+            mode, cause, captured = state
+            if cause or (mode, captured) != self._last_state:
+                self.history.append((t, mode, cause, captured))
+                self._last_state = (mode, captured)
         h = values.get(_WHEEL_MOMENTUM)
         if h is not None:
             self.last_h = (k, h)
