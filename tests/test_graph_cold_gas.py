@@ -65,8 +65,8 @@ def test_gas_ground_commands_are_acknowledged_applied_and_reacquire_goes_back_to
     bag = open_bag(tmp_path / 'bag')
     acks = [Codec(topics.type_of(topics.GROUND_ACK)).decode(d)[1] for _t, _s, d in
             bag.messages({topics.resolve(topics.GROUND_ACK)})]
-    assert any('accepted t=5.0: isolation 1 close: routed to cold_gas' in a for a in acks), acks
-    assert any('accepted t=300.0: mode reacquire' in a for a in acks), acks
+    assert "t=5.00 accepted (scheduled) 'gas isolation 1 close': routed to cold_gas" in acks, acks
+    assert any(a.startswith("t=300.00 accepted (scheduled) 'mode reacquire': ") for a in acks), acks
     state = {}
     codec = Codec(topics.type_of(topics.COLD_GAS_STATE))
     for _topic, t_ns, data in bag.messages({topics.resolve(topics.COLD_GAS_STATE)}):

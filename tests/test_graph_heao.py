@@ -9,6 +9,8 @@
 
 from __future__ import annotations
 
+import re
+
 from acds_common import topics
 from acds_common.messages import WALL_CLOCK_PREFIX
 from acds_common.scenario import load_scenario
@@ -81,7 +83,8 @@ def test_ground_commands_refusal_reason_and_scheduled_step(launch_graph):
         refused_live = ground_command(graph, 'warp_drive on')
         modes = wait_for_messages(graph, topics.MODE, 30)
         diags = graph.monitor.messages(topics.DIAGNOSTICS)
-    assert refused_live.startswith('refused') and "unknown command 'warp_drive'" in refused_live, refused_live
+    assert re.fullmatch(r"t=\d+\.\d\d refused \(live\) 'warp_drive on': unknown command 'warp_drive'; .*",
+                        refused_live), refused_live
     # the scheduled refusal, from the mode manager's diagnostics (lockstep QoS: none can be missed)
     refusals = [(_step(d, dt), {kv.key: kv.value for kv in st.values}) for d in diags for st in d.status
                 if st.name == 'ascs_mode_manager' and st.message == 'ground command refused']

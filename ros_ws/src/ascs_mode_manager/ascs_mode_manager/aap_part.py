@@ -16,11 +16,9 @@ from __future__ import annotations
 from typing import Any
 
 from acds_common.cdr import Status
-from acds_common.messages import MODE_STATUS, WARN, diagnostic
 from acds_common.mode_report import ModeReport
 from acds_common.validation import scenario_key
 
-from ascs_mode_manager.ground_commands import answer
 from ascs_mode_manager.heao_part import event_text
 from ascs_mode_manager.spin_mechanizations import AscsError
 from ascs_mode_manager.workshop_modes import WorkshopModeManager
@@ -37,14 +35,7 @@ class AapPart:
     def step(self, k: int, t: float, _inp: dict[str, Any]) -> dict[str, Any]:
         """One step: ground commands, mode transfers, ``mode`` (always), ``events``, ``diagnostics``."""
         diagnostics: list[Status] = []
-        for text, parsed, _source in self.host.commands.due(t):
-            result = answer(self.core, parsed, t)
-            if result.accepted:
-                self.host.acknowledge(f'accepted t={t:.1f}: {result.command}: {result.reason}', True)
-            else:
-                self.host.acknowledge(f'refused t={t:.1f}: {text}: {result.reason}', False)
-                diagnostics.extend(diagnostic(MODE_STATUS, {'command': text, 'reason': result.reason},
-                                              'ground command refused', WARN))
+        self.host.answer_due(t, diagnostics)
         transitions = self.core.step(t)
         events = [event_text(tr) for tr in transitions]
         for text in events:

@@ -71,6 +71,13 @@ def submit(logic: ModeLogic, text: str, t_s: float) -> CommandResult:
     return answer(logic, parse(logic, text), t_s)
 
 
+def ack_line(t_s: float | None, source: str, text: str, result: CommandResult) -> str:
+    """The one answer line on ``ground/ack``, for every mode logic: ``t=<s> accepted|refused (scheduled|live)
+    '<text as received>': <reason>``; ``t_s`` None for a live command refused before any step took it."""
+    when = '' if t_s is None else f't={t_s:.2f} '
+    return f"{when}{'accepted' if result.accepted else 'refused'} ({source}) {text!r}: {result.reason}"
+
+
 def parse_schedule(entries: list[str]) -> list[tuple[float, str]]:
     """``["T_S: command", ...]`` → [(T_S, command)] sorted by time (stable); AscsError naming a bad entry."""
     out = []

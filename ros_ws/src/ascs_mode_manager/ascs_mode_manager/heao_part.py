@@ -5,7 +5,8 @@ Stage ``heao`` of step k (inputs: gyro and sun sensor of step k from rigid_body)
 1. ground commands: the scheduled ones (``modes.ground_commands``, "T_S: text") whose
    time has come (first step with t_k ≥ T_S), then the live ones received on
    ``ground/command`` since the previous step, in arrival order, are validated by the
-   core; each is answered on ``ground/ack`` ("accepted …" or "refused …: <reason>");
+   core; each is answered on ``ground/ack`` (the host's ``answer_due``: one line, accepted or refused with the
+   reason, a refusal also a WARN diagnostic);
    accepted mode transfers are applied in this step, commands for other nodes are
    forwarded in this step's ``mode`` (key ``command/<node>``);
 2. the on-board logic of :class:`~ascs_mode_manager.heao_modes.HeaoModeManager`;
@@ -34,7 +35,6 @@ from acds_common.mode_report import ModeReport
 from acds_common.modes import HEAO_CRUISE_MODES
 from acds_common.validation import all_finite, scenario_key
 
-from ascs_mode_manager.ground_commands import answer
 from ascs_mode_manager.heao_modes import HeaoModeConfig, HeaoModeManager, Transition
 from ascs_mode_manager.spin_mechanizations import AscsError
 
@@ -87,26 +87,11 @@ class HeaoPart:
         self.stop_at_capture = m['stop_at_capture']
         self.run_complete = False
 
-    def _commands(self, t: float, diagnostics: list[Status]) -> list[tuple[str, str]]:
-        """Validate the due commands; return the forwarded (node, text) pairs."""
-        forwarded = []
-        for text, parsed, _source in self.host.commands.due(t):
-            result = answer(self.core, parsed, t)
-            if result.accepted:
-                line = f'accepted t={t:.1f}: {result.command}: {result.reason}'
-                if result.route is not None:
-                    forwarded.append((result.route, result.command or text))
-            else:
-                line = f'refused t={t:.1f}: {text}: {result.reason}'
-                diagnostics.extend(diagnostic(MODE_STATUS, {'command': text, 'reason': result.reason},
-                                              'ground command refused', WARN))
-            self.host.acknowledge(line, result.accepted)
-        return forwarded
-
     def step(self, k: int, t: float, inp: dict[str, Any]) -> dict[str, Any]:
         """One step of the mode logic: ``mode`` (always), ``events`` (on transitions), ``diagnostics``."""
         diagnostics: list[Status] = []
-        forwarded = self._commands(t, diagnostics)
+        forwarded = tuple((result.route, result.command or text)
+                          for text, result in self.host.answer_due(t, diagnostics) if result.route is not None)
         transitions: list[Transition] = []
         omega = xyz(None if inp['gyro'] is None else inp['gyro'][0])
         sun = xyz(inp['sun'])
@@ -124,7 +109,7 @@ class HeaoPart:
             self.host.log('info', text)
             events.append(text)
         report = ModeReport(self.core.mode, '; '.join(tr.cause for tr in transitions), self.core.captured,
-                            tuple(self.core.status().items()), self.run_complete, tuple(forwarded))
+                            tuple(self.core.status().items()), self.run_complete, forwarded)
         out: dict[str, Any] = {'mode': report.encode()}
         if events:
             out['events'] = events

@@ -14,11 +14,21 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
+from acds_common.cdr import Status
+from acds_common.messages import MODE_STATUS, WARN, diagnostic
 from acds_common.stepper import Stepper
 
 from ascs_mode_manager.aap_part import AapPart
 from ascs_mode_manager.cold_gas_part import ColdGasPart
-from ascs_mode_manager.ground_commands import MAX_PENDING, GroundCommandQueue, parse
+from ascs_mode_manager.ground_commands import (
+    MAX_PENDING,
+    CommandResult,
+    GroundCommandQueue,
+    ack_line,
+    answer,
+    parse,
+    refuse,
+)
 from ascs_mode_manager.heao_part import HeaoPart
 from ascs_mode_manager.sss_part import SssPart
 
@@ -41,10 +51,25 @@ class ModeManagerStep(Stepper):
     def receive_command(self, text: str) -> None:
         """A live ground command: applied at the next step this node computes (refused if the queue is full)."""
         if not self.commands.receive(text):
-            self.acknowledge(f'refused {text!r}: dropped, {MAX_PENDING} commands already wait for the next step',
-                             False)
+            self._acknowledge(ack_line(None, 'live', text, refuse(
+                f'dropped, {MAX_PENDING} commands already wait for the next step')), False)
 
-    def acknowledge(self, line: str, accepted: bool) -> None:
+    def answer_due(self, t_s: float, diagnostics: list[Status]) -> list[tuple[str, CommandResult]]:
+        """Answer every ground command due at the step at ``t_s`` (s) with the part's mode logic: each answered
+        on ``ground/ack`` (:func:`~ascs_mode_manager.ground_commands.ack_line`), a refusal also as a WARN
+        diagnostic; returns the accepted ones as (text as received, result), in order."""
+        accepted = []
+        for text, parsed, source in self.commands.due(t_s):
+            result = answer(self.logic.core, parsed, t_s)
+            self._acknowledge(ack_line(t_s, source, text, result), result.accepted)
+            if result.accepted:
+                accepted.append((text, result))
+            else:
+                diagnostics.extend(diagnostic(MODE_STATUS, {'command': text, 'reason': result.reason},
+                                              'ground command refused', WARN))
+        return accepted
+
+    def _acknowledge(self, line: str, accepted: bool) -> None:
         """Answer a ground command on ``ground/ack`` (refusals carry the reason) and log it."""
         self._acks.append(line)
         self.log('info' if accepted else 'warn', f'ground command {line}')

@@ -250,7 +250,7 @@ class SssAscs:
             other = "spin" if arg == "attitude" else "attitude"
             why = self._already_on_this_pass(other) if arg != self.mode else ""
             if why:
-                return CommandResult(False, f"refused '{cmd.text}': {why}")
+                return CommandResult(False, why)
             self.mode = arg
             return CommandResult(True, f"mode {arg} selected")
         if verb in ("spin_up", "despin"):
@@ -260,7 +260,7 @@ class SssAscs:
             turn_on = arg == "on"
             why = self._already_on_this_pass("spin") if turn_on else ""
             if why:
-                return CommandResult(False, f"refused '{cmd.text}': {why}")
+                return CommandResult(False, why)
             self.direct_attitude = turn_on
             return CommandResult(True, f"direct attitude {arg}: attitude coil "
                                        f"{'on from the main bus' if turn_on else 'back to automatic control'}")

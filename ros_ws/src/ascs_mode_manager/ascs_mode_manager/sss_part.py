@@ -26,8 +26,8 @@ Outputs of step k:
 * ``events``: every automatic turn-on/turn-off, every spin-mode turn-on the one-mode-per-perigee-pass rule
   inhibits, and every commanded mode change, with its sim time:
   ``t=1234.50 turn_on sss_spin_idle->sss_spin_torquing: <why>``.
-* ``ground/ack``: every ground command accepted or refused, with the reason.
-* ``diagnostics``: every 20 steps, and at once (WARN) when an input is rejected.
+* ``ground/ack``: every ground command accepted or refused, with the reason (the host's ``answer_due``).
+* ``diagnostics``: every 20 steps, and at once (WARN) when an input or a ground command is rejected.
 
 Mode names: ``sss_disabled`` (not enabled, Direct Attitude off), ``sss_spin_idle`` /
 ``sss_attitude_idle`` (enabled, that mode selected, below the polarity-sensing level),
@@ -58,7 +58,6 @@ from acds_common.mode_report import ModeReport
 from acds_common.units import GAUSS_T, tesla_to_gauss
 from acds_common.validation import scenario_key
 
-from ascs_mode_manager.ground_commands import Parsed, answer
 from ascs_mode_manager.spin_mechanizations import MECHANIZATIONS, AscsError, Mechanization, coil_moments
 from ascs_mode_manager.sss_ascs import SssAscs, SssOutput, build_sss_ascs
 
@@ -115,17 +114,10 @@ class SssPart:
             return np.zeros(3)
         return (volts - bias) / self.scale_v_per_t
 
-    def apply(self, text: str, parsed: Parsed, t_s: float, source: str) -> str:
-        """Apply one ground command; acknowledge it; return the cause text if it was accepted."""
-        result = answer(self.core, parsed, t_s)
-        verdict = 'accepted' if result.accepted else 'refused'
-        self.host.acknowledge(f't={t_s:.2f} {verdict} ({source}) {text!r}: {result.reason}', result.accepted)
-        return f'ground command {text!r}' if result.accepted else ''
-
     def step(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Step k: commands due, the core step, then mode, moment command, events and diagnostics."""
         diagnostics: list[Status] = []
-        causes = [self.apply(text, parsed, t_s, source) for text, parsed, source in self.host.commands.due(t_s)]
+        causes = [f'ground command {text!r}' for text, _result in self.host.answer_due(t_s, diagnostics)]
         b_t = self.sensed_field_t(k, inp, diagnostics)
         self.last_signal_t = float(b_t[CHANNEL_AXIS])
         out = self.core.step(t_s, self.host.control_period_s, b_t)

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import collections
+
 import pytest
 from acds_common.commands import CommandError, ModeCommand
-from ascs_mode_manager.ground_commands import GroundCommandQueue, answer, parse, parse_schedule
+from ascs_mode_manager.ground_commands import MAX_PENDING, GroundCommandQueue, answer, parse, parse_schedule
 from ascs_mode_manager.spin_mechanizations import AscsError
 from ascs_mode_manager.workshop_modes import WorkshopModeManager
 
@@ -39,3 +41,34 @@ def test_text_is_parsed_on_entry_and_a_text_that_does_not_parse_is_refused_with_
     assert answer(core, hold, 0.0).accepted
     refused = answer(core, gain, 0.0)
     assert not refused.accepted and refused.reason == str(gain) and 'takes only "mode <' in refused.reason
+
+
+@pytest.mark.parametrize('system, scenario, accepted, refused', [
+    ('heao', 'heao_b_acquisition', 'eea_select x B', 'sss enable'),
+    ('sss', 'sss_a_pass_test', 'sss enable', 'mode mode_1b'),
+    ('aap', 'aap_workshop_pop_test', 'mode cmg_hold', 'sss enable'),
+])
+def test_every_mode_logic_answers_in_the_one_ack_format(tmp_path, system, scenario, accepted, refused):
+    """Scheduled and live commands, accepted, refused and dropped (queue full), of HEAO, SSS and AAP: one line
+    format (ground_commands.ack_line), a refusal also a WARN diagnostic naming the command."""
+    from acds_common.parameters import node_parameters, normalize
+    from acds_common.scenario import load_scenario
+    from ascs_mode_manager.mode_manager_step import ModeManagerStep
+
+    path = tmp_path / 'cmd.yaml'
+    path.write_text(f'extends: {scenario}\nname: cmd\nmodes:\n  ground_commands: ["1: {accepted}", "1: {refused}"]\n')
+    params = node_parameters(load_scenario(str(path)), 20)['ascs_mode_manager']
+    step_class = next(c for c in ModeManagerStep.__subclasses__() if c.__name__.lower().startswith(system))
+    step = step_class(normalize('ascs_mode_manager', params), log=lambda _level, _text: None)
+    inputs = collections.defaultdict(lambda: None)  # no sensor input: each logic holds or reads zero
+    step.receive_command('warp_drive on')
+    out = step.mode_logic(2, 1.0, inputs)
+    assert out['ack'][:2] == [f"t=1.00 accepted (scheduled) '{accepted}': " + out['ack'][0].split(': ', 1)[1],
+                              f"t=1.00 refused (scheduled) '{refused}': " + out['ack'][1].split(': ', 1)[1]]
+    assert out['ack'][2].startswith("t=1.00 refused (live) 'warp_drive on': ")
+    refusals = [st for st in out['diagnostics'] if st.message == 'ground command refused']
+    assert [dict(st.values)['command'] for st in refusals] == [refused, 'warp_drive on']
+    for _ in range(MAX_PENDING + 1):
+        step.receive_command('mode mode_1a')
+    assert step.mode_logic(3, 1.5, inputs)['ack'][0] == (
+        f"refused (live) 'mode mode_1a': dropped, {MAX_PENDING} commands already wait for the next step")

@@ -36,5 +36,5 @@ def test_the_aap_part_publishes_the_mode_every_step_and_answers_scheduled_comman
     out = step.mode_logic(5, 100.0, {})
     assert out['mode'][0].message == 'cmg_hold'
     assert out['events'] == ['t=100.0 cmg_dump->cmg_hold: ground command at t=100.0']
-    assert out['ack'][0].startswith('accepted t=100.0: mode cmg_hold')
-    assert out['ack'][1].startswith("refused t=100.0: sss enable") and out['diagnostics'][0].level == 1
+    assert out['ack'][0] == "t=100.00 accepted (scheduled) 'mode cmg_hold': cmg_dump → cmg_hold at the next step"
+    assert out['ack'][1].startswith("t=100.00 refused (scheduled) 'sss enable': ") and out['diagnostics'][0].level == 1
