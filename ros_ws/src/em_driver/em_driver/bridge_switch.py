@@ -42,7 +42,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from acds_common import kernels
@@ -157,10 +157,32 @@ def band_limits_a(i_c_a: float, driver: DriverParams) -> tuple[float, float]:
     h = max(ε·I_c, band_floor_a); (lo, hi) = (I_c − h, I_c + h). A command below
     the floor (the comparator offset) gives (0, 0): treated as zero.
     """
-    if i_c_a < driver.band_floor_a or i_c_a == 0.0:
+    return comparator_band(i_c_a, driver.epsilon, driver.band_floor_a)
+
+
+@kernels.helper
+def comparator_band(i_c_a: float, epsilon: float, band_floor_a: float) -> tuple[float, float]:
+    """:func:`band_limits_a` on the driver's ε and band floor (the form kernels call)."""
+    if i_c_a < band_floor_a or i_c_a == 0.0:
         return 0.0, 0.0
-    half = max(driver.epsilon * i_c_a, driver.band_floor_a)
+    half = max(epsilon * i_c_a, band_floor_a)
     return i_c_a - half, i_c_a + half
+
+
+@kernels.helper
+def bridge_drive(command_a: float, epsilon: float, band_floor_a: float) -> tuple[float, bool, float, float]:
+    """What a current command (A, signed) asks of the bridge (seed 002 §4.2.5 absolute-value detector and
+    comparator): (polarity ±1, or 0 to keep the last one for a zero command; drive; lo; hi)."""
+    lo, hi = comparator_band(abs(command_a), epsilon, band_floor_a)
+    polarity = 1.0 if command_a > 0.0 else -1.0 if command_a < 0.0 else 0.0
+    return polarity, hi > 0.0, lo, hi
+
+
+@kernels.helper
+def level_drive(level: int) -> tuple[float, bool, float, float]:
+    """What a constant-level command −1/0/+1 asks of the switch (seed 001 SSS; the form of
+    :func:`bridge_drive`): the level's polarity (0 keeps the last), the supply switched straight on."""
+    return float(level), level != 0, math.inf, math.inf
 
 
 def duty_cycle_closed_form(i_c_a: float, coil: CoilParams, driver: DriverParams) -> tuple[float, float]:
@@ -273,6 +295,7 @@ class _Recorder:
         return Waveform(np.array(self.times), np.array(self.currents), np.array(self.states, dtype=bool))
 
 
+@kernels.helper
 def coil_period(s: float, i: float, on: bool, active: bool, lo: float, hi: float, duration_s: float, tau: float,
                 supply: float, i_on: float, i_off: float, recorder: _Recorder | None
                 ) -> tuple[float, bool, float, float, float, float, int]:
@@ -281,8 +304,8 @@ def coil_period(s: float, i: float, on: bool, active: bool, lo: float, hi: float
     inf, inf: the switch held on); τ (s), supply E (V), I_on and I_off (A). Returns the end current and
     comparator state, ∫ i dt (A·s), the on time (s), the energy drawn and returned (J) and the switch count.
 
-    A kernel (:mod:`acds_common.kernels`): compiled in the direct engine; ``recorder`` (a waveform) only on the
-    plain function.
+    A kernel (:mod:`acds_common.kernels`), called through :func:`unit_period`; ``recorder`` (a waveform) only on
+    the plain function.
     """
     band = recorder is None and 0.0 < lo < hi < i_on  # a band the bridge can hold: whole cycles in closed form
     t = 0.0
@@ -359,56 +382,132 @@ def whole_cycles(lo: float, hi: float, t_s: float, duration_s: float, tau: float
     return n, t_on, t_off, area_on, area_off
 
 
+#: A unit's state row (:class:`BridgeSwitchCoil`; a drive assembly keeps its six units' rows in one table):
+#: coil current (A), comparator state and polarity (1.0 on / ±1.0), fault code, driver power (1.0 powered).
+CURRENT, BRIDGE_ON, POLARITY, FAULT, POWERED = range(5)
+#: The fault codes of the state row, indexed by code (0.0: healthy).
+FAULT_CODES = (None, CoilFault.OPEN_WINDING, CoilFault.STUCK_ON_BRIDGE, CoilFault.DEAD_DRIVER)
+_OPEN, _STUCK, _DEAD = (float(FAULT_CODES.index(f)) for f in CoilFault)
+
+
+def state_table(rows: int, compiled: bool) -> Any:
+    """``rows`` unit state rows (healthy, powered, no current, positive polarity): a numpy table for the
+    compiled kernels (which update it in place; a unit holds a view of its row), lists for the plain
+    functions (faster there)."""
+    table = [[0.0, 0.0, 1.0, 0.0, 1.0] for _ in range(rows)]
+    return np.array(table) if compiled else table
+
+
+@kernels.helper
+def unit_period(row, polarity: float, drive: bool, lo: float, hi: float, duration_s: float, tau: float,
+                supply: float, i_on: float, i_off: float, recorder: _Recorder | None
+                ) -> tuple[float, float, float, float, int]:
+    """One unit (driver + winding) over one period (spec §6, seed 002 §4.2.5), its state ``row`` (see
+    :data:`CURRENT`) updated in place: the bridge routed to ``polarity`` (0 keeps the last; a stuck-on pair
+    keeps its own), the drive (:func:`bridge_drive` / :func:`level_drive`) gated by the fault and the driver
+    power, then :func:`coil_period`. Returns ∫ i dt (A·s), the on time (s), the energy drawn and returned (J)
+    and the switch count. An open winding carries no current; the comparator, seeing none, holds the bridge on
+    while driven.
+
+    A kernel (:mod:`acds_common.kernels`): a row is a list (plain) or a numpy row (compiled).
+    """
+    fault = row[FAULT]
+    if polarity != 0.0 and fault != _STUCK:
+        row[POLARITY] = polarity
+    on = row[BRIDGE_ON] != 0.0
+    if fault == _OPEN:
+        row[CURRENT] = 0.0
+        row[BRIDGE_ON] = 1.0 if drive else 0.0
+        if recorder is not None:
+            recorder.segment(0.0, duration_s, 0.0, 0.0, tau, drive)
+        return 0.0, duration_s if drive else 0.0, 0.0, 0.0, 1 if drive != on else 0
+    if fault == _DEAD or row[POWERED] == 0.0:
+        drive = False
+    elif fault == _STUCK:
+        drive, lo, hi = True, math.inf, math.inf
+    i = row[CURRENT]
+    if not (drive or on or i != 0.0) and recorder is None:
+        # Off at zero current and nothing to drive (a standby unit): the diodes block, nothing happens.
+        row[CURRENT] = 0.0
+        return 0.0, 0.0, 0.0, 0.0, 0
+    i, on, integral_i, on_time, drawn, returned, switches = coil_period(
+        row[POLARITY], i, on, drive, lo, hi, duration_s, tau, supply, i_on, i_off, recorder)
+    row[CURRENT] = i
+    row[BRIDGE_ON] = 1.0 if on else 0.0
+    return integral_i, on_time, drawn, returned, switches
+
+
+@kernels.helper
+def period_figures(integral_i: float, on_time: float, drawn: float, duration_s: float, current_a: float,
+                   moment_per_amp_am2: float, sense_gain_v_per_a: float
+                   ) -> tuple[float, float, float, float, float, float]:
+    """A period's report (:class:`PeriodResult`) from :func:`unit_period`'s totals and the end current: average
+    current (A), average and end moment (A·m²), duty, power (W) and e_ft (V)."""
+    avg_current_a = integral_i / duration_s
+    return (avg_current_a, moment_per_amp_am2 * avg_current_a, moment_per_amp_am2 * current_a,
+            on_time / duration_s, drawn / duration_s, sense_gain_v_per_a * current_a)
+
+
 class BridgeSwitchCoil:
     """One winding with its bridge-switch driver, integrated exactly between switching events (spec §6).
 
     coil, driver: parameters; current0_a: initial coil current, A (signed).
     The object keeps the coil current, the bridge state and the last polarity
-    between calls, so consecutive ``run`` calls form one continuous waveform.
+    between calls, so consecutive ``run`` calls form one continuous waveform; they,
+    the fault and the driver power are its state row (:func:`unit_period`), its own
+    or, given ``state``, a row of a drive assembly's table.
     """
 
-    def __init__(self, coil: CoilParams, driver: DriverParams, current0_a: float = 0.0) -> None:
+    def __init__(self, coil: CoilParams, driver: DriverParams, current0_a: float = 0.0, state: Any = None) -> None:
         if not math.isfinite(current0_a):
             raise EmDriverError(f'current0_a must be finite, got {current0_a!r}')
         self.coil = coil
         self.driver = driver
-        self._i_on = _on_current_a(coil, driver)
-        self._i_off = _off_current_a(coil, driver)
-        self._tau = coil.tau_s
-        self._supply_v = driver.supply_v
-        self._period = kernels.compiled(coil_period)
-        #: The (all-zero) result of an idle period, built once.
-        self._idle: PeriodResult | None = None
-        self._current_a = float(current0_a)
-        self._bridge_on = False
-        self._polarity = 1.0 if current0_a >= 0.0 else -1.0
-        self.fault: CoilFault | None = None
-        #: Driver power (the TA powers only the active unit): unpowered, nothing drives
-        #: the winding, even a stuck-on bridge; its current decays through the diodes.
-        self.powered = True
+        #: What :func:`unit_period` reads of the circuit: τ (s), supply E (V), I_on and I_off (A).
+        self.circuit = (coil.tau_s, driver.supply_v, _on_current_a(coil, driver), _off_current_a(coil, driver))
+        self._unit_period = kernels.compiled(unit_period)
+        row = state_table(1, self._unit_period is not unit_period)[0] if state is None else state
+        row[CURRENT] = float(current0_a)
+        row[POLARITY] = 1.0 if current0_a >= 0.0 else -1.0
+        self._row = row
 
     @property
     def current_a(self) -> float:
         """Present coil current, A (signed)."""
-        return self._current_a
+        return float(self._row[CURRENT])
 
     @property
     def bridge_on(self) -> bool:
         """Present comparator state: True while the bridge pair is commanded on."""
-        return self._bridge_on
+        return bool(self._row[BRIDGE_ON])
 
     @property
     def on_current_a(self) -> float:
         """I_on = (E − 2·V_ces)/R, A: the largest current the bridge can hold."""
-        return self._i_on
+        return self.circuit[2]
+
+    @property
+    def fault(self) -> CoilFault | None:
+        """The injected failure, or None."""
+        return FAULT_CODES[int(self._row[FAULT])]
+
+    @property
+    def powered(self) -> bool:
+        """Driver power (the TA powers only the active unit): unpowered, nothing drives
+        the winding, even a stuck-on bridge; its current decays through the diodes."""
+        return bool(self._row[POWERED])
+
+    @powered.setter
+    def powered(self, on: bool) -> None:
+        self._row[POWERED] = 1.0 if on else 0.0
 
     def e_ft_v(self) -> float:
         """Current-sensor telemetry voltage e_ft, V (signed; gain ``current_sense_gain_v_per_a``)."""
-        return self.driver.current_sense_gain_v_per_a * self._current_a
+        return self.driver.current_sense_gain_v_per_a * self.current_a
 
     def set_fault(self, fault: CoilFault | str | None) -> None:
         """Inject a failure ('open_winding', 'stuck_on_bridge', 'dead_driver') or clear it with None."""
-        self.fault = CoilFault.parse(fault, 'coil')
+        self._row[FAULT] = float(FAULT_CODES.index(CoilFault.parse(fault, 'coil')))
 
     def run(self, command_current_a: float, duration_s: float, record: bool = False,
             record_step_s: float | None = None) -> PeriodResult:
@@ -419,16 +518,10 @@ class BridgeSwitchCoil:
         off and the current decays to zero through the diodes. ``record`` keeps the
         waveform with points at most ``record_step_s`` apart (default τ/200).
         """
-        if (self._idle is not None and command_current_a == 0.0 and 0.0 < duration_s < math.inf and self.fault is None
-                and not (record or self.powered or self._bridge_on or self._current_a)):
-            return self._idle  # nothing to drive and nothing flowing (a standby unit): see _simulate
         if not math.isfinite(command_current_a):
             raise EmDriverError(f'command current must be finite, got {command_current_a!r}')
-        magnitude = abs(float(command_current_a))
-        lo, hi = band_limits_a(magnitude, self.driver)
-        if command_current_a != 0.0:
-            self._set_polarity(1.0 if command_current_a > 0.0 else -1.0)
-        return self._simulate(hi > 0.0, lo, hi, duration_s, record, record_step_s)
+        drive = bridge_drive(float(command_current_a), self.driver.epsilon, self.driver.band_floor_a)
+        return self._simulate(drive, duration_s, record, record_step_s)
 
     def run_constant_level(self, level: int, duration_s: float, record: bool = False,
                            record_step_s: float | None = None) -> PeriodResult:
@@ -440,70 +533,26 @@ class BridgeSwitchCoil:
         """
         if level not in (-1, 0, 1):
             raise EmDriverError(f'constant-level command must be -1, 0 or +1, got {level!r}')
-        if level != 0:
-            self._set_polarity(float(level))
-        return self._simulate(level != 0, math.inf, math.inf, duration_s, record, record_step_s)
+        return self._simulate(level_drive(int(level)), duration_s, record, record_step_s)
 
-    def _set_polarity(self, sign: float) -> None:
-        """Route the drive to the commanded polarity (a stuck-on pair keeps its own)."""
-        if self.fault is not CoilFault.STUCK_ON_BRIDGE:
-            self._polarity = sign
-
-    def _simulate(self, active: bool, lo: float, hi: float, duration_s: float, record: bool,
+    def _simulate(self, drive: tuple[float, bool, float, float], duration_s: float, record: bool,
                   record_step_s: float | None) -> PeriodResult:
-        """Event-driven exact integration over one period (see the module docstring)."""
+        """Event-driven exact integration over one period (see the module docstring and :func:`unit_period`)."""
         if not (math.isfinite(duration_s) and duration_s > 0.0):
             raise EmDriverError(f'duration_s must be a finite positive time, got {duration_s!r}')
         recorder = None
         if record:
-            step = self._tau / 200.0 if record_step_s is None else record_step_s
+            step = self.circuit[0] / 200.0 if record_step_s is None else record_step_s
             if not (math.isfinite(step) and step > 0.0):
                 raise EmDriverError(f'record_step_s must be a finite positive time, got {record_step_s!r}')
             recorder = _Recorder(step)
-
-        fault = self.fault
-        if fault is CoilFault.OPEN_WINDING:
-            return self._open_winding_result(active, duration_s, recorder)
-        if fault is CoilFault.DEAD_DRIVER or not self.powered:
-            active = False
-        elif fault is CoilFault.STUCK_ON_BRIDGE:
-            active, lo, hi = True, math.inf, math.inf
-
-        i = self._current_a
-        on = self._bridge_on
-        if not (active or on or i) and recorder is None:
-            # Off at zero current and nothing to drive (a standby unit): the diodes block, nothing happens.
-            self._current_a = 0.0
-            if self._idle is None:
-                self._idle = self._result(0.0, 0.0, 0, 0.0, 0.0, duration_s, None)  # all zeros, any duration
-            return self._idle
-        period = self._period if recorder is None else coil_period  # the recorder: the plain function
-        i, on, integral_i, on_time, drawn, returned, switches = period(
-            self._polarity, i, on, active, lo, hi, duration_s, self._tau, self._supply_v, self._i_on, self._i_off,
-            recorder)
-        self._current_a = i
-        self._bridge_on = on
-        waveform = recorder.finish(duration_s, i, on) if recorder is not None else None
-        return self._result(integral_i / duration_s, on_time / duration_s, switches, drawn, returned,
-                            duration_s, waveform)
-
-    def _open_winding_result(self, active: bool, duration_s: float, recorder: _Recorder | None) -> PeriodResult:
-        """Open winding: no current flows; the comparator sees zero current and holds the bridge on."""
-        switches = int(active != self._bridge_on)
-        self._current_a = 0.0
-        self._bridge_on = active
-        waveform = None
-        if recorder is not None:
-            recorder.segment(0.0, duration_s, 0.0, 0.0, self.coil.tau_s, active)
-            waveform = recorder.finish(duration_s, 0.0, active)
-        return self._result(0.0, float(active), switches, 0.0, 0.0, duration_s, waveform)
-
-    def _result(self, avg_current_a: float, duty: float, switches: int, drawn_j: float, returned_j: float,
-                duration_s: float, waveform: Waveform | None) -> PeriodResult:
-        k = self.coil.moment_per_amp_am2
-        i = self._current_a
-        # PeriodResult's fields in order (avg/end current, avg/end moment, duty, switches, drawn, returned,
-        # from bus, power, e_ft, waveform), positional: this runs for every unit every step.
-        return PeriodResult(avg_current_a, i, k * avg_current_a, k * i, duty, switches, drawn_j, returned_j,
-                            drawn_j - returned_j, drawn_j / duration_s, self.driver.current_sense_gain_v_per_a * i,
-                            waveform)
+        period = self._unit_period if recorder is None else unit_period  # the recorder: the plain function
+        integral_i, on_time, drawn, returned, switches = period(
+            self._row, *drive, duration_s, *self.circuit, recorder)
+        i = self.current_a
+        waveform = recorder.finish(duration_s, i, self.bridge_on) if recorder is not None else None
+        avg_current_a, avg_moment, end_moment, duty, power, e_ft = period_figures(
+            integral_i, on_time, drawn, duration_s, i, self.coil.moment_per_amp_am2,
+            self.driver.current_sense_gain_v_per_a)
+        return PeriodResult(avg_current_a, i, avg_moment, end_moment, duty, switches, drawn, returned,
+                            drawn - returned, power, e_ft, waveform)

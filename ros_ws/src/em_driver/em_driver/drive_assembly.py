@@ -36,15 +36,22 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from acds_common import kernels
 from acds_common.commands import UNITS  # redundant unit names per axis (driver + winding)
 
 from em_driver.bridge_switch import (
+    CURRENT,
+    POWERED,
     BridgeSwitchCoil,
     CoilFault,
     CoilParams,
     DriverParams,
     EmDriverError,
-    PeriodResult,
+    bridge_drive,
+    level_drive,
+    period_figures,
+    state_table,
+    unit_period,
 )
 
 __all__ = ['DRIVE_TYPES', 'UNITS', 'AxisConfig', 'AssemblyResult', 'DriveAssembly']
@@ -197,46 +204,86 @@ class AssemblyResult:
         return np.asarray(self._values['alarms'])
 
 
-class _Axis:
-    """One axis: two units (driver + winding) and the mismatch monitor."""
+#: An axis's drive type as the kernels read it (its index in DRIVE_TYPES).
+_BRIDGE_SWITCH, _CONSTANT_LEVEL, _NO_COIL = (float(DRIVE_TYPES.index(t)) for t in DRIVE_TYPES)
 
-    def __init__(self, config: AxisConfig) -> None:
+
+@kernels.helper
+def unit_share(row, powered: bool, drive: tuple[float, bool, float, float], idle: tuple[float, bool, float, float],
+               duration_s: float, p) -> tuple[float, float, float, float, float, float, int]:
+    """One unit of an axis over the period (:func:`~em_driver.bridge_switch.unit_period`): powered, it gets the
+    axis's ``drive``, unpowered (the standby unit) ``idle``; returns its average and end moment (A·m²), end
+    current (A), e_ft (V), duty, power (W) and switch count. ``p``: the axis's parameter row (:func:`axis_period`)."""
+    row[POWERED] = 1.0 if powered else 0.0
+    polarity, on, lo, hi = drive if powered else idle
+    integral_i, on_time, drawn, _, switches = unit_period(row, polarity, on, lo, hi, duration_s, p[1], p[2], p[3],
+                                                          p[4], None)
+    current_a = row[CURRENT]
+    _, avg_moment, end_moment, duty, power, e_ft = period_figures(integral_i, on_time, drawn, duration_s,
+                                                                  current_a, p[7], p[8])
+    return avg_moment, end_moment, current_a, e_ft, duty, power, switches
+
+
+@kernels.helper
+def axis_period(state, k: int, p, command: float, active: int, duration_s: float
+                ) -> tuple[float, float, float, float, float, float, float, int]:
+    """Axis ``k`` over one period (spec §6; seed 002 §4.2.5: the TA powers the ``active`` unit, 0 = A, 1 = B):
+    the held moment command (A·m²) saturated at the coil's maximum and turned into a current command
+    (bridge switch), or its sign switching the supply (constant level). Parameter row ``p``: drive type, τ, E,
+    I_on, I_off, ε, band floor, moment per amp, sense gain, max moment. Returns the axis's average and end
+    dipole (A·m², both windings), and the commanded current (A) and the active unit's end current (A), e_ft
+    (V), duty, both units' power (W) and the active unit's switch count, in :class:`AssemblyResult` order."""
+    drive_type = p[0]
+    if drive_type == _NO_COIL:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    if drive_type == _CONSTANT_LEVEL:
+        level = 1 if command > 0.0 else -1 if command < 0.0 else 0
+        command_a = level * p[3]
+        drive, idle = level_drive(level), level_drive(0)
+    else:
+        limit = p[9]
+        command_a = (-limit if command < -limit else limit if command > limit else command) / p[7]
+        drive, idle = bridge_drive(command_a, p[5], p[6]), bridge_drive(0.0, p[5], p[6])
+    a = unit_share(state[2 * k], active == 0, drive, idle, duration_s, p)
+    b = unit_share(state[2 * k + 1], active == 1, drive, idle, duration_s, p)
+    on = a if active == 0 else b
+    return a[0] + b[0], a[1] + b[1], on[2], command_a, on[3], on[4], a[5] + b[5], on[6]
+
+
+def drive_period(state, params, commands: tuple[float, float, float], actives: tuple[int, int, int],
+                 duration_s: float) -> tuple:
+    """The three axes over one period (:func:`axis_period`): ``state`` the six units' rows (axis k's units A and
+    B at 2k, 2k + 1), ``params`` the axes' parameter rows, the held moment commands (A·m²) and active units.
+
+    A kernel (:mod:`acds_common.kernels`): one call a step drives the assembly.
+    """
+    return (axis_period(state, 0, params[0], commands[0], actives[0], duration_s),
+            axis_period(state, 1, params[1], commands[1], actives[1], duration_s),
+            axis_period(state, 2, params[2], commands[2], actives[2], duration_s))
+
+
+class _Axis:
+    """One axis: two units (driver + winding; their state ``rows``) and the mismatch monitor."""
+
+    def __init__(self, config: AxisConfig, rows: Sequence[Any]) -> None:
         self.config = config
-        self.units = {name: BridgeSwitchCoil(config.coil, config.driver) for name in UNITS}
+        self.units = {name: BridgeSwitchCoil(config.coil, config.driver, state=row) for name, row in zip(UNITS, rows,
+                                                                                                        strict=True)}
         self.active = UNITS[0]
         self.command = 0.0
         self.mismatch_time_s = 0.0
         self.alarm = False
-        on_current_a = self.units[UNITS[0]].on_current_a  # both units: the same coil and driver
+        unit = self.units[UNITS[0]]  # both units: the same coil and driver
+        on_current_a = unit.on_current_a
         #: Mismatch monitor: the current the bridge can hold and the axis full-scale current, A.
         self.on_current_a = on_current_a
         self.full_scale_a = on_current_a if config.drive_type == 'constant_level' else config.coil.max_current_a
         self.sense_gain_v_per_a = config.driver.current_sense_gain_v_per_a
-        # What every step reads, looked up once.
-        self.constant_level = config.drive_type == 'constant_level'
-        self.max_moment_am2 = config.coil.max_moment_am2
-        self.moment_per_amp_am2 = config.coil.moment_per_amp_am2
-
-    def level(self) -> int:
-        """Sign of the held command: −1, 0 or +1 (the constant-level drive's level)."""
-        return (self.command > 0.0) - (self.command < 0.0)
-
-    def current_command_a(self) -> float:
-        """Current command for the held moment / level command, A (signed)."""
-        if self.constant_level:
-            return self.level() * self.units[self.active].on_current_a
-        limit, command = self.max_moment_am2, self.command
-        # min(max(command, −limit), limit), without the two calls
-        return (-limit if command < -limit else limit if command > limit else command) / self.moment_per_amp_am2
-
-    def run_unit(self, name: str, dt_s: float, command_a: float) -> PeriodResult:
-        """Run one unit for the period; ``command_a`` is :meth:`current_command_a` (the active one's)."""
-        unit = self.units[name]
-        powered = name == self.active
-        unit.powered = powered
-        if self.constant_level:
-            return unit.run_constant_level(self.level() if powered else 0, dt_s)
-        return unit.run(command_a if powered else 0.0, dt_s)
+        self.coil = config.drive_type != 'none'
+        #: The axis's parameter row (:func:`axis_period`).
+        self.params = (float(DRIVE_TYPES.index(config.drive_type)), *unit.circuit, config.driver.epsilon,
+                       config.driver.band_floor_a, config.coil.moment_per_amp_am2, self.sense_gain_v_per_a,
+                       config.coil.max_moment_am2)
 
 
 class DriveAssembly:
@@ -259,7 +306,13 @@ class DriveAssembly:
             raise EmDriverError(f'mismatch_tolerance_frac must be > 0, got {mismatch_tolerance_frac!r}')
         if not (math.isfinite(mismatch_settle_s) and mismatch_settle_s >= 0.0):
             raise EmDriverError(f'mismatch_settle_s must be >= 0 s, got {mismatch_settle_s!r}')
-        self._axes = [_Axis(c) for c in configs]
+        self._period = kernels.compiled(drive_period)
+        compiled = self._period is not drive_period
+        #: The six units' state rows (axis k's A and B at 2k, 2k + 1) and the axes' parameter rows.
+        self._state = state_table(6, compiled)
+        self._axes = [_Axis(c, self._state[2 * k:2 * k + 2]) for k, c in enumerate(configs)]
+        params = [ax.params for ax in self._axes]
+        self._params = np.array(params) if compiled else params
         self.auto_switch_to_standby = auto_switch_to_standby
         self.mismatch_tolerance_frac = mismatch_tolerance_frac
         self.mismatch_settle_s = mismatch_settle_s
@@ -306,38 +359,35 @@ class DriveAssembly:
             raise EmDriverError(f'dt_s must be a finite positive time, got {dt_s!r}')
         diagnostics: list[str] = []
         events, self._pending_events = self._pending_events, []
-        rows: list[tuple[float, float, float, float, float, float, float, int]] = []
-        unit_a, unit_b = UNITS
-        for k, ax in enumerate(self._axes):
-            if ax.config.drive_type == 'none':  # no coil on this axis: nothing to drive, nothing to monitor
-                rows.append((0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0))
-                continue
+        x, y, z = axes = self._axes
+        for k, ax in enumerate(axes):
             c = command[k]
+            if not ax.coil:  # no coil on this axis: nothing to drive, nothing to monitor
+                continue
             if math.isfinite(c):
                 ax.command = c
             else:
                 diagnostics.append(f'axis {k}: rejected non-finite moment command {c!r}; '
                                    f'holding last valid command {ax.command:g}')
-            command_a = ax.current_command_a()
-            a, b = ax.run_unit(unit_a, dt_s, command_a), ax.run_unit(unit_b, dt_s, command_a)
-            active = a if ax.active == unit_a else b
-            rows.append((a.avg_moment_am2 + b.avg_moment_am2, a.end_moment_am2 + b.end_moment_am2,
-                         active.end_current_a, command_a, active.e_ft_v, active.duty,
-                         a.power_w + b.power_w, active.switch_count))
-            monitored = self._monitor(k, ax, active, command_a, dt_s)
-            if monitored:
-                events.extend(monitored)
+        unit_a = UNITS[0]
+        rows = self._period(self._state, self._params, (x.command, y.command, z.command),
+                            (int(x.active != unit_a), int(y.active != unit_a), int(z.active != unit_a)), dt_s)
+        for k, ax in enumerate(axes):
+            if ax.coil:
+                row = rows[k]
+                monitored = self._monitor(k, ax, row[4], row[3], dt_s)
+                if monitored:
+                    events.extend(monitored)
         avg, end, cur, cmd, eft, duty, power, switches = zip(*rows, strict=True)
-        x, y, z = self._axes
         return AssemblyResult(
             avg_dipole_am2=avg, end_dipole_am2=end, coil_current_a=cur, commanded_current_a=cmd, e_ft_v=eft, duty=duty,
             switch_count=switches, power_w=power, alarms=(x.alarm, y.alarm, z.alarm),
             active_units=(x.active, y.active, z.active), events=tuple(events), diagnostics=tuple(diagnostics))
 
-    def _monitor(self, k: int, ax: _Axis, active: PeriodResult, command_a: float, dt_s: float) -> list[str]:
+    def _monitor(self, k: int, ax: _Axis, e_ft_v: float, command_a: float, dt_s: float) -> list[str]:
         """Mismatch alarm: e_ft against the expected current (``command_a`` limited to what the supply
         reaches); optional auto switch to standby."""
-        measured_a = active.e_ft_v / ax.sense_gain_v_per_a
+        measured_a = e_ft_v / ax.sense_gain_v_per_a
         on_a = ax.on_current_a
         expected_a = -on_a if command_a < -on_a else on_a if command_a > on_a else command_a  # min(max(…))
         if abs(measured_a - expected_a) > self.mismatch_tolerance_frac * ax.full_scale_a:
