@@ -3,6 +3,7 @@ pytest plugin acds_runtime installs, entry point pytest11)."""
 
 import hashlib
 import os
+import struct
 from pathlib import Path
 
 import pytest
@@ -26,3 +27,23 @@ def folder_state():
                 out[str(entry.relative_to(folder))] = 'folder'
         return out
     return state
+
+
+@pytest.fixture(scope='module')
+def compile_kernels():
+    """:func:`acds_common.kernels.compiled` with compilation enabled in this process (the direct engine's kernels)."""
+    from acds_common import kernels
+
+    kernels.enable()
+    return kernels.compiled
+
+
+@pytest.fixture
+def ieee_bits():
+    """``ieee_bits(value)``: every float of a nested result as its IEEE bytes (so −0.0 ≠ 0.0 and a NaN is itself),
+    other leaves as they are: what the compiled-against-plain kernel tests compare."""
+    def bits(value: object) -> list:
+        if isinstance(value, tuple):
+            return [b for v in value for b in bits(v)]
+        return [struct.pack('<d', value) if isinstance(value, float) else value]
+    return bits

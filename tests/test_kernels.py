@@ -11,25 +11,9 @@ from __future__ import annotations
 
 import math
 import random
-import struct
 
-import pytest
-from acds_common import kernels
 from dynamics.rigid_body_model import attitude_rk4
 from em_driver.bridge_switch import CoilParams, DriverParams, band_limits_a, coil_period
-
-
-def _bits(value: object) -> list:
-    """Every float of a nested result as its IEEE bytes (so −0.0 ≠ 0.0 and a NaN is itself); other leaves as is."""
-    if isinstance(value, tuple):
-        return [b for v in value for b in _bits(v)]
-    return [struct.pack('<d', value) if isinstance(value, float) else value]
-
-
-@pytest.fixture(scope='module')
-def compile_kernels():
-    kernels.enable()
-    return kernels.compiled
 
 
 def test_compiled_forms_are_compiled(compile_kernels):
@@ -58,15 +42,15 @@ def _attitude_case(rng: random.Random) -> tuple:
             rng.random() < 0.7, rng.random() < 0.7)
 
 
-def test_attitude_rk4_compiled_gives_the_same_bits(compile_kernels):
+def test_attitude_rk4_compiled_gives_the_same_bits(compile_kernels, ieee_bits):
     fast = compile_kernels(attitude_rk4)
     rng = random.Random(24)
     for case in range(3000):
         args = _attitude_case(rng)
-        assert _bits(fast(*args)) == _bits(attitude_rk4(*args)), f'case {case}: {args}'
+        assert ieee_bits(fast(*args)) == ieee_bits(attitude_rk4(*args)), f'case {case}: {args}'
 
 
-def test_coil_period_compiled_gives_the_same_bits(compile_kernels):
+def test_coil_period_compiled_gives_the_same_bits(compile_kernels, ieee_bits):
     """Random commands held, switched, reversed, saturated and dropped, each period continuing the last one's end
     state (as a drive does), with the Table 4-3 winding and driver and with perturbed ones."""
     fast = compile_kernels(coil_period)
@@ -95,5 +79,5 @@ def test_coil_period_compiled_gives_the_same_bits(compile_kernels):
             duration = rng.choice([0.5, 0.5, 2.0, rng.uniform(1e-3, 5.0)])
             args = (s, i, on, active, lo, hi, duration, tau, driver.supply_v, i_on, i_off, None)
             got, want = fast(*args), coil_period(*args)
-            assert _bits(got) == _bits(want), f'variant {variant}: {args}'
+            assert ieee_bits(got) == ieee_bits(want), f'variant {variant}: {args}'
             i, on = want[0], want[1]

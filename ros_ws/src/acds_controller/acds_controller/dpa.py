@@ -263,12 +263,15 @@ class Dpa:
         """
         if mode not in HEAO_MODES:
             raise ControllerError(f'unknown mode {mode!r}; choose one of {HEAO_MODES}')
+        return self.step_xyz(mode, as_xyz(b_sensed_t, 'b_sensed_t'), as_xyz(omega_rad_s, 'omega_rad_s'),
+                             as_xyz(sun_body_unit, 'sun_body_unit'), as_xyz(wheel_h_nms, 'wheel_h_nms'),
+                             q_body_to_eci, check_gain(dt_s, 'dt_s (s)', 1e-6, 1e4))
+
+    def step_xyz(self, mode: str, b_sensed: Vec3, omega: Vec3, sun: Vec3, h_wheel: Vec3,
+                 q_body_to_eci: Sequence[float] | None, dt: float) -> DpaOutput:
+        """:meth:`step` without its checks (the stepper's per-step path, spec §7): a mode of
+        :data:`HEAO_MODES`, finite float triples, Δt within 1e-6…1e4 s (the attitude reference is still checked)."""
         c = self._config
-        b_sensed = as_xyz(b_sensed_t, 'b_sensed_t')
-        omega = as_xyz(omega_rad_s, 'omega_rad_s')
-        sun = as_xyz(sun_body_unit, 'sun_body_unit')
-        h_wheel = as_xyz(wheel_h_nms, 'wheel_h_nms')
-        dt = check_gain(dt_s, 'dt_s (s)', 1e-6, 1e4)
         b = (compensate_coupling_xyz(b_sensed, self._delta, self._m_prev_am2)
              if c.coupling_compensation else b_sensed)
 

@@ -9,10 +9,11 @@ cancelled when it is common to both (and shows in telemetry when it is not).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
+from math import floor
 
 import numpy as np
+from acds_common import kernels
 from acds_common.units import GAUSS_T, tesla_to_gauss
 from acds_common.vec3 import Vec3
 
@@ -26,6 +27,30 @@ SCALE_V_PER_GAUSS = 2.5
 MOMENT_PER_AMP_AM2_PER_A = 2062.0 / 0.727
 
 _AXES = ('x', 'y', 'z')
+
+
+@kernels.helper
+def count_v(v: float, lsb_v: float, top_count: float) -> float:
+    """One voltage quantised to the nearest ADC count (clipped to 0…``top_count``), as the count's voltage, V.
+
+    The count is ⌊v/LSB + ½⌋; the clip is decided on v/LSB + ½ itself (below 0, or at or above top + 1, is the
+    same as the floored count below 0 or above top), so a voltage beyond any integer's range still saturates.
+    ``top_count`` is a float (2ⁿ − 1 exactly), so every comparison is float with float.
+    """
+    x = v / lsb_v + 0.5
+    return (0.0 if x < 0.0 else top_count if x >= top_count + 1.0 else floor(x)) * lsb_v
+
+
+def field_xyz(volts: Sequence[float], bias_volts: Sequence[float], lsb_v: float, top_count: float,
+              scale_v_per_gauss: float) -> Vec3:
+    """Sensed field, T: the A/D conversion of every axis's field and bias voltage and B = (V_field − V_bias)/scale
+    (seed 002 §4.2.7, Table 4-5). A kernel (:mod:`acds_common.kernels`): compiled in the direct engine."""
+    return ((count_v(volts[0], lsb_v, top_count) - count_v(bias_volts[0], lsb_v, top_count)) / scale_v_per_gauss
+            * GAUSS_T,
+            (count_v(volts[1], lsb_v, top_count) - count_v(bias_volts[1], lsb_v, top_count)) / scale_v_per_gauss
+            * GAUSS_T,
+            (count_v(volts[2], lsb_v, top_count) - count_v(bias_volts[2], lsb_v, top_count)) / scale_v_per_gauss
+            * GAUSS_T)
 
 
 class TransferAssembly:
@@ -59,23 +84,17 @@ class TransferAssembly:
         self.moment_per_amp_am2_per_a = check_gain(
             moment_per_amp_am2_per_a, 'moment_per_amp_am2_per_a', 1e-6, 1e9)
         self.lsb_v = self.full_scale_v / (1 << adc_bits)
-        self._top_count = (1 << adc_bits) - 1
+        self._top_count = float((1 << adc_bits) - 1)
 
-    def _count_v(self, v: float) -> float:
-        """One voltage quantised to the nearest ADC count (clipped to 0…2ⁿ−1), as the count's voltage."""
-        count = math.floor(v / self.lsb_v + 0.5)
-        return (0 if count < 0 else self._top_count if count > self._top_count else count) * self.lsb_v
+        self._field = kernels.compiled(field_xyz)
 
     def digitise(self, volts: np.ndarray) -> np.ndarray:
         """Quantise volts to the nearest ADC count (clipped to 0…2ⁿ−1) and return the count's voltage, V."""
-        return np.array([self._count_v(v) for v in as_xyz(volts, 'volts')])
+        return np.array([count_v(v, self.lsb_v, self._top_count) for v in as_xyz(volts, 'volts')])
 
     def sense_xyz(self, volts: Sequence[float], bias_volts: Sequence[float]) -> Vec3:
         """:meth:`sense` on finite float triples (the stepper's per-step path), T."""
-        count, scale = self._count_v, self.scale_v_per_gauss
-        return ((count(volts[0]) - count(bias_volts[0])) / scale * GAUSS_T,
-                (count(volts[1]) - count(bias_volts[1])) / scale * GAUSS_T,
-                (count(volts[2]) - count(bias_volts[2])) / scale * GAUSS_T)
+        return self._field(volts, bias_volts, self.lsb_v, self._top_count, self.scale_v_per_gauss)
 
     def sense(self, volts: np.ndarray, bias_volts: np.ndarray) -> np.ndarray:
         """Sensed field in tesla (body axes) from per-axis field volts and bias reference volts (Table 4-5)."""
