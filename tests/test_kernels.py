@@ -36,7 +36,7 @@ def _attitude_case(rng: random.Random) -> tuple:
     inertia = tuple(tuple(inertia[min(i, j)][max(i, j)] for j in range(3)) for i in range(3))
     inverse = tuple(tuple(u(-1e-3, 1e-3) for _ in range(3)) for _ in range(3))
     q = tuple(u(-1, 1) for _ in range(4))
-    return (q, tuple(u(-0.05, 0.05) for _ in range(3)), n, 0.5 / n, tuple(env), inertia, inverse,
+    return (q, tuple(u(-0.05, 0.05) for _ in range(3)), n, u(0.0, 1e5), 0.5, tuple(env), None, None, inertia, inverse,
             tuple(u(-2000, 2000) for _ in range(3)), tuple(u(-20, 20) for _ in range(3)),
             tuple(u(-0.2, 0.2) for _ in range(3)), tuple(u(-1e-3, 1e-3) for _ in range(3)),
             rng.random() < 0.7, rng.random() < 0.7)

@@ -22,7 +22,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from acds_common import units, validation
+from acds_common import kernels, units, validation
 from acds_common.vec3 import Vec3  # the fast paths take and return float triples (RK4 stage times)
 
 #: Mean obliquity of the ecliptic, rad (spec §3).
@@ -144,6 +144,22 @@ def solve_kepler(mean_anomaly_rad: float, eccentricity: float) -> float:
     return e_anom + (mean_anomaly_rad - m)
 
 
+@kernels.helper
+def circular_in_plane(a_m: float, n_rad_s: float, t_s: float) -> tuple[float, float, float, float]:
+    """(x, y, ẋ, ẏ) in the node-line frame of a circular orbit of radius ``a_m`` and mean motion ``n_rad_s`` at
+    ``t_s`` (spec §3 "Orbits"): a plain-float helper, the same for :class:`Orbit` and compiled kernels."""
+    u = n_rad_s * t_s
+    cu, su = math.cos(u), math.sin(u)
+    return a_m * cu, a_m * su, -a_m * n_rad_s * su, a_m * n_rad_s * cu
+
+
+@kernels.helper
+def in_plane_to_eci(x: float, y: float, p_axis: Vec3, q_axis: Vec3) -> Vec3:
+    """The in-plane vector x·P + y·Q in ECI (P, Q: the orbit plane's axes in ECI), on floats."""
+    (p0, p1, p2), (q0, q1, q2) = p_axis, q_axis
+    return x * p0 + y * q0, x * p1 + y * q1, x * p2 + y * q2
+
+
 class Orbit:
     """Two-body Keplerian orbit about a point-mass Earth (spec §3 "Orbits")."""
 
@@ -175,9 +191,7 @@ class Orbit:
         """(x_p, y_p, ẋ_p, ẏ_p): position (m) and velocity (m/s) in the orbit plane at ``t_s``."""
         a, n = self.semi_major_axis_m, self.mean_motion_rad_s
         if self._circular:
-            u = n * t_s
-            cu, su = math.cos(u), math.sin(u)
-            return a * cu, a * su, -a * n * su, a * n * cu
+            return circular_in_plane(a, n, t_s)
         e, b = self.eccentricity, self._semi_minor_axis_m
         e_anom = solve_kepler(self.cfg.mean_anomaly0_rad + n * t_s, e)
         ce, se = math.cos(e_anom), math.sin(e_anom)
@@ -187,15 +201,12 @@ class Orbit:
     def state_xyz(self, t_s: float) -> tuple[Vec3, Vec3]:
         """Fast path of :meth:`position_velocity_eci`: (position m, velocity m/s) as float triples, no checks."""
         x, y, vx, vy = self._in_plane(t_s)
-        (p0, p1, p2), (q0, q1, q2) = self._p_axis, self._q_axis
-        return ((x * p0 + y * q0, x * p1 + y * q1, x * p2 + y * q2),
-                (vx * p0 + vy * q0, vx * p1 + vy * q1, vx * p2 + vy * q2))
+        return in_plane_to_eci(x, y, self._p_axis, self._q_axis), in_plane_to_eci(vx, vy, self._p_axis, self._q_axis)
 
     def position_xyz(self, t_s: float) -> Vec3:
         """Fast path: ECI position (m) at ``t_s`` as a float triple, no checks."""
         x, y, _vx, _vy = self._in_plane(t_s)
-        (p0, p1, p2), (q0, q1, q2) = self._p_axis, self._q_axis
-        return x * p0 + y * q0, x * p1 + y * q1, x * p2 + y * q2
+        return in_plane_to_eci(x, y, self._p_axis, self._q_axis)
 
     def node_time_s(self) -> float:
         """A time (s) at which the orbit passes its ascending node: the argument of latitude (for an
@@ -238,6 +249,35 @@ class EarthFieldConfig:
             raise EnvironmentModelError(f"EarthFieldConfig.tilt_rad must be in [0, pi/2], got {self.tilt_rad}")
 
 
+@kernels.helper
+def greenwich_angle_rad(greenwich_angle0_rad: float, t_s: float) -> float:
+    """Earth rotation angle (vernal equinox to Greenwich), rad, at ``t_s`` from its value at t = 0."""
+    return greenwich_angle0_rad + units.EARTH_RATE_RAD_S * t_s
+
+
+@kernels.helper
+def dipole_axis_xyz(pole_ecef: Vec3, greenwich_angle0_rad: float, t_s: float) -> Vec3:
+    """The pole's ECEF unit vector rotated about ECI z by the Earth rotation angle at ``t_s`` (ECI), on floats."""
+    g = greenwich_angle_rad(greenwich_angle0_rad, t_s)
+    c, s = math.cos(g), math.sin(g)
+    px, py, pz = pole_ecef
+    return c * px - s * py, s * px + c * py, pz
+
+
+@kernels.helper
+def dipole_b_eci_xyz(pole_ecef: Vec3, k_tm3: float, greenwich_angle0_rad: float, r_eci_m: Sequence[float],
+                     t_s: float) -> Vec3:
+    """The tilted dipole's field (T, ECI) at ``r_eci_m`` (m, finite, off-centre) and ``t_s``, on floats: pole
+    ``pole_ecef``, k = μ0/(4π)·|m| (T·m³). With m̂ = −p̂: B = k/|r|³·(3(m̂·r)/|r|²·r − m̂), the dipole formula of
+    :class:`TiltedDipoleField` (spec §3), the same for the class and compiled kernels."""
+    px, py, pz = dipole_axis_xyz(pole_ecef, greenwich_angle0_rad, t_s)
+    rx, ry, rz = r_eci_m
+    r2 = rx * rx + ry * ry + rz * rz
+    k = k_tm3 / (r2 * math.sqrt(r2))
+    f = -3.0 * (px * rx + py * ry + pz * rz) / r2
+    return k * (f * rx + px), k * (f * ry + py), k * (f * rz + pz)
+
+
 class TiltedDipoleField:
     """Centred tilted dipole rotating with the Earth (spec §3; seed 002 §4.3).
 
@@ -254,30 +294,15 @@ class TiltedDipoleField:
 
     def greenwich_angle_rad(self, t_s: float) -> float:
         """Earth rotation angle (vernal equinox to Greenwich), rad, at ``t_s``."""
-        return self.cfg.greenwich_angle0_rad + units.EARTH_RATE_RAD_S * t_s
-
-    def _axis_xyz(self, t_s: float) -> Vec3:
-        """The pole's unit vector rotated about ECI z by the Earth rotation angle at ``t_s``."""
-        g = self.greenwich_angle_rad(t_s)
-        c, s = math.cos(g), math.sin(g)
-        px, py, pz = self._pole_ecef
-        return c * px - s * py, s * px + c * py, pz
+        return greenwich_angle_rad(self.cfg.greenwich_angle0_rad, t_s)
 
     def dipole_axis_eci(self, t_s: float) -> np.ndarray:
         """Unit vector to the northern geomagnetic pole in ECI at ``t_s`` (the moment is antiparallel)."""
-        return np.array(self._axis_xyz(t_s))
+        return np.array(dipole_axis_xyz(self._pole_ecef, self.cfg.greenwich_angle0_rad, t_s))
 
     def b_eci_xyz(self, r_eci_m: Sequence[float], t_s: float) -> Vec3:
-        """Fast path of :meth:`b_eci` on float triples (no checks: the point must be finite and off-centre).
-
-        With m̂ = −p̂: B = k/|r|³·(3(m̂·r)/|r|²·r − m̂), the same dipole formula.
-        """
-        px, py, pz = self._axis_xyz(t_s)
-        rx, ry, rz = r_eci_m
-        r2 = rx * rx + ry * ry + rz * rz
-        k = self._k / (r2 * math.sqrt(r2))
-        f = -3.0 * (px * rx + py * ry + pz * rz) / r2
-        return k * (f * rx + px), k * (f * ry + py), k * (f * rz + pz)
+        """Fast path of :meth:`b_eci` on float triples (no checks: the point must be finite and off-centre)."""
+        return dipole_b_eci_xyz(self._pole_ecef, self._k, self.cfg.greenwich_angle0_rad, r_eci_m, t_s)
 
     def b_eci(self, r_eci_m: np.ndarray, t_s: float) -> np.ndarray:
         """Field (T) in ECI at position ``r_eci_m`` (m) and time ``t_s`` (s)."""
@@ -286,6 +311,32 @@ class TiltedDipoleField:
         if not rn > 0.0 or not math.isfinite(rn):
             raise EnvironmentModelError(f"field point must be finite and away from the Earth's centre, got {r}")
         return np.array(self.b_eci_xyz([float(c) for c in r], t_s))
+
+
+#: A circular orbit and the tilted-dipole field as plain floats (:func:`circular_dipole_parameters`): orbit radius
+#: (m), mean motion (rad/s), the plane's axes P and Q in ECI, the pole in ECEF, k = μ0/(4π)·|m| (T·m³), the Earth
+#: rotation angle at t = 0 (rad).
+CircularDipole = tuple[float, float, Vec3, Vec3, Vec3, float, float]
+
+
+def circular_dipole_parameters(orbit: Orbit, field: object) -> CircularDipole | None:
+    """The orbit and field as the floats :func:`circular_dipole_environment` takes, so that a compiled kernel
+    evaluates them itself; None unless the orbit is circular and the field the tilted dipole."""
+    if not (orbit._circular and isinstance(field, TiltedDipoleField)):
+        return None
+    return (orbit.semi_major_axis_m, orbit.mean_motion_rad_s, orbit._p_axis, orbit._q_axis, field._pole_ecef,
+            field._k, field.cfg.greenwich_angle0_rad)
+
+
+@kernels.helper
+def circular_dipole_environment(params: CircularDipole, t_s: float, with_field: bool) -> tuple[Vec3, Vec3, Vec3]:
+    """(r_eci m, v_eci m/s, B_eci T) at ``t_s`` of the circular orbit and tilted dipole ``params``, the same
+    operations as :meth:`Orbit.state_xyz` and :meth:`TiltedDipoleField.b_eci_xyz` (B zero unless ``with_field``)."""
+    a, n, p_axis, q_axis, pole, k, g0 = params
+    x, y, vx, vy = circular_in_plane(a, n, t_s)
+    r = in_plane_to_eci(x, y, p_axis, q_axis)
+    b = dipole_b_eci_xyz(pole, k, g0, r, t_s) if with_field else (0.0, 0.0, 0.0)
+    return r, in_plane_to_eci(vx, vy, p_axis, q_axis), b
 
 
 class MagneticFieldModel(Protocol):
@@ -440,7 +491,7 @@ class IgrfField:
 
     def greenwich_angle_rad(self, t_s: float) -> float:
         """Earth rotation angle (vernal equinox to Greenwich), rad, at ``t_s``."""
-        return self.cfg.greenwich_angle0_rad + units.EARTH_RATE_RAD_S * t_s
+        return greenwich_angle_rad(self.cfg.greenwich_angle0_rad, t_s)
 
     def date(self, t_s: float) -> datetime.datetime:
         """UTC date at ``t_s`` (s from the epoch)."""

@@ -30,7 +30,16 @@ from collections.abc import Sequence
 import numpy as np
 from acds_common import kernels, units
 from acds_common.attitude import Quat, dcm
-from acds_common.environment import MagneticFieldModel, Orbit, Sun, field_xyz, sun_frame_dcm
+from acds_common.environment import (
+    CircularDipole,
+    MagneticFieldModel,
+    Orbit,
+    Sun,
+    circular_dipole_environment,
+    circular_dipole_parameters,
+    field_xyz,
+    sun_frame_dcm,
+)
 from acds_common.environment import ecliptic_normal_eci as default_ecliptic_normal_eci
 from acds_common.environment import gravity_gradient_torque_nm as gravity_gradient_torque_nm  # the public form
 from acds_common.inertia import InertiaError, inertia_tensor
@@ -187,13 +196,34 @@ _Env = tuple[float, float, float, float, float, float]
 _NO_ENV: _Env = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
-def attitude_rk4(q: Quat, w: Vec3, n: int, sub: float, env: tuple[_Env, ...], inertia: Mat3, inertia_inv: Mat3,
-                 m: Vec3, h0: Vec3, hdot: Vec3, td: Vec3, gg: bool, field: bool) -> tuple[Quat, Vec3, Vec3, Vec3]:
-    """``n`` RK4 substeps of ``sub`` s of the attitude equations (module docstring) from (q, ω): the new q
+@kernels.helper
+def stage_environment(env: tuple[_Env, ...], orbit: CircularDipole | None, end: tuple[Vec3, Vec3, Vec3] | None,
+                      j: int, stages: int, t0: float, dt: float, pos: bool, field: bool) -> _Env:
+    """The environment at RK4 stage time t0 + dt·j/``stages`` (0 < j ≤ stages): ``env[j]``, or, with the circular
+    orbit and tilted dipole ``orbit``, ``end``'s r and B at the end, else computed
+    (:func:`acds_common.environment.circular_dipole_environment`; r and, with ``field``, B only when ``pos``)."""
+    if orbit is None:
+        return env[j]
+    if j == stages:
+        return end[0] + end[2]
+    if not pos:
+        return _NO_ENV
+    r, _v, b = circular_dipole_environment(orbit, t0 + dt * (j / stages), field)
+    return r + b
+
+
+@kernels.helper
+def attitude_rk4(q: Quat, w: Vec3, n: int, t0: float, dt: float, env: tuple[_Env, ...], orbit: CircularDipole | None,
+                 end: tuple[Vec3, Vec3, Vec3] | None, inertia: Mat3, inertia_inv: Mat3, m: Vec3, h0: Vec3, hdot: Vec3,
+                 td: Vec3, gg: bool, field: bool) -> tuple[Quat, Vec3, Vec3, Vec3]:
+    """``n`` RK4 substeps of dt/n s of the attitude equations (module docstring) from (q, ω) at ``t0``: the new q
     (renormalised after each substep), ω and the RK4-weighted sums Σ (T_mag, T_gg) (divide by 6n for the mean).
 
-    ``env`` the stage environment (r_eci m, B_eci T as 6 floats) at the 2n+1 stage times; dipole ``m`` A·m²;
-    wheel momentum h0 + hdot·τ N·m·s; disturbance ``td`` N·m; ``gg`` gravity gradient on; ``field`` T_mag on.
+    The stage environment (r_eci m, B_eci T as 6 floats) at the 2n+1 stage times t0 + dt·j/(2n)
+    (:func:`stage_environment`): ``env``, all of them (``orbit`` and ``end`` None), or the start's only, with the
+    circular orbit and tilted dipole ``orbit`` and the environment (r, v, B) ``end`` at t0 + dt
+    (:func:`attitude_rk4_circular_dipole`). Dipole ``m`` A·m²; wheel momentum h0 + hdot·τ N·m·s; disturbance
+    ``td`` N·m; ``gg`` gravity gradient on; ``field`` T_mag on.
     :func:`dynamics.integrator.rk4_step` written out on the seven floats (the same operations in the same
     order, so the same bits): a kernel (:mod:`acds_common.kernels`), compiled in the direct engine.
     """
@@ -205,6 +235,8 @@ def attitude_rk4(q: Quat, w: Vec3, n: int, sub: float, env: tuple[_Env, ...], in
     tdx, tdy, tdz = td
     pos = gg or field
     k_gg = 3.0 * units.EARTH_MU_M3_S2
+    sub = dt / n
+    stages = 2 * n
 
     def deriv(qx: float, qy: float, qz: float, qw: float, wx: float, wy: float, wz: float, tau: float,
               stage: _Env) -> tuple[float, ...]:
@@ -249,8 +281,11 @@ def attitude_rk4(q: Quat, w: Vec3, n: int, sub: float, env: tuple[_Env, ...], in
     wx, wy, wz = w
     smx = smy = smz = sgx = sgy = sgz = 0.0  # Σ stage weight · (T_mag, T_gg)
     half, sixth = 0.5 * sub, sub / 6.0
+    e1 = env[0]
     for k in range(n):
-        e0, eh, e1 = env[2 * k], env[2 * k + 1], env[2 * k + 2]
+        e0 = e1
+        eh = stage_environment(env, orbit, end, 2 * k + 1, stages, t0, dt, pos, field)
+        e1 = stage_environment(env, orbit, end, 2 * k + 2, stages, t0, dt, pos, field)
         a = deriv(qx, qy, qz, qw, wx, wy, wz, k * sub, e0)
         b = deriv(qx + half * a[0], qy + half * a[1], qz + half * a[2], qw + half * a[3],
                   wx + half * a[4], wy + half * a[5], wz + half * a[6], (k + 0.5) * sub, eh)
@@ -274,6 +309,20 @@ def attitude_rk4(q: Quat, w: Vec3, n: int, sub: float, env: tuple[_Env, ...], in
         sgy += a[11] + 2.0 * b[11] + 2.0 * c[11] + d[11]
         sgz += a[12] + 2.0 * b[12] + 2.0 * c[12] + d[12]
     return (qx, qy, qz, qw), (wx, wy, wz), (smx, smy, smz), (sgx, sgy, sgz)
+
+
+def attitude_rk4_circular_dipole(q: Quat, w: Vec3, n: int, t0: float, dt: float, start: _Env, orbit: CircularDipole,
+                                 inertia: Mat3, inertia_inv: Mat3, m: Vec3, h0: Vec3, hdot: Vec3, td: Vec3, gg: bool,
+                                 field: bool) -> tuple[Quat, Vec3, Vec3, Vec3, tuple[Vec3, Vec3, Vec3]]:
+    """:func:`attitude_rk4` in a circular orbit and the tilted-dipole field ``orbit``
+    (:func:`acds_common.environment.circular_dipole_parameters`, spec §3) evaluated here at the stage times
+    after the first (``start``, the environment at t0, is known from the last step): its results and the full
+    environment (r_eci m, v_eci m/s, B_eci T) at t0 + dt, where the truth is wanted. A kernel: one compiled call
+    replaces the stage environment's Python (:mod:`acds_common.kernels`)."""
+    end = circular_dipole_environment(orbit, t0 + dt, True)
+    q1, w1, smag, sgg = attitude_rk4(q, w, n, t0, dt, (start,), orbit, end, inertia, inertia_inv, m, h0, hdot, td,
+                                     gg, field)
+    return q1, w1, smag, sgg, end
 
 
 class RigidBodyModel:
@@ -322,7 +371,9 @@ class RigidBodyModel:
         self._tmag_avg = ZERO
         self._tgg_avg = ZERO
         self.disturbance = disturbance
-        self._rk4 = kernels.compiled(attitude_rk4)
+        #: A circular orbit and the tilted dipole as floats: the kernel evaluates them at the stage times itself.
+        self._circular_dipole = circular_dipole_parameters(orbit, field)
+        self._rk4 = kernels.compiled(attitude_rk4 if self._circular_dipole is None else attitude_rk4_circular_dipole)
         #: The environment (t, r, v, b) at the last time it was needed in full: an ``advance`` ends
         #: where ``truth`` and the next ``advance`` start.
         self._env_cache: tuple[float, Vec3, Vec3, Vec3] | None = None
@@ -395,9 +446,15 @@ class RigidBodyModel:
             td = (td[0] + gx, td[1] + gy, td[2] + gz)
         need_field = m[0] != 0.0 or m[1] != 0.0 or m[2] != 0.0
         gg = self.gravity_gradient
-        env = self._stage_environment(t0, dt, need_field or gg, need_field)
-        q, w, smag, sgg = self._rk4(self._q, self._w, self.substeps, dt / self.substeps, env, self._inertia_t,
-                                    self._inertia_inv_t, m, h0, hdot, td, gg, need_field)
+        body = (self._inertia_t, self._inertia_inv_t, m, h0, hdot, td, gg, need_field)
+        if self._circular_dipole is None:
+            env = self._stage_environment(t0, dt, need_field or gg, need_field)
+            q, w, smag, sgg = self._rk4(self._q, self._w, self.substeps, t0, dt, env, None, None, *body)
+        else:  # the kernel evaluates the orbit and field after the start, and gives the end's for truth
+            r, _v, b = self._environment(t0)
+            q, w, smag, sgg, end = self._rk4(self._q, self._w, self.substeps, t0, dt, (*r, *b),
+                                             self._circular_dipole, *body)
+            self._env_cache = (t0 + dt, *end)
         if not math.isfinite(sum(q) + sum(w)):  # a finite sum: every component finite
             raise DynamicsError("integration diverged (non-finite state): reduce dt_s or raise substeps")
         self._q, self._w = q, w
