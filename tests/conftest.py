@@ -43,7 +43,7 @@ def ieee_bits():
     """``ieee_bits(value)``: every float of a nested result as its IEEE bytes (so −0.0 ≠ 0.0 and a NaN is itself),
     other leaves as they are: what the compiled-against-plain kernel tests compare."""
     def bits(value: object) -> list:
-        if isinstance(value, tuple):
+        if isinstance(value, tuple | list):
             return [b for v in value for b in bits(v)]
         return [struct.pack('<d', value) if isinstance(value, float) else value]
     return bits

@@ -9,13 +9,9 @@ given the stage environment the :class:`~acds_common.environment.Orbit` and
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import random
-from pathlib import Path
 
-import pytest
-from acds_common import kernels
 from acds_common.environment import (
     EarthFieldConfig,
     Orbit,
@@ -25,17 +21,6 @@ from acds_common.environment import (
     circular_dipole_parameters,
 )
 from dynamics.rigid_body_model import attitude_rk4, attitude_rk4_circular_dipole
-
-_spec = importlib.util.spec_from_file_location('test_kernels', Path(__file__).with_name('test_kernels.py'))
-_test_kernels = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(_test_kernels)
-_bits = _test_kernels._bits  # every float of a nested result as its IEEE bytes
-
-
-@pytest.fixture(scope='module')
-def compile_kernels():
-    kernels.enable()
-    return kernels.compiled
 
 
 def _orbit_field(rng: random.Random) -> tuple[Orbit, TiltedDipoleField]:
@@ -81,7 +66,7 @@ def test_circular_dipole_parameters_only_for_a_circular_orbit_and_the_dipole():
     assert circular_dipole_parameters(circular, object()) is None
 
 
-def test_circular_dipole_environment_compiled_gives_the_methods_bits(compile_kernels):
+def test_circular_dipole_environment_compiled_gives_the_methods_bits(compile_kernels, ieee_bits):
     fast = compile_kernels(circular_dipole_environment)
     rng = random.Random(11)
     for _case_no in range(100):
@@ -90,17 +75,17 @@ def test_circular_dipole_environment_compiled_gives_the_methods_bits(compile_ker
         for t in (0.0, -0.0, rng.uniform(0.0, 1e4), rng.uniform(1e5, 1e8)):
             r, v = orbit.state_xyz(t)
             want = (r, v, field.b_eci_xyz(r, t))
-            assert _bits(fast(params, t, True)) == _bits(want) == _bits(circular_dipole_environment(params, t, True))
-            assert _bits(fast(params, t, False)) == _bits((r, v, (0.0, 0.0, 0.0)))
+            assert ieee_bits(fast(params, t, True)) == ieee_bits(want) == ieee_bits(circular_dipole_environment(params, t, True))
+            assert ieee_bits(fast(params, t, False)) == ieee_bits((r, v, (0.0, 0.0, 0.0)))
 
 
-def test_attitude_rk4_circular_dipole_compiled_gives_the_same_bits(compile_kernels):
+def test_attitude_rk4_circular_dipole_compiled_gives_the_same_bits(compile_kernels, ieee_bits):
     fast = compile_kernels(attitude_rk4_circular_dipole)
     for case, _orbit, _field, args in _cases(24, 2000):
-        assert _bits(fast(*args)) == _bits(attitude_rk4_circular_dipole(*args)), f'case {case}: {args}'
+        assert ieee_bits(fast(*args)) == ieee_bits(attitude_rk4_circular_dipole(*args)), f'case {case}: {args}'
 
 
-def test_attitude_rk4_circular_dipole_gives_the_stage_environment_path_bits():
+def test_attitude_rk4_circular_dipole_gives_the_stage_environment_path_bits(ieee_bits):
     """The kernel's own orbit and field give what the model's stage environment gave :func:`attitude_rk4`
     (r and B from the Orbit and TiltedDipoleField methods at t0 + dt·j/(2n)), and the end's (r, v, B)."""
     for case, orbit, field, args in _cases(25, 500):
@@ -115,4 +100,4 @@ def test_attitude_rk4_circular_dipole_gives_the_stage_environment_path_bits():
         r_end, v_end = orbit.state_xyz(t0 + dt)
         want = (*attitude_rk4(q, w, n, t0, dt, tuple(env), None, None, *body),
                 (r_end, v_end, field.b_eci_xyz(r_end, t0 + dt)))
-        assert _bits(attitude_rk4_circular_dipole(*args)) == _bits(want), f'case {case}: {args}'
+        assert ieee_bits(attitude_rk4_circular_dipole(*args)) == ieee_bits(want), f'case {case}: {args}'

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import math
 import random
-import struct
 
 import numpy as np
 import pytest
@@ -24,13 +23,6 @@ from em_driver.drive_assembly import AxisConfig, DriveAssembly, drive_period
 FAULTS = (None, 'open_winding', 'stuck_on_bridge', 'dead_driver')
 PER_AXIS = ('avg_dipole_am2', 'end_dipole_am2', 'coil_current_a', 'commanded_current_a', 'e_ft_v', 'duty',
             'switch_count', 'power_w', 'alarms')
-
-
-def _bits(value: object) -> list:
-    """Every float of a nested result as its IEEE bytes (so −0.0 ≠ 0.0 and a NaN is itself); other leaves as is."""
-    if isinstance(value, tuple | list):
-        return [b for v in value for b in _bits(v)]
-    return [struct.pack('<d', value) if isinstance(value, float) else value]
 
 
 def _units(assembly: DriveAssembly) -> list:
@@ -58,7 +50,7 @@ def _configs(rng: random.Random, variant: int) -> list[AxisConfig]:
     return [AxisConfig.constant_level(coil) if t == 'constant_level' else AxisConfig(t, coil) for t in types]
 
 
-def test_drive_assembly_compiled_gives_the_same_bits():
+def test_drive_assembly_compiled_gives_the_same_bits(ieee_bits):
     """Twenty assemblies, 300 steps each, plain and compiled side by side."""
     plans = []
     for variant in range(20):
@@ -88,13 +80,13 @@ def test_drive_assembly_compiled_gives_the_same_bits():
             got = quick.step(np.array(command), dt)
             where = f'variant {variant} step {step}: {command}'
             for name in PER_AXIS:
-                assert _bits(got.per_axis(name)) == _bits(want.per_axis(name)), f'{where}: {name}'
+                assert ieee_bits(got.per_axis(name)) == ieee_bits(want.per_axis(name)), f'{where}: {name}'
             assert (got.active_units, got.events, got.diagnostics) == (want.active_units, want.events,
                                                                        want.diagnostics), where
-            assert _bits(_units(quick)) == _bits(_units(slow)), where
+            assert ieee_bits(_units(quick)) == ieee_bits(_units(slow)), where
 
 
-def test_bridge_switch_coil_compiled_gives_the_same_bits():
+def test_bridge_switch_coil_compiled_gives_the_same_bits(ieee_bits):
     """A lone unit: bridge-switch and constant-level periods, faults, driver power, recorded waveforms."""
     rng = random.Random(2402)
     starts = [rng.uniform(-0.9, 0.9) for _ in range(8)]
@@ -118,8 +110,8 @@ def test_bridge_switch_coil_compiled_gives_the_same_bits():
                 current = rng.choice([0.0, rng.uniform(-1.0, 1.0), rng.uniform(-1e-3, 1e-3), 2.0])
                 want, got = (u.run(current, duration, record=record) for u in (slow, quick))
             where = f'step {step}'
-            assert _bits(tuple(map(float, got[:11]))) == _bits(tuple(map(float, want[:11]))), where
-            assert _bits((quick.current_a, quick.bridge_on)) == _bits((slow.current_a, slow.bridge_on)), where
+            assert ieee_bits(tuple(map(float, got[:11]))) == ieee_bits(tuple(map(float, want[:11]))), where
+            assert ieee_bits((quick.current_a, quick.bridge_on)) == ieee_bits((slow.current_a, slow.bridge_on)), where
             if record:
                 for field in ('times_s', 'currents_a', 'bridge_on'):
                     assert np.array_equal(getattr(got.waveform, field), getattr(want.waveform, field)), where
