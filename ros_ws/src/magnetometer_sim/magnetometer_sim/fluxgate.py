@@ -369,7 +369,7 @@ class Magnetometer:
         b_sensed = (bx + rx + dx, by + ry + dy, bz + rz + dz)
         a, b = self._pair
         volts_a, volts_b = self._pair_volts(a.field_g(b_sensed), a.axis_bias_v, b.field_g(b_sensed), b.axis_bias_v,
-                                                  a.curve)
+                                              a.curve)
         sample_a, sample_b = a.output(volts_a), b.output(volts_b)
         volts, bias = sample_a if self.active_unit == UNITS[0] else sample_b
         p = self.units[self.active_unit].params
