@@ -174,7 +174,7 @@ class HeaoModeManager:
 
         if self.mode == 'mode_1a':
             thr = self.config.rate_thresholds_rad_s
-            if present and all(abs(omega[i]) <= thr[i] for i in range(3)):
+            if present and abs(omega[0]) <= thr[0] and abs(omega[1]) <= thr[1] and abs(omega[2]) <= thr[2]:
                 rates = ', '.join(f'|ω{a}|={deg(abs(omega[i])):.4f}≤{deg(thr[i]):.4f}'
                                   for i, a in enumerate(AXES))
                 out.append(self._enter(t, 'mode_1b', f'rates below thresholds ({rates} deg/s) and sun present'))
@@ -188,7 +188,9 @@ class HeaoModeManager:
         """Capture check; ``sun_z`` is the z component of the sun unit vector (None: sun absent)."""
         cfg = self.config
         angle = math.pi if sun_z is None else math.acos(max(-1.0, min(1.0, sun_z)))
-        if angle > cfg.capture_cone_rad or not all(abs(w) <= cfg.capture_rate_rad_s for w in omega):
+        rate = cfg.capture_rate_rad_s
+        if angle > cfg.capture_cone_rad or not (abs(omega[0]) <= rate and abs(omega[1]) <= rate
+                                                and abs(omega[2]) <= rate):
             self._capture_since_t_s = None
             return []
         if self._capture_since_t_s is None:
@@ -268,10 +270,9 @@ class HeaoModeManager:
     def status(self) -> dict[str, str]:
         """The logic's status beyond :attr:`mode` and :attr:`captured`, as key/value strings for the ``mode``
         report (times in s, '' when not reached)."""
-        def fmt(x: float | None) -> str:
-            return '' if x is None else f'{x:.3f}'
+        entry, capture = self.mode_1b_entry_t_s, self.capture_t_s
         return {
-            'mode_1b_entry_t_s': fmt(self.mode_1b_entry_t_s),
-            'capture_t_s': fmt(self.capture_t_s),
+            'mode_1b_entry_t_s': '' if entry is None else f'{entry:.3f}',
+            'capture_t_s': '' if capture is None else f'{capture:.3f}',
             'pending_commands': str(len(self._pending)),
         }

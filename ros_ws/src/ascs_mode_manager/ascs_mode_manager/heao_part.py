@@ -11,8 +11,8 @@ Stage ``heao`` of step k (inputs: gyro and sun sensor of step k from rigid_body)
    forwarded in this step's ``mode`` (key ``command/<node>``);
 2. the on-board logic of :class:`~ascs_mode_manager.heao_modes.HeaoModeManager`;
 3. ``mode`` (DiagnosticArray, every step): the step's
-   :class:`~acds_common.mode_report.ModeReport`: the mode, this step's transition causes
-   ('' if none), the capture flag, the core's status keys, ``run_complete`` (from the
+   :class:`~acds_common.mode_report.ModeReport` (encoded when it differs from the last step's): the mode,
+   this step's transition causes ('' if none), the capture flag, the core's status keys, ``run_complete`` (from the
    capture step on when ``modes.stop_at_capture``: the time owner then ends the run after
    this step) and the forwarded commands;
 4. ``events``: one line per transition, "t=<s> <from>-><to>: <cause>" (capture:
@@ -86,6 +86,9 @@ class HeaoPart:
             self.core = self.build_core(m)
         self.stop_at_capture = m['stop_at_capture']
         self.run_complete = False
+        #: The last step's report fields and its encoded ``mode`` value (reused while the fields stay the same).
+        self._report: tuple[Any, ...] = ()
+        self._mode_value: tuple[Status, ...] = ()
 
     def step(self, k: int, t: float, inp: dict[str, Any]) -> dict[str, Any]:
         """One step of the mode logic: ``mode`` (always), ``events`` (on transitions), ``diagnostics``."""
@@ -108,9 +111,11 @@ class HeaoPart:
             text = event_text(tr)
             self.host.log('info', text)
             events.append(text)
-        report = ModeReport(self.core.mode, '; '.join(tr.cause for tr in transitions), self.core.captured,
-                            tuple(self.core.status().items()), self.run_complete, forwarded)
-        out: dict[str, Any] = {'mode': report.encode()}
+        report = (self.core.mode, '; '.join(tr.cause for tr in transitions) if transitions else '',
+                  self.core.captured, tuple(self.core.status().items()), self.run_complete, forwarded)
+        if report != self._report:  # most steps report what the last one did: its encoding is reused
+            self._report, self._mode_value = report, ModeReport(*report).encode()
+        out: dict[str, Any] = {'mode': self._mode_value}
         if events:
             out['events'] = events
         if diagnostics:

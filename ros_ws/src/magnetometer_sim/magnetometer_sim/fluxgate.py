@@ -35,7 +35,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from acds_common import validation
+from acds_common import kernels, validation
 from acds_common.commands import UNITS  # assembly names: active/standby pair
 from acds_common.units import GAUSS_T
 from acds_common.vec3 import Vec3, mat3, mv
@@ -117,6 +117,32 @@ class FluxgateAxisParams:
         return self.resolution_g**2 / 12.0 + accuracy_g**2 / 3.0 + self.noise_std_g**2
 
 
+@kernels.helper
+def axis_volts(b_g: float, bias_v: float, curve: tuple[float, ...]) -> float:
+    """One axis (module docstring): field ``b_g`` (G) → output volts about ``bias_v``, clipped to the rails,
+    quantised; ``curve`` = (c, range_g², nominal bias, scale, rail low, rail high, step), V and G.
+
+    ``b_g ** 3.0`` is the C library's ``pow`` both ways (Python turns ``** 3`` into the same call; numba would
+    multiply instead, which differs in the last bit); ``round`` is round-half-even both ways.
+    """
+    c, range2, bias, scale, low, high, step = curve
+    v = bias + scale * (b_g + c * (b_g ** 3.0 - b_g * range2)) - bias + bias_v
+    v = low if v < low else high if v > high else v  # the rails
+    return round(v / step) * step
+
+
+@kernels.helper
+def unit_volts(b_g: Vec3, bias_v: Vec3, curve: tuple[float, ...]) -> Vec3:
+    """One assembly's three axes: :func:`axis_volts` of each field component (G) about its bias (V)."""
+    return axis_volts(b_g[0], bias_v[0], curve), axis_volts(b_g[1], bias_v[1], curve), axis_volts(b_g[2], bias_v[2], curve)
+
+
+def pair_volts(b_a: Vec3, bias_a: Vec3, b_b: Vec3, bias_b: Vec3, curve: tuple[float, ...]) -> tuple[Vec3, Vec3]:
+    """Both assemblies' axis volts (:func:`unit_volts`) in one call: the kernel (:mod:`acds_common.kernels`)
+    :meth:`Magnetometer.read` runs every step, the noise already drawn (the units' numpy streams stay in Python)."""
+    return unit_volts(b_a, bias_a, curve), unit_volts(b_b, bias_b, curve)
+
+
 class MagnetometerReading:
     """One magnetometer sample (spec §5, Table 4-11 telemetry).
 
@@ -187,20 +213,30 @@ class FluxgateAssembly:
         else:
             self._offset_g = (0.0, 0.0, 0.0)
             self._scale_err = (0.0, 0.0, 0.0)
-        self._bias_shift_v = [0.0, 0.0, 0.0]
-        self._stuck = [False, False, False]
-        self._dead = False
         self._last_v = (p.bias_v, p.bias_v, p.bias_v)
-        self._step_v = p.step_v
-        #: What :meth:`_volts` reads every sample: the curve's constants (the same values as from the params).
-        self._curve = (0.5 * p.nonlinearity_frac, p.range_g ** 2, p.bias_v, p.scale_v_per_g, p.rail_low_v,
-                       p.rail_high_v, self._step_v)
+        #: What :func:`axis_volts` reads every sample: the curve's constants (the same values as from the params).
+        self.curve = (0.5 * p.nonlinearity_frac, p.range_g ** 2, p.bias_v, p.scale_v_per_g, p.rail_low_v,
+                      p.rail_high_v, p.step_v)
+        self.clear_faults()
 
     def clear_faults(self) -> None:
         """Remove every injected fault."""
         self._bias_shift_v = [0.0, 0.0, 0.0]
         self._stuck = [False, False, False]
         self._dead = False
+        self._faults_changed()
+
+    def _faults_changed(self) -> None:
+        """What every sample reads of the faults, computed when they change: each axis's bias (V, nominal + shift),
+        the bias output clipped to the rails (each as min(max(e, lo), hi)) and whether any axis is stuck."""
+        p = self.params
+        shift_x, shift_y, shift_z = self._bias_shift_v
+        ex, ey, ez = p.bias_v + shift_x, p.bias_v + shift_y, p.bias_v + shift_z
+        self.axis_bias_v = (ex, ey, ez)
+        lo, hi = p.rail_low_v, p.rail_high_v
+        self._bias_out = (lo if ex < lo else hi if ex > hi else ex, lo if ey < lo else hi if ey > hi else ey,
+                          lo if ez < lo else hi if ez > hi else ez)
+        self._any_stuck = any(self._stuck)
 
     def inject_fault(self, kind: str, axis: int | None = None, value: float | None = None) -> None:
         """Inject 'bias_shift' (value V, one axis or all), 'stuck_axis' (one axis or all) or 'dead_unit'."""
@@ -217,38 +253,36 @@ class FluxgateAssembly:
             self._dead = True
         else:
             raise MagnetometerError(f'unknown magnetometer fault {kind!r}; expected one of {FAULT_KINDS}')
+        self._faults_changed()
 
-    def _volts(self, b_g: float, bias_v: float) -> float:
-        """One axis: field (G) → output volts about ``bias_v``, clipped to the rails, quantised."""
-        c, range2, bias, scale, low, high, step = self._curve
-        v = bias + scale * (b_g + c * (b_g ** 3 - b_g * range2)) - bias + bias_v
-        v = low if v < low else high if v > high else v  # the rails
-        return round(v / step) * step
-
-    def sample_xyz(self, b_sensed_t: Sequence[float]) -> tuple[Vec3, Vec3]:
-        """:meth:`sample` on a float triple: (axis volts, bias volts) as float triples."""
-        p = self.params
+    def field_g(self, b_sensed_t: Sequence[float]) -> Vec3:
+        """The field each axis measures, G: b_sensed_t (T) with the unit's scale and offset errors and this
+        sample's noise (drawn from the unit's stream when noise_std_g > 0)."""
         (sx, sy, sz), (ox, oy, oz) = self._scale_err, self._offset_g
         bx = b_sensed_t[0] / GAUSS_T * (1.0 + sx) + ox
         by = b_sensed_t[1] / GAUSS_T * (1.0 + sy) + oy
         bz = b_sensed_t[2] / GAUSS_T * (1.0 + sz) + oz
-        if p.noise_std_g > 0.0:
-            nx, ny, nz = self._rng.normal(0.0, p.noise_std_g, 3).tolist()
-            bx, by, bz = bx + nx, by + ny, bz + nz
-        shift_x, shift_y, shift_z = self._bias_shift_v
-        ex, ey, ez = p.bias_v + shift_x, p.bias_v + shift_y, p.bias_v + shift_z
-        if any(self._stuck):  # a stuck axis repeats its last output
+        noise_std_g = self.params.noise_std_g
+        if noise_std_g > 0.0:
+            nx, ny, nz = self._rng.normal(0.0, noise_std_g, 3).tolist()
+            return bx + nx, by + ny, bz + nz
+        return bx, by, bz
+
+    def output(self, volts: Vec3) -> tuple[Vec3, Vec3]:
+        """(axis volts, bias volts) the unit puts out for the axis volts of its field (:func:`unit_volts`): a stuck
+        axis repeats its last output, a dead unit gives 0 V."""
+        if self._any_stuck:
             last, stuck = self._last_v, self._stuck
-            out: Vec3 = (last[0] if stuck[0] else self._volts(bx, ex), last[1] if stuck[1] else self._volts(by, ey),
-                         last[2] if stuck[2] else self._volts(bz, ez))
-        else:
-            out = (self._volts(bx, ex), self._volts(by, ey), self._volts(bz, ez))
-        self._last_v = out
+            volts = (last[0] if stuck[0] else volts[0], last[1] if stuck[1] else volts[1],
+                     last[2] if stuck[2] else volts[2])
+        self._last_v = volts
         if self._dead:
             return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
-        lo, hi = p.rail_low_v, p.rail_high_v  # each clipped as min(max(e, lo), hi), without the two calls
-        return out, (lo if ex < lo else hi if ex > hi else ex, lo if ey < lo else hi if ey > hi else ey,
-                     lo if ez < lo else hi if ez > hi else ez)
+        return volts, self._bias_out
+
+    def sample_xyz(self, b_sensed_t: Sequence[float]) -> tuple[Vec3, Vec3]:
+        """:meth:`sample` on a float triple: (axis volts, bias volts) as float triples."""
+        return self.output(unit_volts(self.field_g(b_sensed_t), self.axis_bias_v, self.curve))
 
     def sample(self, b_sensed_t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Output (axis volts, bias volts), V, for the field at the sensor b_sensed_t (T, body axes)."""
@@ -298,6 +332,10 @@ class Magnetometer:
             self._covariance9[name] = (var, 0.0, 0.0, 0.0, var, 0.0, 0.0, 0.0, var)
         self._delta = mat3(delta)
         self.active_unit = UNITS[0]
+        #: The two assemblies in UNITS order and their volts kernel (one call a read; the units share ``params``,
+        #: hence one curve).
+        self._pair = (self.units[UNITS[0]], self.units[UNITS[1]])
+        self._pair_volts = kernels.compiled(pair_volts)
 
     def select_unit(self, unit: str) -> None:
         """Make ``unit`` ('A' or 'B') the active assembly."""
@@ -329,8 +367,11 @@ class Magnetometer:
         rx, ry, rz = self._residual
         dx, dy, dz = mv(self._delta, dipole)
         b_sensed = (bx + rx + dx, by + ry + dy, bz + rz + dz)
-        samples = {name: unit.sample_xyz(b_sensed) for name, unit in self.units.items()}
-        volts, bias = samples[self.active_unit]
+        a, b = self._pair
+        volts_a, volts_b = self._pair_volts(a.field_g(b_sensed), a.axis_bias_v, b.field_g(b_sensed), b.axis_bias_v,
+                                              a.curve)
+        sample_a, sample_b = a.output(volts_a), b.output(volts_b)
+        volts, bias = sample_a if self.active_unit == UNITS[0] else sample_b
         p = self.units[self.active_unit].params
         field_t = ((volts[0] - p.bias_v) / p.scale_v_per_g * GAUSS_T, (volts[1] - p.bias_v) / p.scale_v_per_g * GAUSS_T,
                    (volts[2] - p.bias_v) / p.scale_v_per_g * GAUSS_T)
