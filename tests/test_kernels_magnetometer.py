@@ -10,24 +10,14 @@ last bits.
 from __future__ import annotations
 
 import random
-import struct
 
 import pytest
-from acds_common import kernels
 from magnetometer_sim.fluxgate import FluxgateAssembly, FluxgateAxisParams, pair_volts
 
 
-def _bits(value: object) -> list:
-    """Every float of a nested result as its IEEE bytes (so −0.0 ≠ 0.0); other leaves as is."""
-    if isinstance(value, tuple):
-        return [b for v in value for b in _bits(v)]
-    return [struct.pack('<d', value) if isinstance(value, float) else value]
-
-
 @pytest.fixture(scope='module')
-def fast():
-    kernels.enable()
-    out = kernels.compiled(pair_volts)
+def fast(compile_kernels):
+    out = compile_kernels(pair_volts)
     assert out is not pair_volts and out.py_func is pair_volts
     return out
 
@@ -59,7 +49,7 @@ def _curves(rng: random.Random) -> list[tuple[float, ...]]:
     return out
 
 
-def test_pair_volts_compiled_gives_the_same_bits(fast):
+def test_pair_volts_compiled_gives_the_same_bits(fast, ieee_bits):
     rng = random.Random(5)
     for curve in _curves(rng):
         for case in range(3000):
@@ -69,15 +59,15 @@ def test_pair_volts_compiled_gives_the_same_bits(fast):
                 args.append(tuple(rng.choice([2.5, 2.5, rng.uniform(-1.0, 6.0), 2.5 + rng.randint(-50, 50) * 0.01])
                                   for _ in range(3)))
             got, want = fast(*args, curve), pair_volts(*args, curve)
-            assert _bits(got) == _bits(want), f'curve {curve}, case {case}: {args}'
+            assert ieee_bits(got) == ieee_bits(want), f'curve {curve}, case {case}: {args}'
 
 
-def test_exact_ties_round_half_even(fast):
+def test_exact_ties_round_half_even(fast, ieee_bits):
     """v/step exactly n + ½ (step 0.5 V: every tie representable): both forms round to the even neighbour."""
     curve = (0.0, 1.0, 2.5, 1.0, 0.0, 5.0, 0.5)
     fields = tuple((n + 0.5) * 0.5 - 2.5 for n in range(10))
     for i in range(0, 9, 3):
         b, bias = fields[i:i + 3], (2.5, 2.5, 2.5)
         got, want = fast(b, bias, b, bias, curve), pair_volts(b, bias, b, bias, curve)
-        assert _bits(got) == _bits(want)
+        assert ieee_bits(got) == ieee_bits(want)
         assert all(round(v / 0.5) % 2 == 0 for v in want[0])  # the ties went to even
