@@ -90,9 +90,13 @@ def mode_status(value: Sequence[Status] | None, node: str) -> tuple[str | None, 
     status = _mode_status(value)
     if status is None:
         return None, []
-    keyed = dict(status.values)  # the mode is written once; commands may repeat
-    key = COMMAND_PREFIX + node
-    return keyed.get('mode', status.message), ([v for k, v in status.values if k == key] if key in keyed else [])
+    mode, key, commands = status.message, COMMAND_PREFIX + node, []
+    for k, v in status.values:  # one pass: the last 'mode' pair (there is one), every command in order
+        if k == 'mode':
+            mode = v
+        elif k == key:
+            commands.append(v)
+    return mode, commands
 
 
 def mode_state(value: Sequence[Status] | None) -> tuple[str, str, bool] | None:

@@ -311,6 +311,8 @@ class DriveAssembly:
         #: The six units' state rows (axis k's A and B at 2k, 2k + 1) and the axes' parameter rows.
         self._state = state_table(6, compiled)
         self._axes = [_Axis(c, self._state[2 * k:2 * k + 2]) for k, c in enumerate(configs)]
+        #: (index, axis) of the axes with a coil: the ones driven and monitored.
+        self._coiled = tuple((k, ax) for k, ax in enumerate(self._axes) if ax.coil)
         params = [ax.params for ax in self._axes]
         self._params = np.array(params) if compiled else params
         self.auto_switch_to_standby = auto_switch_to_standby
@@ -357,27 +359,31 @@ class DriveAssembly:
             raise EmDriverError(f'moment_command_am2 must have shape (3,), got {np.shape(moment_command_am2)}')
         if not (math.isfinite(dt_s) and dt_s > 0.0):
             raise EmDriverError(f'dt_s must be a finite positive time, got {dt_s!r}')
+        return self.step_xyz(command, dt_s)
+
+    def step_xyz(self, command: Sequence[float], dt_s: float) -> AssemblyResult:
+        """:meth:`step` on a moment command that is already a float triple (a Vector3Stamped value) and a
+        ``dt_s`` already checked (the scenario bounds the control period): the stepper's per-step path
+        (spec §6). A non-finite component is still rejected per axis, as :meth:`step` does."""
         diagnostics: list[str] = []
         events, self._pending_events = self._pending_events, []
-        x, y, z = axes = self._axes
-        for k, ax in enumerate(axes):
+        finite = math.isfinite(command[0] + command[1] + command[2])  # a finite sum: three finite components
+        for k, ax in self._coiled:  # an axis without a coil ignores its command
             c = command[k]
-            if not ax.coil:  # no coil on this axis: nothing to drive, nothing to monitor
-                continue
-            if math.isfinite(c):
+            if finite or math.isfinite(c):
                 ax.command = c
             else:
                 diagnostics.append(f'axis {k}: rejected non-finite moment command {c!r}; '
                                    f'holding last valid command {ax.command:g}')
+        x, y, z = self._axes
         unit_a = UNITS[0]
         rows = self._period(self._state, self._params, (x.command, y.command, z.command),
                             (int(x.active != unit_a), int(y.active != unit_a), int(z.active != unit_a)), dt_s)
-        for k, ax in enumerate(axes):
-            if ax.coil:
-                row = rows[k]
-                monitored = self._monitor(k, ax, row[4], row[3], dt_s)
-                if monitored:
-                    events.extend(monitored)
+        for k, ax in self._coiled:
+            row = rows[k]
+            monitored = self._monitor(k, ax, row[4], row[3], dt_s)
+            if monitored:
+                events.extend(monitored)
         avg, end, cur, cmd, eft, duty, power, switches = zip(*rows, strict=True)
         return AssemblyResult(
             avg_dipole_am2=avg, end_dipole_am2=end, coil_current_a=cur, commanded_current_a=cmd, e_ft_v=eft, duty=duty,

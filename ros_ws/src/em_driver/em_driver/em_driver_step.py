@@ -67,7 +67,8 @@ class EmDriverStep(Stepper):
             command = self._bench_command
         else:
             command = (0.0, 0.0, 0.0) if inp['command'] is None else inp['command']
-        result = self.assembly.step(command, self.control_period_s)
+        # A float triple (Vector3Stamped value) and the scenario's checked control period: the unchecked path.
+        result = self.assembly.step_xyz(command, self.control_period_s)
         events.extend(result.events)
         rejected.extend(result.diagnostics)
         out: dict[str, Any] = {

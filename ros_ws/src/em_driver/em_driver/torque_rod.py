@@ -612,6 +612,9 @@ class TorqueRodAssembly:
             power_w=out['power'], alarms=np.array([a.alarm for a in self._axes]),
             active_units=self.active_units, events=tuple(events), diagnostics=tuple(diagnostics))
 
+    #: The stepper's per-step entry (:meth:`DriveAssembly.step_xyz`'s counterpart): the rods' own checked step.
+    step_xyz = step
+
     def _average_dipole(self, rod: TorqueRod, runs: list[_Run], dt_s: float) -> float:
         """Time-average dipole over the period, A·m².
 
