@@ -362,10 +362,13 @@ class Magnetometer:
         b_true_body_t: Earth field at the spacecraft, body axes, T.
         em_dipole_am2: the electromagnets' achieved dipole from the previous step, A·m².
         """
-        bx, by, bz = _check_xyz('b_true_body_t', b_true_body_t)
-        dipole = _check_xyz('em_dipole_am2', em_dipole_am2)
+        return self.read_xyz(_check_xyz('b_true_body_t', b_true_body_t), _check_xyz('em_dipole_am2', em_dipole_am2))
+
+    def read_xyz(self, b_true_xyz: Sequence[float], dipole_xyz: Sequence[float]) -> MagnetometerReading:
+        """:meth:`read` on float triples already checked finite (the stepper's per-step path, spec §5)."""
+        bx, by, bz = b_true_xyz
         rx, ry, rz = self._residual
-        dx, dy, dz = mv(self._delta, dipole)
+        dx, dy, dz = mv(self._delta, dipole_xyz)
         b_sensed = (bx + rx + dx, by + ry + dy, bz + rz + dz)
         a, b = self._pair
         volts_a, volts_b = self._pair_volts(a.field_g(b_sensed), a.axis_bias_v, b.field_g(b_sensed), b.axis_bias_v,

@@ -68,7 +68,7 @@ class MagnetometerStep(Stepper):
             self._dipole = dipole
         else:
             errors.append(f'rejected non-finite achieved dipole {list(dipole)}; holding the last valid dipole')
-        reading = self.mag.read(self._b_true, self._dipole)
+        reading = self.mag.read_xyz(self._b_true, self._dipole)  # float triples, checked finite above
         out: dict[str, Any] = {
             'volts': reading.volts_xyz,
             'bias_volts': reading.bias_xyz,
