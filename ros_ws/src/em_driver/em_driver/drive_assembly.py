@@ -123,20 +123,22 @@ class AssemblyResult:
     coil_current_a: active winding current at the end, A.
     commanded_current_a: current command per axis, A (TA "torquer current cmd").
     e_ft_v: active unit's current telemetry, V.
-    duty: active unit's duty cycle (0…1). switch_count: its bridge transitions.
+    duty: active unit's duty cycle (0…1).
     power_w: electrical power drawn by both units of the axis, W.
+    switch_count: active unit's bridge transitions.
     alarms: excess-coil-current / mismatch alarm per axis.
     active_units: 'A' or 'B' per axis.
     events: unit switch-overs and alarm transitions this period.
     diagnostics: rejected commands (NaN/inf) this period.
 
-    The per-axis values are kept as given (the assembly gives float tuples, what the stepper
+    The first eight parameters are in the order of :func:`axis_period`'s figures (the assembly passes its
+    kernel's rows transposed). The per-axis values are kept as given (the assembly gives float tuples, what the stepper
     publishes through :meth:`xyz`); the attributes are them as numpy arrays, built when read.
     """
 
-    def __init__(self, *, avg_dipole_am2: Sequence[float], end_dipole_am2: Sequence[float],
+    def __init__(self, avg_dipole_am2: Sequence[float], end_dipole_am2: Sequence[float],
                  coil_current_a: Sequence[float], commanded_current_a: Sequence[float], e_ft_v: Sequence[float],
-                 duty: Sequence[float], switch_count: Sequence[int], power_w: Sequence[float],
+                 duty: Sequence[float], power_w: Sequence[float], switch_count: Sequence[int],
                  alarms: Sequence[bool], active_units: tuple[str, str, str], events: tuple[str, ...],
                  diagnostics: tuple[str, ...]) -> None:
         self._values = {'avg_dipole_am2': avg_dipole_am2, 'end_dipole_am2': end_dipole_am2,
@@ -146,8 +148,9 @@ class AssemblyResult:
         self.active_units = active_units
         self.events = events
         self.diagnostics = diagnostics
+        x, y, z = alarms
         #: The alarms as a tuple of bools (what the stepper compares step to step).
-        self.alarm_flags = tuple(map(bool, alarms))
+        self.alarm_flags = (bool(x), bool(y), bool(z))
 
     def xyz(self, name: str) -> tuple[float, float, float]:
         """One per-axis quantity (by its attribute name) as a float triple."""
@@ -384,11 +387,9 @@ class DriveAssembly:
             monitored = self._monitor(k, ax, row[4], row[3], dt_s)
             if monitored:
                 events.extend(monitored)
-        avg, end, cur, cmd, eft, duty, power, switches = zip(*rows, strict=True)
-        return AssemblyResult(
-            avg_dipole_am2=avg, end_dipole_am2=end, coil_current_a=cur, commanded_current_a=cmd, e_ft_v=eft, duty=duty,
-            switch_count=switches, power_w=power, alarms=(x.alarm, y.alarm, z.alarm),
-            active_units=(x.active, y.active, z.active), events=tuple(events), diagnostics=tuple(diagnostics))
+        # The kernel's per-axis rows are in AssemblyResult's parameter order: transposed, they are its arguments.
+        return AssemblyResult(*zip(*rows, strict=True), (x.alarm, y.alarm, z.alarm), (x.active, y.active, z.active),
+                              tuple(events), tuple(diagnostics))
 
     def _monitor(self, k: int, ax: _Axis, e_ft_v: float, command_a: float, dt_s: float) -> list[str]:
         """Mismatch alarm: e_ft against the expected current (``command_a`` limited to what the supply
