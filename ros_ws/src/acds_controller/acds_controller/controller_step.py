@@ -88,7 +88,7 @@ class DpaStep(Stepper):
         warnings: list[tuple[str, dict[str, str]]] = []
         mode, commands = mode_status(inp['mode'], self.node)
         self.apply_commands(k, commands, warnings)
-        mode = resolve_mode(mode, 'mode_1a', HEAO_MODES, warnings, f'unknown mode {mode!r} from the mode manager')
+        mode = resolve_mode(mode, 'mode_1a', HEAO_MODES, warnings, 'unknown mode {!r} from the mode manager')
         try:
             result = self._dpa_step(k, mode, inp)
         except ControllerError as exc:
@@ -131,11 +131,14 @@ class DpaStep(Stepper):
 
 def resolve_mode(mode: str | None, default: str, known: Any, warnings: list[tuple[str, dict[str, str]]],
                   unknown: str) -> str:
-    """The mode to run: ``default`` before the mode manager speaks, standby (with a warning) for one not ``known``."""
+    """The mode to run: ``default`` before the mode manager speaks, standby (with a warning) for one not ``known``.
+
+    ``unknown``: the warning's text, a :meth:`str.format` template of the mode (formatted only when it is sent).
+    """
     if mode is None:
         return default
     if mode not in known:
-        warnings.append((f'{unknown}: standby', {'mode': mode}))
+        warnings.append((f'{unknown.format(mode)}: standby', {'mode': mode}))
         return 'standby'
     return mode
 

@@ -48,7 +48,7 @@ class WorkshopComputerStep(Stepper):
             warnings.append((f'command refused: {text!r}: the Workshop computer takes no forwarded commands',
                              {'command': text}))
         mode = resolve_mode(mode, 'cmg_dump', WORKSHOP_MODES, warnings,
-                             f'{mode!r} is not a Workshop mode ({", ".join(WORKSHOP_MODES)})')
+                             '{!r} is not a Workshop mode (' + ', '.join(WORKSHOP_MODES) + ')')
         try:
             volts, bias = vec(inp['mag_volts'], MID_SCALE_V), vec(inp['mag_bias'], MID_SCALE_V)
             omega, h = vec(None if inp['gyro'] is None else inp['gyro'][0]), np.array(store_momentum(inp, self.control_period_s))
