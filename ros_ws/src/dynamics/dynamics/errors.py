@@ -20,6 +20,14 @@ def finite_float(name: str, value: float) -> float:
     return value
 
 
+def positive_dt(dt_s: float) -> float:
+    """Return the step ``dt_s`` (s) as a finite float > 0 or raise DynamicsError."""
+    dt = finite_float("dt_s", dt_s)
+    if dt <= 0.0:
+        raise DynamicsError(f"dt_s must be > 0 s, got {dt}")
+    return dt
+
+
 def finite_vector3(name: str, value: object) -> np.ndarray:
     """Return ``value`` as a finite float 3-vector or raise DynamicsError naming ``name``."""
     return validation.finite_vector3(name, value, DynamicsError)

@@ -19,6 +19,7 @@ from acds_common.stepper import Stepper
 from acds_common.validation import all_finite
 
 from dynamics.configuration import build_wheels
+from dynamics.errors import positive_dt
 
 #: Wheel telemetry on ``diagnostics`` every this many steps.
 TELEMETRY_EVERY = 20
@@ -33,6 +34,7 @@ class ReactionWheelsStep(Stepper):
         super().__init__(params, log)
         self.wheels = build_wheels(self.section('wheels'))
         self._last_volts = (0.0, 0.0, 0.0)
+        self._dt = positive_dt(self.control_period_s)
 
     def drive(self, k: int, _t: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Apply the step-k drive volts for one control period."""
@@ -42,7 +44,7 @@ class ReactionWheelsStep(Stepper):
             warning = f'non-finite drive volts {list(volts)} rejected at step {k}; holding the last valid ones'
             volts = self._last_volts
         self._last_volts = volts
-        h_start, hdot = self.wheels.step_xyz(volts, self.control_period_s)
+        h_start, hdot = self.wheels.step_xyz_unchecked(volts, self._dt)  # volts checked above
         out: dict[str, Any] = {'momentum': h_start, 'torque': hdot}
         if warning is not None or (self.telemetry_wanted and k % TELEMETRY_EVERY == 0):
             values = {**{f'wheel_{i}_momentum_nms': f'{h:.6g}' for i, h in enumerate(self.wheels.wheel_momenta_nms())},

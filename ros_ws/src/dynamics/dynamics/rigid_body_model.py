@@ -46,7 +46,7 @@ from acds_common.inertia import InertiaError, inertia_tensor
 from acds_common.vec3 import ZERO, Mat3, Vec3, cross, mat3, mtv, mv
 
 from dynamics.disturbances import DisturbanceTorque
-from dynamics.errors import DynamicsError, finite_float, finite_vector3, finite_xyz
+from dynamics.errors import DynamicsError, finite_float, finite_vector3, finite_xyz, positive_dt
 
 #: Default RK4 substeps per ``advance`` call (0.1 s substeps at the 0.5 s HEAO control period).
 DEFAULT_SUBSTEPS = 5
@@ -82,6 +82,10 @@ class Truth:
     stepper publishes); the numpy attributes (``q_body_to_eci``, ``b_body_t``, …) and the derived
     quantities (``dcm_body_sun``, total momentum, energy) are built when read.
     """
+
+    __slots__ = ('t_s', 'q_xyzw', 'omega_xyz', 'r_xyz', 'v_xyz', 'b_eci_xyz', 'sun_present', 'torque_magnetic_xyz',
+                 'torque_gravity_gradient_xyz', 'wheel_h_xyz', '_rmat', '_inertia', '_sun_frame', 'b_body_xyz',
+                 'sun_body_xyz', 'sun_cosines_xyz')
 
     def __init__(self, t_s: float, q_xyzw: tuple[float, float, float, float], omega_xyz: Vec3, r_xyz: Vec3,
                  v_xyz: Vec3, b_eci_xyz: Vec3, sun_eci_xyz: Vec3, sun_present: bool, torque_magnetic_xyz: Vec3,
@@ -431,18 +435,23 @@ class RigidBodyModel:
         None: no thrusters), added to the disturbance term. Records the step-average magnetic and
         gravity-gradient torques (RK4 stage weights, i.e. Simpson's rule per substep).
         """
-        dt = finite_float("dt_s", dt_s)
-        if dt <= 0.0:
-            raise DynamicsError(f"dt_s must be > 0 s, got {dt}")
+        dt = positive_dt(dt_s)
         m = finite_xyz("dipole_body_am2", dipole_body_am2)
         h0 = finite_xyz("wheel_h_body_nms", wheel_h_body_nms)
         hdot = finite_xyz("wheel_hdot_body_nm", wheel_hdot_body_nm)
+        gas = None if thruster_torque_body_nm is None else finite_xyz("thruster_torque_body_nm",
+                                                                       thruster_torque_body_nm)
+        self.advance_unchecked(dt, m, h0, hdot, gas)
+
+    def advance_unchecked(self, dt: float, m: Vec3, h0: Vec3, hdot: Vec3, gas: Vec3 | None) -> None:
+        """:meth:`advance` for a caller that has checked its inputs (the stepper, every step): ``dt`` a float
+        > 0, the 3-vectors finite float triples (``gas`` the thruster torque or None). Spec §3."""
         t0 = self._t
         td = ZERO
         if self.disturbance is not None:
             td = finite_xyz("disturbance torque", self.disturbance.momentum_nms(t0, t0 + dt) / dt)
-        if thruster_torque_body_nm is not None:
-            gx, gy, gz = finite_xyz("thruster_torque_body_nm", thruster_torque_body_nm)
+        if gas is not None:
+            gx, gy, gz = gas
             td = (td[0] + gx, td[1] + gy, td[2] + gz)
         need_field = m[0] != 0.0 or m[1] != 0.0 or m[2] != 0.0
         gg = self.gravity_gradient
@@ -465,7 +474,10 @@ class RigidBodyModel:
 
     def truth(self, wheel_h_body_nms: Sequence[float]) -> Truth:
         """Truth at the current time; ``wheel_h_body_nms`` (N·m·s, body) for the total momentum."""
-        h = finite_xyz("wheel_h_body_nms", wheel_h_body_nms)
+        return self.truth_unchecked(finite_xyz("wheel_h_body_nms", wheel_h_body_nms))
+
+    def truth_unchecked(self, h: Vec3) -> Truth:
+        """:meth:`truth` for a caller that has checked ``h`` (a finite float triple): the stepper, every step."""
         t = self._t
         r, v, b = self._environment(t)
         return Truth(t, self._q, self._w, r, v, b, self.sun.direction_xyz, self.sun.present_xyz(r), self._tmag_avg,

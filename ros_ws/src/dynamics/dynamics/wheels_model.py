@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from acds_common import units
 
-from dynamics.errors import DynamicsError, finite_float, finite_vector3, finite_xyz
+from dynamics.errors import DynamicsError, finite_float, finite_vector3, finite_xyz, positive_dt
 
 #: Drive saturation voltage, V (seed 002 §4.2.2).
 V_SAT_V = 17.1
@@ -211,10 +211,12 @@ class ReactionWheels:
     def step_xyz(self, volts_body_axes_v: object, dt_s: float) -> tuple[tuple[float, float, float],
                                                                       tuple[float, float, float]]:
         """:meth:`step` on floats: (h at step start, mean ḣ) in body axes as float triples."""
-        volts = finite_xyz("volts_body_axes_v", volts_body_axes_v)
-        dt = finite_float("dt_s", dt_s)
-        if dt <= 0.0:
-            raise DynamicsError(f"dt_s must be > 0 s, got {dt}")
+        return self.step_xyz_unchecked(finite_xyz("volts_body_axes_v", volts_body_axes_v), positive_dt(dt_s))
+
+    def step_xyz_unchecked(self, volts: Sequence[float], dt: float) -> tuple[tuple[float, float, float],
+                                                                           tuple[float, float, float]]:
+        """:meth:`step_xyz` for a caller that has checked its inputs (the stepper, every step): ``volts`` three
+        finite numbers, ``dt`` a float > 0. Spec §4."""
         k, vsat = self.cfg.torque_gain_nm_per_v2, self.cfg.v_sat_v
         request = []  # body-axis torque requests k·V|V|, V limited to ±V_sat
         for v in volts:
