@@ -25,9 +25,10 @@ from acds_common.cdr import Codec
 from acds_common.graph import Graph, build_graph
 from acds_common.parameters import node_parameters, normalize
 from acds_common.scenario import Scenario
-from acds_common.stepper import StepError, Stepper, load_stepper
+from acds_common.stepper import Stepper, load_stepper
 
 from .launcher import LaunchError, RunResult
+from .step_program import Input, Route, Stage, StepProgram, compile_step
 from .summary import RunObserver
 
 
@@ -78,14 +79,13 @@ class DirectRun:
         read = {spec.topic(i.topic) for spec in self.graph.nodes.values() for st in spec.stages for i in st.inputs}
         self._store: dict[str, dict[int, Any]] = {topic: {} for topic, _codec, out in self._codecs.values()
                                                   if out.every_step and topic in read}
-        # Per node and output key, what _emit needs every step: (its store or None, stamp offset, many, the
-        # observer's sink for its bytes (truth: hashed) or None, the codec's encode, the observer's sink for its
-        # value or None, topic, codec).
-        self._routes: dict[str, dict[str, tuple[Any, ...]]] = {name: {} for name in self.graph.nodes}
+        # Per node and output key, where its values go (step_program.Route).
+        self._routes: dict[str, dict[str, Route]] = {name: {} for name in self.graph.nodes}
         for (node, key), (topic, codec, out) in self._codecs.items():
-            self._routes[node][key] = (self._store.get(topic), out.stamp_offset, out.many,
-                                       self.observer.truth_sink(topic), codec.encode, self.observer.value_sink(topic),
-                                       topic, codec)
+            self._routes[node][key] = Route(self._store.get(topic), out.stamp_offset, out.many,
+                                            self.observer.truth_sink(topic), codec.encode,
+                                            self.observer.reads_per_step(topic), self.observer.event_sink(topic),
+                                            topic, codec)
         self._max_lag = max((i.lag for spec in self.graph.nodes.values() for st in spec.stages for i in st.inputs),
                             default=0)
         self._writer: Any = None
@@ -94,50 +94,24 @@ class DirectRun:
         #: Live view (as for :class:`~acds_runtime.launcher.GraphRun`): fed (topic, CDR, value), closed after the run.
         self.live_sink = live(self.params) if live is not None else None
 
-    def _emit(self, node: str, outputs: dict[str, Any], k: int, *, initial: bool = False) -> None:
-        """Hand a stage's outputs of step k on: to their stores (the consumers' inputs), to the run observer
-        (the bytes of truth topics only: nothing else is encoded unless a bag is recorded or a live view fed)."""
-        routes = self._routes[node]
-        bytes_out = self._bytes_out
-        dt_ns = self.dt_ns
-        for key, value in outputs.items():
-            try:
-                store, offset, many, truth, encode, feed, topic, codec = routes[key]
-            except KeyError:
-                raise LaunchError(f'{node}: stepper returned undeclared output {key!r}') from None
-            step = k if initial else k + offset
-            if store is not None:
-                store[step] = value
-            if bytes_out:
-                self._publish(topic, codec, step, value if many else (value,), truth, feed)
-            elif many:
-                if feed is not None:
-                    for item in value:
-                        feed(topic, step, item)
-            else:
-                if truth is not None:
-                    truth(encode(step * dt_ns, value))
-                if feed is not None:
-                    feed(topic, step, value)
-
-    def _publish(self, topic: str, codec: Codec, step: int, items: Any, truth: Any, feed: Any) -> None:
+    def _publish(self, topic: str, codec: Codec, step: int, items: Any, truth: Any) -> None:
         """Recording or a live view: every message encoded, written, shown and observed."""
         live = self.live_sink
+        t_ns = step * self.dt_ns
         for item in items:
-            data = codec.encode(step * self.dt_ns, item)
+            data = codec.encode(t_ns, item)
             if self._writer is not None:
                 self._writer.write(topic, data)
             if live is not None:
                 live(topic, data, item)
             if truth is not None:
                 truth(data)
-            if feed is not None:
-                feed(topic, step, item)
+            self.observer.feed_value(topic, step, item)
 
     def _read(self, key: str, node: str) -> bool:
         """Whether anything takes ``node``'s output ``key`` in memory (an input's store, the run observer)."""
         route = self._routes[node].get(key)
-        return route is not None and (route[0] is not None or route[3] is not None or route[5] is not None)
+        return route is not None and route.read()
 
     def _clock_tick(self, k: int) -> None:
         if self._writer is not None or self.live_sink is not None:
@@ -175,46 +149,35 @@ class DirectRun:
             raise LaunchError(self._writer.error)
         return RunResult(self.scenario, final, wall, self.observer.summary(final, wall), bag=self.record)
 
-    def _loop(self, t0: float) -> int:
-        owner_name = self.graph.time_owner
-        owner = self.steppers[owner_name]
+    def _program(self) -> StepProgram:
+        """The step of this graph written out (:mod:`~acds_runtime.step_program`): stages in firing order, each
+        lag-0 input produced before its consumer fires, each lagged input None before its first step (each
+        store holds None at the steps before 0 its readers look back to)."""
         present = set(self.graph.nodes)
-        # Per stage: its node, name, bound method, the inputs of absent sources (always None) and, per input of a
-        # present source, (key, store of its topic, lag, topic, source). A lagged input is None before its first
-        # step: each store holds None at the steps before 0 its readers look back to.
-        plan = []
+        stages = []
         for name, stage in self.graph.firing_order():
             spec = self.graph.nodes[name]
-            absent = {inp.key: None for inp in stage.inputs if inp.source not in present}
-            live = tuple((inp.key, self._store.get(spec.topic(inp.topic), {}), inp.lag, spec.topic(inp.topic),
-                          inp.source) for inp in stage.inputs if inp.source in present)
-            for _key, store, lag, _topic, _source in live:
-                store.update(dict.fromkeys(range(-lag, 0)))
-            plan.append((name, stage.name, getattr(self.steppers[name], stage.name), absent, live))
+            inputs = tuple(Input(inp.key, self._store.get(spec.topic(inp.topic), {}), inp.lag, spec.topic(inp.topic),
+                                 inp.source) for inp in stage.inputs if inp.source in present)
+            for inp in inputs:
+                inp.store.update(dict.fromkeys(range(-inp.lag, 0)))
+            stages.append(Stage(name, stage.name, getattr(self.steppers[name], stage.name),
+                                tuple(inp.key for inp in stage.inputs if inp.source not in present), inputs))
+        return compile_step(stages, self._routes, self.graph.time_owner, dt_ns=self.dt_ns,
+                            pending=self.observer.pending, per_step_count=self.observer.per_step_count,
+                            drain=self.observer.drain, publish=self._publish if self._bytes_out else None)
+
+    def _loop(self, t0: float) -> int:
+        owner = self.steppers[self.graph.time_owner]
+        program = self._program()
+        step, progress, steps, bytes_out = program.step, self.progress, self.steps, self._bytes_out
         buffers = list(self._store.values())
-        emit, progress, steps, dt_ns, bytes_out = self._emit, self.progress, self.steps, self.dt_ns, self._bytes_out
         flush_truth = self.observer.flush_truth
         self._clock_tick(0)
-        self._emit(owner_name, owner.start(), 0, initial=True)
+        program.initial(owner.start())
         k = 0
         while True:
-            t_s = k * dt_ns / 1e9
-            for name, stage_name, method, absent, live in plan:
-                inputs = dict(absent)
-                for key, store, lag, topic, source in live:
-                    try:
-                        inputs[key] = store[k - lag]
-                    except KeyError:
-                        raise LaunchError(f'node {source} produced no {topic} for step '
-                                          f'{k - lag} ({name}.{stage_name} needs it)') from None
-                try:
-                    outputs = method(k, t_s, inputs)
-                except StepError as exc:
-                    raise LaunchError(f'node {name} failed at step {k}: {exc}') from None
-                except Exception as exc:  # noqa: BLE001 (as a node process reports it: one line naming the step)
-                    raise LaunchError(f'node {name} failed: stage {stage_name} raised {type(exc).__name__} at step '
-                                      f'{k}: {exc}') from None
-                emit(name, outputs, k)
+            step(k)
             if owner.finished:
                 return k
             k += 1

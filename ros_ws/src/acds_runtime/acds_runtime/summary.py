@@ -158,12 +158,14 @@ class RunObserver:
         self.truth = graph.truth_topics()
         self.events = {topics.resolve(t) for p in self.parts for t in getattr(p, 'event_topics', ())}
         self.codecs = {t: Codec(topics.type_of(t)) for t in (*self.per_step, *self.events)}
-        self._pending: dict[int, dict[str, Any]] = {}
+        #: Step → {per-step topic: value} of the steps not complete yet (:meth:`reads_per_step`).
+        self.pending: dict[int, dict[str, Any]] = {}
         self._next = 0
         self._digests = {t: hashlib.sha256() for t in self.truth}
         #: The direct engine's truth messages not hashed yet (:meth:`truth_sink`, :meth:`flush_truth`).
         self._truth_buffers: dict[str, list[bytes]] = {}
-        self._per_step_count = len(self.per_step)
+        #: How many per-step topics make a step complete.
+        self.per_step_count = len(self.per_step)
         self._event_parts = [part for part in self.parts if hasattr(part, 'event')]
         self.truth_messages = 0
 
@@ -195,43 +197,53 @@ class RunObserver:
                 self.truth_messages += len(buffer)
                 buffer.clear()
 
-    def value_sink(self, topic: str) -> Callable[[str, int, Any], None] | None:
-        """For the direct engine: :meth:`feed_value` of ``topic``'s kind (event or per-step) when the summaries
-        read it, else None."""
-        if topic not in self.codecs:
-            return None
-        return self._feed_event if topic in self.events else self._feed_step
+    def reads_per_step(self, topic: str) -> bool:
+        """For the direct engine: whether the summaries read per-step ``topic``; its values then go into
+        :attr:`pending` (step → {topic: value}), and :meth:`drain` is called once a step's are all there
+        (:attr:`per_step_count`): :meth:`feed_value` without a call per value."""
+        return topic in self.codecs and topic not in self.events
+
+    def event_sink(self, topic: str) -> Callable[[str, Any], None] | None:
+        """For the direct engine: what takes each value of event ``topic`` when a summary reads it, else None."""
+        return self._feed_event if topic in self.events else None
+
+    def drain(self) -> None:
+        """Hand the complete steps of :attr:`pending` to the summaries, in step order."""
+        self._drain(final=False)
 
     def feed_value(self, topic: str, k: int, value: Any) -> None:
-        """A decoded value of step k."""
+        """A decoded value of step k (of a topic no summary reads: nothing)."""
+        if topic not in self.codecs:
+            return
         if topic in self.events:
-            self._feed_event(topic, k, value)
+            self._feed_event(topic, value)
         else:
             self._feed_step(topic, k, value)
 
-    def _feed_event(self, topic: str, _k: int, value: Any) -> None:
+    def _feed_event(self, topic: str, value: Any) -> None:
         for part in self._event_parts:
             part.event(topic, value)
 
     def _feed_step(self, topic: str, k: int, value: Any) -> None:
-        values = self._pending.get(k)
+        values = self.pending.get(k)
         if values is None:
-            values = self._pending[k] = {}
+            values = self.pending[k] = {}
         values[topic] = value
-        if len(values) >= self._per_step_count:  # step k complete: it (and what waited for it) can go
+        if len(values) >= self.per_step_count:  # step k complete: it (and what waited for it) can go
             self._drain(final=False)
 
     def _drain(self, final: bool) -> None:
-        while self._next in self._pending:
-            values = self._pending[self._next]
-            if not final and len(values) < self._per_step_count:
+        pending = self.pending
+        while self._next in pending:
+            values = pending[self._next]
+            if not final and len(values) < self.per_step_count:
                 return
-            del self._pending[self._next]
+            del pending[self._next]
             for part in self.parts:
                 part.step(self._next, values)
             self._next += 1
-        if final and self._pending:  # steps after a gap (never in a complete run): in order
-            self._next = min(self._pending)
+        if final and pending:  # steps after a gap (never in a complete run): in order
+            self._next = min(pending)
             self._drain(final=True)
 
     # ---- result -------------------------------------------------------------------------------------
