@@ -11,6 +11,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 os.environ.setdefault('ROS_LOG_DIR', str(ROOT / 'runs' / 'ros_log'))
 os.environ.setdefault('ACDS_WORKSPACE', str(ROOT))
+# Bound compiled kernels check every call's argument types (acds_common.kernels.bound), here and in the runs the
+# tests start: a call site whose types are not what it bound fails the suite instead of being converted.
+os.environ.setdefault('ACDS_KERNEL_CHECK', '1')
 
 
 @pytest.fixture

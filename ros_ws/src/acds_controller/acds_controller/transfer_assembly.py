@@ -86,7 +86,11 @@ class TransferAssembly:
         self.lsb_v = self.full_scale_v / (1 << adc_bits)
         self._top_count = float((1 << adc_bits) - 1)
 
+        #: The A/D kernel as the dispatcher (any argument types) and bound to float triples (:func:`kernels.bound`;
+        #: the converter's constants are floats by construction above: ``check_gain``, a true division, ``float``).
         self._field = kernels.compiled(field_xyz)
+        self._field_floats = kernels.bound(field_xyz, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), self.lsb_v, self._top_count,
+                                           self.scale_v_per_gauss)
 
     def digitise(self, volts: np.ndarray) -> np.ndarray:
         """Quantise volts to the nearest ADC count (clipped to 0…2ⁿ−1) and return the count's voltage, V."""
@@ -94,7 +98,15 @@ class TransferAssembly:
 
     def sense_xyz(self, volts: Sequence[float], bias_volts: Sequence[float]) -> Vec3:
         """:meth:`sense` on finite float triples (the stepper's per-step path), T."""
-        return self._field(volts, bias_volts, self.lsb_v, self._top_count, self.scale_v_per_gauss)
+        # The volts come from another model (a magnetometer's output, a message), so their types are checked here:
+        # the bound kernel only on two tuples of three floats, anything else (ints from integer parameters, numpy
+        # scalars, lists) through the dispatcher, which types it.
+        v0, v1, v2 = volts
+        b0, b1, b2 = bias_volts
+        field = (self._field_floats if type(volts) is tuple and type(bias_volts) is tuple and type(v0) is float
+                 and type(v1) is float and type(v2) is float and type(b0) is float and type(b1) is float
+                 and type(b2) is float else self._field)
+        return field(volts, bias_volts, self.lsb_v, self._top_count, self.scale_v_per_gauss)
 
     def sense(self, volts: np.ndarray, bias_volts: np.ndarray) -> np.ndarray:
         """Sensed field in tesla (body axes) from per-axis field volts and bias reference volts (Table 4-5)."""

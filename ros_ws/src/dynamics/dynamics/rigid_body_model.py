@@ -377,7 +377,22 @@ class RigidBodyModel:
         self.disturbance = disturbance
         #: A circular orbit and the tilted dipole as floats: the kernel evaluates them at the stage times itself.
         self._circular_dipole = circular_dipole_parameters(orbit, field)
-        self._rk4 = kernels.compiled(attitude_rk4 if self._circular_dipole is None else attitude_rk4_circular_dipole)
+        #: The RK4 kernel bound to the one signature :meth:`advance_unchecked` calls it with (:func:`kernels.bound`):
+        #: the types are fixed by construction there: q and ω float tuples (from ``float``/:func:`finite_xyz` here,
+        #: then the kernel's own results), ``substeps`` an ``int``, t a float (:func:`finite_float`, then float sums),
+        #: dt a float (:func:`positive_dt`; :meth:`advance_unchecked`'s contract, the stepper's ``positive_dt``), the
+        #: environment float sextuples (the orbit's and field's floats or the kernel's end environment), the circular
+        #: dipole's parameters and the inertia rows fixed here (floats, :func:`mat3`), m, h0 and ḣ float triples
+        #: (:meth:`advance` makes them with :func:`finite_xyz`; the stepper passes its inputs' Vector3Stamped values,
+        #: plain floats from :func:`acds_common.messages.vector3` or a kernel, the direct engine running only the
+        #: built-in steppers), the disturbance a float triple whatever numbers the thrusters give (sums with the
+        #: floats of ZERO or :func:`finite_xyz`), gravity gradient and field flags bools (``bool`` here, a comparison
+        #: there). The test suite runs every shipped scenario with the check on (:func:`kernels.checking`).
+        rk4 = attitude_rk4 if self._circular_dipole is None else attitude_rk4_circular_dipole
+        env = ((_NO_ENV,) * (2 * self.substeps + 1), None, None) if self._circular_dipole is None else \
+            (_NO_ENV, self._circular_dipole)
+        self._rk4 = kernels.bound(rk4, self._q, self._w, self.substeps, self._t, 1.0, *env, self._inertia_t,
+                                  self._inertia_inv_t, ZERO, ZERO, ZERO, ZERO, self.gravity_gradient, True)
         #: The environment (t, r, v, b) at the last time it was needed in full: an ``advance`` ends
         #: where ``truth`` and the next ``advance`` start.
         self._env_cache: tuple[float, Vec3, Vec3, Vec3] | None = None

@@ -309,8 +309,7 @@ class DriveAssembly:
             raise EmDriverError(f'mismatch_tolerance_frac must be > 0, got {mismatch_tolerance_frac!r}')
         if not (math.isfinite(mismatch_settle_s) and mismatch_settle_s >= 0.0):
             raise EmDriverError(f'mismatch_settle_s must be >= 0 s, got {mismatch_settle_s!r}')
-        self._period = kernels.compiled(drive_period)
-        compiled = self._period is not drive_period
+        compiled = kernels.compiled(drive_period) is not drive_period
         #: The six units' state rows (axis k's A and B at 2k, 2k + 1) and the axes' parameter rows.
         self._state = state_table(6, compiled)
         self._axes = [_Axis(c, self._state[2 * k:2 * k + 2]) for k, c in enumerate(configs)]
@@ -318,6 +317,11 @@ class DriveAssembly:
         self._coiled = tuple((k, ax) for k, ax in enumerate(self._axes) if ax.coil)
         params = [ax.params for ax in self._axes]
         self._params = np.array(params) if compiled else params
+        #: The drive kernel bound to the one signature :meth:`step_xyz` calls it with (:func:`kernels.bound`): the
+        #: types are fixed by construction there: the state and parameter tables are this object's float64 C
+        #: arrays (never replaced), the held commands floats (0.0 here, then :meth:`step_xyz` stores only
+        #: ``float`` values), the active units ``int``, the period a ``float`` (:meth:`step_xyz` converts it).
+        self._period = kernels.bound(drive_period, self._state, self._params, (0.0, 0.0, 0.0), (0, 0, 0), 1.0)
         self.auto_switch_to_standby = auto_switch_to_standby
         self.mismatch_tolerance_frac = mismatch_tolerance_frac
         self.mismatch_settle_s = mismatch_settle_s
@@ -374,14 +378,14 @@ class DriveAssembly:
         for k, ax in self._coiled:  # an axis without a coil ignores its command
             c = command[k]
             if finite or math.isfinite(c):
-                ax.command = c
+                ax.command = float(c)  # a float for the bound kernel, whatever number the caller gave
             else:
                 diagnostics.append(f'axis {k}: rejected non-finite moment command {c!r}; '
                                    f'holding last valid command {ax.command:g}')
         x, y, z = self._axes
         unit_a = UNITS[0]
         rows = self._period(self._state, self._params, (x.command, y.command, z.command),
-                            (int(x.active != unit_a), int(y.active != unit_a), int(z.active != unit_a)), dt_s)
+                            (int(x.active != unit_a), int(y.active != unit_a), int(z.active != unit_a)), float(dt_s))
         for k, ax in self._coiled:
             row = rows[k]
             monitored = self._monitor(k, ax, row[4], row[3], dt_s)

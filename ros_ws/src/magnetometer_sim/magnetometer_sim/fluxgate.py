@@ -38,7 +38,7 @@ import numpy as np
 from acds_common import kernels, validation
 from acds_common.commands import UNITS  # assembly names: active/standby pair
 from acds_common.units import GAUSS_T
-from acds_common.vec3 import Vec3, mat3, mv
+from acds_common.vec3 import ZERO, Vec3, mat3, mv
 
 __all__ = [
     'MagnetometerError',
@@ -335,7 +335,12 @@ class Magnetometer:
         #: The two assemblies in UNITS order and their volts kernel (one call a read; the units share ``params``,
         #: hence one curve).
         self._pair = (self.units[UNITS[0]], self.units[UNITS[1]])
-        self._pair_volts = kernels.compiled(pair_volts)
+        a, b = self._pair
+        #: Bound to the one signature :meth:`read_xyz` calls it with (:func:`kernels.bound`), fixed by construction:
+        #: :meth:`FluxgateAssembly.field_g` gives floats (a true division of every component), each axis bias is
+        #: ``bias_v`` plus a float shift (0.0 or sums from 0.0), and the curve is unit A's, built once here.
+        #: (The example fields are float triples, not ``field_g``'s: that would draw from the units' noise streams.)
+        self._pair_volts = kernels.bound(pair_volts, ZERO, a.axis_bias_v, ZERO, b.axis_bias_v, a.curve)
 
     def select_unit(self, unit: str) -> None:
         """Make ``unit`` ('A' or 'B') the active assembly."""
