@@ -25,6 +25,7 @@ operations give the same bits on every machine. The direct engine runs it compil
 from __future__ import annotations
 
 import math
+import struct
 from collections.abc import Sequence
 
 import numpy as np
@@ -105,8 +106,9 @@ class Truth:
         self._sun_frame = sun_frame
         self.b_body_xyz = mtv(self._rmat, b_eci_xyz)
         self.sun_body_xyz = mtv(self._rmat, sun_eci_xyz)
-        #: (B13, B23, B33): the sun frame's z axis (the sun line) in body axes.
-        self.sun_cosines_xyz = mtv(self._rmat, sun_frame[2])
+        #: (B13, B23, B33): the sun frame's z axis (the sun line) in body axes; the product above when the model
+        #: gives that row itself as the Sun's direction (the same bits: :class:`RigidBodyModel`).
+        self.sun_cosines_xyz = self.sun_body_xyz if sun_frame[2] is sun_eci_xyz else mtv(self._rmat, sun_frame[2])
 
     @property
     def q_body_to_eci(self) -> np.ndarray:
@@ -190,6 +192,11 @@ class Truth:
     def attitude_to_sun_deg(self) -> float:
         """Angle between body z and the sun line, deg (acos B33)."""
         return math.degrees(math.acos(max(-1.0, min(1.0, self.sun_cosines_xyz[2]))))
+
+
+def _bits(v: Vec3) -> bytes:
+    """A float triple's IEEE bits (equal bits: the same results from every product with it)."""
+    return struct.pack('<3d', *v)
 
 
 #: One RK4 stage's attitude-independent environment: r_eci (m) and b_eci (T) as six floats.
@@ -367,6 +374,10 @@ class RigidBodyModel:
         self.ecliptic_normal_eci = (default_ecliptic_normal_eci() if ecliptic_normal_eci is None
                                     else finite_vector3("ecliptic_normal_eci", ecliptic_normal_eci))
         self._sun_frame = mat3(sun_frame_dcm(np.array(sun.direction_xyz), self.ecliptic_normal_eci))
+        sun_line = self._sun_frame[2]  # the direction normalised: often the very same bits (a unit direction)
+        #: The Sun's ECI direction given to ``Truth``: the sun line's row itself when the bits are the same, so that
+        #: ``Truth`` rotates it once for both the sun sensor and the direction cosines.
+        self._sun_eci = sun_line if _bits(sun_line) == _bits(sun.direction_xyz) else sun.direction_xyz
         self.gravity_gradient = bool(gravity_gradient)
         self.substeps = int(substeps)
         self._q: tuple[float, float, float, float] = tuple(float(c) for c in q0 / np.linalg.norm(q0))  # type: ignore
@@ -495,5 +506,5 @@ class RigidBodyModel:
         """:meth:`truth` for a caller that has checked ``h`` (a finite float triple): the stepper, every step."""
         t = self._t
         r, v, b = self._environment(t)
-        return Truth(t, self._q, self._w, r, v, b, self.sun.direction_xyz, self.sun.present_xyz(r), self._tmag_avg,
+        return Truth(t, self._q, self._w, r, v, b, self._sun_eci, self.sun.present_xyz(r), self._tmag_avg,
                      self._tgg_avg, h, self._inertia_t, self._sun_frame)

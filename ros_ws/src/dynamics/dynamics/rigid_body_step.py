@@ -90,6 +90,8 @@ class RigidBodyStep(Stepper):
         self.limits = actuator_limits(self.section('em_driver'), self.section('wheels'))
         self._bounds = tuple(tuple(float(x) * (1.0 + 1e-9) for x in limit)
                              for limit in (self.limits.dipole_am2, self.limits.wheel_momentum_nms))
+        if not all(math.isfinite(b) for bound in self._bounds for b in bound):  # what integrate's check relies on
+            raise DynamicsError(f'actuator limits must be finite, got {self._bounds}')
         self._wheel_h = _ZERO
         #: Torque-free so far (external and wheel torques all zero): the drifts are integration error.
         self.torque_free = not self.model.gravity_gradient and self.model.disturbance is None
@@ -159,9 +161,12 @@ class RigidBodyStep(Stepper):
         h, hdot, dipole = xyz(inp['wheel_h']), xyz(inp['wheel_hdot']), xyz(inp['dipole'])
         dt = self._dt
         h_end = (h[0] + hdot[0] * dt, h[1] + hdot[1] * dt, h[2] + hdot[2] * dt)
-        dipole_bound, wheel_bound = self._bounds
-        if not (math.isfinite(h[0] + h[1] + h[2] + hdot[0] + hdot[1] + hdot[2] + dipole[0] + dipole[1] + dipole[2])
-                and _within(dipole, dipole_bound) and _within(h, wheel_bound) and _within(h_end, wheel_bound)):
+        # -b <= x <= b is |x| <= b, false for a NaN, and for ±inf (the bounds are finite hardware limits): with
+        # h_end it also refuses a non-finite ḣ (h finite, then h + ḣ·dt is not).
+        (m0, m1, m2), (w0, w1, w2) = self._bounds
+        if not (-m0 <= dipole[0] <= m0 and -m1 <= dipole[1] <= m1 and -m2 <= dipole[2] <= m2
+                and -w0 <= h[0] <= w0 and -w1 <= h[1] <= w1 and -w2 <= h[2] <= w2
+                and -w0 <= h_end[0] <= w0 and -w1 <= h_end[1] <= w1 and -w2 <= h_end[2] <= w2):
             self._refuse(k, h, hdot, dipole, h_end)
         gas = None if inp['gas_wrench'] is None else inp['gas_wrench'][1]
         if gas is not None and not all(math.isfinite(x) for x in gas):

@@ -218,22 +218,23 @@ class ReactionWheels:
         """:meth:`step_xyz` for a caller that has checked its inputs (the stepper, every step): ``volts`` three
         finite numbers, ``dt`` a float > 0. Spec §4."""
         k, vsat = self.cfg.torque_gain_nm_per_v2, self.cfg.v_sat_v
-        request = []  # body-axis torque requests k·V|V|, V limited to ±V_sat
-        for v in volts:
-            v = -vsat if v < -vsat else vsat if v > vsat else v
-            request.append(k * v * abs(v))
-        r0, r1, r2 = request
-        torque = request if self._orthogonal else [d0 * r0 + d1 * r1 + d2 * r2 for d0, d1, d2 in self._dist_rows]
+        vx, vy, vz = volts  # body-axis torque requests k·V|V|, V limited to ±V_sat
+        vx = -vsat if vx < -vsat else vsat if vx > vsat else vx
+        vy = -vsat if vy < -vsat else vsat if vy > vsat else vy
+        vz = -vsat if vz < -vsat else vsat if vz > vsat else vz
+        r0, r1, r2 = k * vx * abs(vx), k * vy * abs(vy), k * vz * abs(vz)
+        torque = (r0, r1, r2) if self._orthogonal else [d0 * r0 + d1 * r1 + d2 * r2 for d0, d1, d2 in self._dist_rows]
         peak = max(map(abs, torque))
         t_max = k * vsat * vsat
         if peak > t_max:
             torque = [t * (t_max / peak) for t in torque]
         self._torque = tuple(torque)
         h_start = self._h
-        h_end = []
-        for h, t, c in zip(h_start, torque, self._caps_t, strict=True):
-            h = h + t * dt
-            h_end.append(-c if h < -c else c if h > c else h)
+        caps = self._caps_t
+        h_end = [0.0] * len(caps)  # each wheel's h + τ·dt limited to ±its capacity
+        for i, c in enumerate(caps):
+            h = h_start[i] + torque[i] * dt
+            h_end[i] = -c if h < -c else c if h > c else h
         self._h = tuple(h_end)
         if self._orthogonal:
             start, end = h_start, h_end

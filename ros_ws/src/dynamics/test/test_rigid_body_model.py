@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import math
+import struct
 
 import numpy as np
 import pytest
 from acds_common import units
-from acds_common.attitude import dcm_to_quat, quat_to_dcm
+from acds_common.attitude import dcm, dcm_to_quat, quat_to_dcm
 from acds_common.environment import (
     EarthFieldConfig,
     Orbit,
@@ -20,6 +21,7 @@ from acds_common.environment import (
     sun_frame_dcm,
 )
 from acds_common.inertia import InertiaError
+from acds_common.vec3 import mat3, mtv
 from dynamics.errors import DynamicsError
 from dynamics.rigid_body_model import (
     DEFAULT_SUBSTEPS,
@@ -195,6 +197,23 @@ def test_sun_direction_cosines_follow_study_definition(roll: float, pitch: float
     assert t_roll.attitude_to_sun_deg == pytest.approx(abs(math.degrees(roll)), abs=1e-6)
     assert t_pitch.sun_direction_cosines[0] == pytest.approx(-math.sin(pitch), abs=1e-12)  # B13 = −pitch
     assert np.allclose(t_pitch.sun_body_unit, t_pitch.sun_direction_cosines, atol=1e-12)
+
+
+@pytest.mark.parametrize("sun_angle_deg", [0.0, -120.0, 30.0, 200.0])
+def test_sun_cosines_and_sun_body_are_the_rotations_of_their_own_vectors(sun_angle_deg: float) -> None:
+    """The model hands Truth the sun line's row as the Sun's direction when the bits agree (one rotation for both):
+    each output still has the bits of its own vector rotated, whichever path it took."""
+    sun = Sun(SunConfig.from_sun_angle(math.radians(sun_angle_deg)))
+    model = RigidBodyModel(I_B, ORBIT_225, FIELD, sun, gravity_gradient=False, q0_body_to_eci=Q_TILTED)
+    line = mat3(sun_frame_dcm(np.array(sun.direction_xyz), ecliptic_normal_eci()))[2]
+    same = struct.pack("<3d", *line) == struct.pack("<3d", *sun.direction_xyz)
+    assert same == (sun_angle_deg in (0.0, -120.0))  # both paths are exercised
+    model.advance(0.5, (100.0, -50.0, 20.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    truth = model.truth((0.0, 0.0, 0.0))
+    r = dcm(truth.q_xyzw)
+    bits = struct.Struct("<3d").pack
+    assert bits(*truth.sun_cosines_xyz) == bits(*mtv(r, line))
+    assert bits(*truth.sun_body_xyz) == bits(*mtv(r, sun.direction_xyz))
 
 
 def test_truth_is_deterministic_and_independent_of_truth_calls() -> None:

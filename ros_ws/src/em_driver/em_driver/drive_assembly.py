@@ -54,7 +54,7 @@ from em_driver.bridge_switch import (
     unit_period,
 )
 
-__all__ = ['DRIVE_TYPES', 'UNITS', 'AxisConfig', 'AssemblyResult', 'DriveAssembly']
+__all__ = ['DRIVE_TYPES', 'FIGURES', 'UNITS', 'AxisConfig', 'AssemblyResult', 'DriveAssembly']
 
 #: Drive types selectable per axis.
 DRIVE_TYPES = ('bridge_switch', 'constant_level', 'none')
@@ -116,8 +116,14 @@ class AxisConfig:
         return cls('constant_level', coil, _default_constant_level_driver())
 
 
+#: The per-axis figures of a period, in the order of :func:`axis_period`'s (a kernel row's) figures.
+FIGURES = ('avg_dipole_am2', 'end_dipole_am2', 'coil_current_a', 'commanded_current_a', 'e_ft_v', 'duty', 'power_w',
+           'switch_count')
+_COLUMN = {name: i for i, name in enumerate(FIGURES)}
+
+
 class AssemblyResult:
-    """Per-axis outputs of one control period (arrays indexed x, y, z).
+    """Per-axis outputs of one control period (x, y, z).
 
     avg_dipole_am2 / end_dipole_am2: time-averaged and end dipole, A·m².
     coil_current_a: active winding current at the end, A.
@@ -131,20 +137,15 @@ class AssemblyResult:
     events: unit switch-overs and alarm transitions this period.
     diagnostics: rejected commands (NaN/inf) this period.
 
-    The first eight parameters are in the order of :func:`axis_period`'s figures (the assembly passes its
-    kernel's rows transposed). The per-axis values are kept as given (the assembly gives float tuples, what the stepper
-    publishes through :meth:`xyz`); the attributes are them as numpy arrays, built when read.
+    ``rows``: one per axis (x, y, z), its :data:`FIGURES` in that order (what :func:`drive_period` returns, kept as
+    it is: a figure's three values are gathered only when read, by :meth:`xyz` or :meth:`per_axis`); the attributes
+    are the figures as numpy arrays, built when read.
     """
 
-    def __init__(self, avg_dipole_am2: Sequence[float], end_dipole_am2: Sequence[float],
-                 coil_current_a: Sequence[float], commanded_current_a: Sequence[float], e_ft_v: Sequence[float],
-                 duty: Sequence[float], power_w: Sequence[float], switch_count: Sequence[int],
-                 alarms: Sequence[bool], active_units: tuple[str, str, str], events: tuple[str, ...],
-                 diagnostics: tuple[str, ...]) -> None:
-        self._values = {'avg_dipole_am2': avg_dipole_am2, 'end_dipole_am2': end_dipole_am2,
-                        'coil_current_a': coil_current_a, 'commanded_current_a': commanded_current_a,
-                        'e_ft_v': e_ft_v, 'duty': duty, 'switch_count': switch_count, 'power_w': power_w,
-                        'alarms': alarms}
+    def __init__(self, rows: Sequence[Sequence[Any]], alarms: Sequence[bool], active_units: tuple[str, str, str],
+                 events: tuple[str, ...], diagnostics: tuple[str, ...]) -> None:
+        self._rows = rows
+        self._alarms = alarms
         self.active_units = active_units
         self.events = events
         self.diagnostics = diagnostics
@@ -153,58 +154,64 @@ class AssemblyResult:
         self.alarm_flags = (bool(x), bool(y), bool(z))
 
     def xyz(self, name: str) -> tuple[float, float, float]:
-        """One per-axis quantity (by its attribute name) as a float triple."""
-        x, y, z = self._values[name]
-        return float(x), float(y), float(z)
+        """One figure (by its name in :data:`FIGURES`) as a float triple."""
+        i = _COLUMN[name]
+        x, y, z = self._rows
+        return float(x[i]), float(y[i]), float(z[i])
 
     def per_axis(self, name: str) -> Sequence[Any]:
-        """One per-axis quantity (by its attribute name) as given (the telemetry's path: no array built)."""
-        return self._values[name]
+        """One figure (by its name in :data:`FIGURES`) or ``alarms``, per axis as given (the telemetry's path: no
+        array built)."""
+        if name == 'alarms':
+            return self._alarms
+        i = _COLUMN[name]
+        x, y, z = self._rows
+        return x[i], y[i], z[i]
 
     @property
     def avg_dipole_am2(self) -> np.ndarray:
         """Time-averaged dipole, A·m²."""
-        return np.asarray(self._values['avg_dipole_am2'])
+        return np.asarray(self.per_axis('avg_dipole_am2'))
 
     @property
     def end_dipole_am2(self) -> np.ndarray:
         """Dipole at the end, A·m²."""
-        return np.asarray(self._values['end_dipole_am2'])
+        return np.asarray(self.per_axis('end_dipole_am2'))
 
     @property
     def coil_current_a(self) -> np.ndarray:
         """Active winding current at the end, A."""
-        return np.asarray(self._values['coil_current_a'])
+        return np.asarray(self.per_axis('coil_current_a'))
 
     @property
     def commanded_current_a(self) -> np.ndarray:
         """Current command, A."""
-        return np.asarray(self._values['commanded_current_a'])
+        return np.asarray(self.per_axis('commanded_current_a'))
 
     @property
     def e_ft_v(self) -> np.ndarray:
         """Active unit's current telemetry, V."""
-        return np.asarray(self._values['e_ft_v'])
+        return np.asarray(self.per_axis('e_ft_v'))
 
     @property
     def duty(self) -> np.ndarray:
         """Active unit's duty cycle."""
-        return np.asarray(self._values['duty'])
+        return np.asarray(self.per_axis('duty'))
 
     @property
     def switch_count(self) -> np.ndarray:
         """Active unit's bridge transitions."""
-        return np.asarray(self._values['switch_count'])
+        return np.asarray(self.per_axis('switch_count'))
 
     @property
     def power_w(self) -> np.ndarray:
         """Electrical power of both units, W."""
-        return np.asarray(self._values['power_w'])
+        return np.asarray(self.per_axis('power_w'))
 
     @property
     def alarms(self) -> np.ndarray:
         """Excess-coil-current / mismatch alarm."""
-        return np.asarray(self._values['alarms'])
+        return np.asarray(self._alarms)
 
 
 #: An axis's drive type as the kernels read it (its index in DRIVE_TYPES).
@@ -386,31 +393,33 @@ class DriveAssembly:
         unit_a = UNITS[0]
         rows = self._period(self._state, self._params, (x.command, y.command, z.command),
                             (int(x.active != unit_a), int(y.active != unit_a), int(z.active != unit_a)), float(dt_s))
+        self._monitor(rows, dt_s, events)
+        return AssemblyResult(rows, (x.alarm, y.alarm, z.alarm), (x.active, y.active, z.active), tuple(events),
+                              tuple(diagnostics))
+
+    def _monitor(self, rows: Sequence[Sequence[float]], dt_s: float, events: list[str]) -> None:
+        """Mismatch alarm of each axis with a coil (its kernel row: e_ft against the expected current, the
+        commanded current limited to what the supply reaches); optional auto switch to standby. Appends the
+        events to ``events``."""
+        tolerance_frac, settle_s, auto_switch = (self.mismatch_tolerance_frac, self.mismatch_settle_s,
+                                                 self.auto_switch_to_standby)
         for k, ax in self._coiled:
             row = rows[k]
-            monitored = self._monitor(k, ax, row[4], row[3], dt_s)
-            if monitored:
-                events.extend(monitored)
-        # The kernel's per-axis rows are in AssemblyResult's parameter order: transposed, they are its arguments.
-        return AssemblyResult(*zip(*rows, strict=True), (x.alarm, y.alarm, z.alarm), (x.active, y.active, z.active),
-                              tuple(events), tuple(diagnostics))
-
-    def _monitor(self, k: int, ax: _Axis, e_ft_v: float, command_a: float, dt_s: float) -> list[str]:
-        """Mismatch alarm: e_ft against the expected current (``command_a`` limited to what the supply
-        reaches); optional auto switch to standby."""
-        measured_a = e_ft_v / ax.sense_gain_v_per_a
-        on_a = ax.on_current_a
-        expected_a = -on_a if command_a < -on_a else on_a if command_a > on_a else command_a  # min(max(…))
-        if abs(measured_a - expected_a) > self.mismatch_tolerance_frac * ax.full_scale_a:
-            ax.mismatch_time_s += dt_s
-        else:
-            ax.mismatch_time_s = 0.0
-        alarm = ax.mismatch_time_s > self.mismatch_settle_s
-        switch = alarm and self.auto_switch_to_standby
-        events = alarm_events(k, ax, alarm, lambda: (f'{measured_a:.4f} A', f'{expected_a:.4f} A'), switch)
-        if switch:
-            ax.mismatch_time_s = 0.0
-        return events
+            measured_a = row[4] / ax.sense_gain_v_per_a
+            command_a = row[3]
+            on_a = ax.on_current_a
+            expected_a = -on_a if command_a < -on_a else on_a if command_a > on_a else command_a  # min(max(…))
+            if abs(measured_a - expected_a) > tolerance_frac * ax.full_scale_a:
+                ax.mismatch_time_s += dt_s
+            else:
+                ax.mismatch_time_s = 0.0
+            alarm = ax.mismatch_time_s > settle_s
+            switch = alarm and auto_switch
+            if alarm != ax.alarm or switch:  # an edge or a switch (alarm_events' own test, without its call)
+                events.extend(alarm_events(k, ax, alarm, lambda m=measured_a, e=expected_a: (f'{m:.4f} A', f'{e:.4f} A'),
+                                           switch))
+                if switch:
+                    ax.mismatch_time_s = 0.0
 
     def _axis(self, axis: int) -> _Axis:
         return axis_of(self._axes, axis)

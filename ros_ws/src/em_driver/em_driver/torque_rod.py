@@ -606,11 +606,10 @@ class TorqueRodAssembly:
             switches[k] = runs[ax.active].switches
             healthy = pwm_response(start_a, duty, dt_s, active.full_current_a, active.tau_s, self.driver)
             events.extend(self._monitor(k, ax, active.current_a, healthy.end_current_a))
-        return AssemblyResult(
-            avg_dipole_am2=out['avg'], end_dipole_am2=out['end'], coil_current_a=out['cur'],
-            commanded_current_a=out['cmd'], e_ft_v=out['eft'], duty=out['duty'], switch_count=switches,
-            power_w=out['power'], alarms=np.array([a.alarm for a in self._axes]),
-            active_units=self.active_units, events=tuple(events), diagnostics=tuple(diagnostics))
+        rows = tuple(zip(*(out[k] for k in ('avg', 'end', 'cur', 'cmd', 'eft', 'duty', 'power')), switches,
+                         strict=True))  # per axis, its figures in drive_assembly.FIGURES order
+        return AssemblyResult(rows, alarms=np.array([a.alarm for a in self._axes]), active_units=self.active_units,
+                              events=tuple(events), diagnostics=tuple(diagnostics))
 
     #: The stepper's per-step entry (:meth:`DriveAssembly.step_xyz`'s counterpart): the rods' own checked step.
     step_xyz = step
