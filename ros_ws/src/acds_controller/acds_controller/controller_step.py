@@ -88,7 +88,8 @@ class DpaStep(Stepper):
         """Stage ``control``: one DPA control period (commands applied first, inputs checked)."""
         warnings: list[tuple[str, dict[str, str]]] = []
         mode, commands = self._mode_status(inp['mode'])
-        self.apply_commands(k, commands, warnings)
+        if commands:
+            self.apply_commands(k, commands, warnings)
         mode = resolve_mode(mode, 'mode_1a', HEAO_MODES, warnings, 'unknown mode {!r} from the mode manager')
         try:
             result = self._dpa_step(k, mode, inp)
