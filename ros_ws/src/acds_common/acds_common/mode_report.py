@@ -99,6 +99,27 @@ def mode_status(value: Sequence[Status] | None, node: str) -> tuple[str | None, 
     return mode, commands
 
 
+class ModeStatusReader:
+    """:func:`mode_status` for one node, kept for the last ``mode`` value read.
+
+    The mode manager hands on the same value object while its report stays the same (it reuses its encoding),
+    and the direct engine passes that object on in memory: most steps then read nothing. A value is an immutable
+    tuple of :class:`Status`, so the same object means the same fields; a node process decodes a new object every
+    step and reads it every step. The commands list returned is the one kept: the caller reads it, never changes it.
+    """
+
+    def __init__(self, node: str) -> None:
+        self.node = node
+        self._value: Sequence[Status] | None = None
+        self._fields = mode_status(None, node)
+
+    def __call__(self, value: Sequence[Status] | None) -> tuple[str | None, list[str]]:
+        """(mode, commands forwarded to the node in order) of ``value``, as :func:`mode_status` gives them."""
+        if value is not self._value:
+            self._value, self._fields = value, mode_status(value, self.node)
+        return self._fields
+
+
 def mode_state(value: Sequence[Status] | None) -> tuple[str, str, bool] | None:
     """(mode, cause, captured) of the step's ``mode`` value, as :meth:`ModeReport.decode` gives them; None if
     absent. What a run summary reads each step: the three keys alone, without building the whole report."""

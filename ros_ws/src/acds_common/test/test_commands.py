@@ -15,7 +15,7 @@ from acds_common.commands import (
     decode,
 )
 from acds_common.messages import MODE_STATUS, OK
-from acds_common.mode_report import ModeReport, mode_state, mode_status, run_complete
+from acds_common.mode_report import ModeReport, ModeStatusReader, mode_state, mode_status, run_complete
 
 GROUND = (ModeCommand, EeaSelect, MagnetometerSelect, LawCommand, GainCommand, GasCommand)
 
@@ -67,6 +67,18 @@ def test_the_mode_report_round_trips_through_the_mode_status():
     assert ModeReport.decode(value) == report
     assert mode_status(value, 'em_driver') == ('mode_1b', ['eea_select x B', 'eea_select y A'])
     assert run_complete(value) and not run_complete(ModeReport('mode_1a').encode()) and not run_complete(None)
+
+
+def test_a_mode_status_reader_reads_what_mode_status_reads_and_rereads_a_new_value_only():
+    read = ModeStatusReader('em_driver')
+    assert read(None) == mode_status(None, 'em_driver') == (None, [])
+    first = ModeReport('mode_1a', forwarded=(('em_driver', 'eea_select x B'),)).encode()
+    kept = read(first)
+    assert kept == ('mode_1a', ['eea_select x B']) and read(first) is kept  # the same object: not read again
+    equal = ModeReport('mode_1a', forwarded=(('em_driver', 'eea_select x B'),)).encode()  # a node process's decode
+    again = read(equal)
+    assert again == kept and again is not kept  # another object: read again
+    assert read(ModeReport('mode_1b').encode()) == ('mode_1b', []) and read(None) == (None, [])
 
 
 def test_a_mode_logic_that_never_ends_a_run_sends_no_run_complete():

@@ -20,7 +20,6 @@ from typing import Any
 import numpy as np
 from acds_common.inertia import inertia_tensor
 from acds_common.messages import diagnostic, xyz
-from acds_common.mode_report import mode_status
 from acds_common.modes import GAS_MODES
 from acds_common.thrusters import arrangement_from_section
 from acds_common.units import deg
@@ -53,7 +52,7 @@ class ColdGasControllerStep(DpaStep):
 
     def control(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Stage ``control``: the gas law in a gas mode, else the DPA (and no gas)."""
-        mode, commands = mode_status(inp['mode'], self.node)
+        mode, commands = self._mode_status(inp['mode'])
         if mode not in GAS_MODES:
             return {**super().control(k, t_s, inp), 'gas_on_time': ZERO}
         warnings: list[tuple[str, dict[str, str]]] = []

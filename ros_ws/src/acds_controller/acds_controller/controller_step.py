@@ -29,7 +29,7 @@ from typing import Any
 
 from acds_common.commands import GainCommand, LawCommand, decode
 from acds_common.messages import WARN, diagnostic, xyz
-from acds_common.mode_report import mode_status
+from acds_common.mode_report import ModeStatusReader
 from acds_common.modes import HEAO_MODES
 from acds_common.stepper import Stepper
 from acds_common.validation import all_finite
@@ -82,12 +82,14 @@ class DpaStep(Stepper):
         self.excess_current_a = EXCESS_CURRENT_FACTOR * c['max_moment_am2'] / self.ta.moment_per_amp_am2_per_a
         #: Whether wheels read the DPA's wheel volts (output ``volts`` is declared only then).
         self.drives_wheels = self.present('reaction_wheels')
+        self._mode_status = ModeStatusReader(self.node)
 
     def control(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Stage ``control``: one DPA control period (commands applied first, inputs checked)."""
         warnings: list[tuple[str, dict[str, str]]] = []
-        mode, commands = mode_status(inp['mode'], self.node)
-        self.apply_commands(k, commands, warnings)
+        mode, commands = self._mode_status(inp['mode'])
+        if commands:
+            self.apply_commands(k, commands, warnings)
         mode = resolve_mode(mode, 'mode_1a', HEAO_MODES, warnings, 'unknown mode {!r} from the mode manager')
         try:
             result = self._dpa_step(k, mode, inp)

@@ -28,8 +28,9 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from acds_common.attitude import conj, to_body
@@ -160,13 +161,14 @@ class DpaOutput:
 
     ``moment_xyz`` / ``volts_xyz`` are the float triples the DPA computed (what the stepper
     publishes); ``moment_command_am2`` / ``wheel_volts_v`` are them as arrays. ``telemetry``
-    (key/value strings) is formatted when first read, so only telemetry steps pay for it.
+    (key/value strings) is formatted when first read, from ``telemetry_args`` (:func:`dpa_telemetry`'s arguments,
+    kept as they are), so only telemetry steps pay for it.
     """
 
-    def __init__(self, moment_xyz: Vec3, volts_xyz: Vec3, telemetry: Callable[[], dict[str, str]]) -> None:
+    def __init__(self, moment_xyz: Vec3, volts_xyz: Vec3, telemetry_args: tuple[Any, ...]) -> None:
         self.moment_xyz = moment_xyz
         self.volts_xyz = volts_xyz
-        self._telemetry = telemetry
+        self._telemetry_args = telemetry_args
 
     @property
     def moment_command_am2(self) -> np.ndarray:
@@ -181,7 +183,7 @@ class DpaOutput:
     @functools.cached_property
     def telemetry(self) -> dict[str, str]:
         """DPA telemetry as key/value strings (see :func:`dpa_telemetry`)."""
-        return self._telemetry()
+        return dpa_telemetry(*self._telemetry_args)
 
 
 class Dpa:
@@ -292,7 +294,7 @@ class Dpa:
         m_cmd = clip(m, c.max_moment_am2)
         self._b_prev_t = b
         self._m_prev_am2 = m_cmd
-        return DpaOutput(m_cmd, volts, functools.partial(dpa_telemetry, c, mode, b, h_used, theta, m, m_cmd, volts))
+        return DpaOutput(m_cmd, volts, (c, mode, b, h_used, theta, m, m_cmd, volts))
 
     def _wheel_loop(self, mode: str, omega: Vec3, sun: Vec3, q_body_to_eci: Sequence[float] | None) -> tuple[Vec3, Vec3]:
         """Attitude error (rad) and wheel volts for modes 1B, scan and point (seed 002 §4.2.2, §4.2.3)."""

@@ -19,7 +19,6 @@ transducer <on|off>``, routed to the ``cold_gas`` node (which applies them, or r
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 from acds_common.commands import Command, GasCommand, ModeCommand
@@ -58,25 +57,23 @@ class ColdGasModeManager(HeaoModeManager):
         #: Sim time of the latest hand-over from gas to the wheels (s), None until it happens.
         self.handover_t_s: float | None = None
 
-    def step(self, t_s: float, omega_rad_s: Sequence[float], sun_body_unit: Sequence[float],
-             sun_present: bool) -> list[Transition]:
-        """The HEAO step (queued commands, Mode 1A/1B logic), then the gas phases' transfers."""
-        out = super().step(t_s, omega_rad_s, sun_body_unit, sun_present)
-        t = float(t_s)
-        w = [abs(float(x)) for x in omega_rad_s]
-        rates = ', '.join(f'|ω{a}|={deg(x):.4f}' for a, x in zip('xyz', w, strict=True))
+    def advance(self, t: float, omega: tuple[float, float, float], sun: tuple[float, float, float],
+                sun_present: bool) -> list[Transition]:
+        """The HEAO step (queued commands, Mode 1A/1B logic), then the gas phases' transfers (the cause's rates
+        formatted at a transfer)."""
+        out = super().advance(t, omega, sun, sun_present)
+        w = [abs(x) for x in omega]
         if self.mode == 'gas_rate_damping' and max(w) <= self.gas.damped_rate_rad_s:
-            out.append(self._enter(t, 'gas_sun_acquisition', f'rates damped on gas ({rates} ≤ '
+            out.append(self._enter(t, 'gas_sun_acquisition', f'rates damped on gas ({_rates(w)} ≤ '
                                    f'{deg(self.gas.damped_rate_rad_s):.4f} deg/s)'))
         elif self.mode == 'gas_sun_acquisition':
-            s = [float(x) for x in sun_body_unit]
-            norm = math.sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2])
+            norm = math.sqrt(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2])
             if sun_present and norm > 0.0:
-                angle = math.acos(max(-1.0, min(1.0, s[2] / norm)))
+                angle = math.acos(max(-1.0, min(1.0, sun[2] / norm)))
                 if angle <= self.gas.handover_cone_rad and max(w) <= self.gas.handover_rate_rad_s:
                     self.handover_t_s = t
                     out.append(self._enter(t, 'mode_1b', f'hand-over to the wheels: z {deg(angle):.2f}° from the sun '
-                                           f'line, {rates} ≤ {deg(self.gas.handover_rate_rad_s):.4f} deg/s'))
+                                           f'line, {_rates(w)} ≤ {deg(self.gas.handover_rate_rad_s):.4f} deg/s'))
         return out
 
     #: The HEAO commands and the cold-gas hardware's.
@@ -96,6 +93,15 @@ class ColdGasModeManager(HeaoModeManager):
             return refuse('wrong mode: the gas modes are entered by the acquisition sequence or by "mode reacquire"')
         return super().apply(cmd, t_s)
 
+    def status_state(self) -> tuple[object, ...]:
+        """The HEAO status values and the hand-over time."""
+        return *super().status_state(), self.handover_t_s
+
     def status(self) -> dict[str, str]:
         """The HEAO status and the hand-over time (s, '' before it)."""
         return {**super().status(), 'handover_t_s': '' if self.handover_t_s is None else f'{self.handover_t_s:.3f}'}
+
+
+def _rates(w: list[float]) -> str:
+    """|ω_i| (rad/s) as a transfer cause gives them, deg/s."""
+    return ', '.join(f'|ω{a}|={deg(x):.4f}' for a, x in zip('xyz', w, strict=True))

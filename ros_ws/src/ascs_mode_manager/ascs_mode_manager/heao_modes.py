@@ -158,14 +158,20 @@ class HeaoModeManager:
             raise AscsError(f't_s must be finite, got {t_s!r}')
         if self._last_t_s is not None and t < self._last_t_s:
             raise AscsError(f't_s = {t} s goes back in time (last step at {self._last_t_s} s)')
-        self._last_t_s = t
         try:
             omega = finite_xyz('omega_rad_s', omega_rad_s, AscsError)
             sun = finite_xyz('sun_body_unit', sun_body_unit, AscsError)
         except AscsError:
             raise AscsError('omega_rad_s and sun_body_unit must be finite 3-vectors') from None
+        return self.advance(t, omega, sun, bool(sun_present))
+
+    def advance(self, t: float, omega: tuple[float, float, float], sun: tuple[float, float, float],
+                sun_present: bool) -> list[Transition]:
+        """:meth:`step` without its checks (the stepper's per-step path): ``t`` a finite float not before the last
+        step's, ``omega`` and ``sun`` finite float triples."""
+        self._last_t_s = t
         sun_norm = math.sqrt(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2])
-        present = bool(sun_present) and sun_norm > 0.0
+        present = sun_present and sun_norm > 0.0
 
         out: list[Transition] = []
         for to_mode, t_accepted, text in self._pending:
@@ -267,12 +273,16 @@ class HeaoModeManager:
         self._pending.append((target, t_s, normalised))
         return CommandResult(True, f'{current} → {target} at the next step', None, normalised)
 
+    def status_state(self) -> tuple[object, ...]:
+        """The values :meth:`status` formats (equal states, equal status: the stepper formats it when this changes)."""
+        return self.mode_1b_entry_t_s, self.capture_t_s, len(self._pending)
+
     def status(self) -> dict[str, str]:
         """The logic's status beyond :attr:`mode` and :attr:`captured`, as key/value strings for the ``mode``
         report (times in s, '' when not reached)."""
-        entry, capture = self.mode_1b_entry_t_s, self.capture_t_s
+        entry, capture, pending = HeaoModeManager.status_state(self)  # this class's three (a variant adds its own)
         return {
             'mode_1b_entry_t_s': '' if entry is None else f'{entry:.3f}',
             'capture_t_s': '' if capture is None else f'{capture:.3f}',
-            'pending_commands': str(len(self._pending)),
+            'pending_commands': str(pending),
         }

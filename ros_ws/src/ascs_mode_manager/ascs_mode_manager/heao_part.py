@@ -25,7 +25,6 @@ deterministic way to command a run.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from acds_common.cdr import Status
@@ -86,20 +85,24 @@ class HeaoPart:
             self.core = self.build_core(m)
         self.stop_at_capture = m['stop_at_capture']
         self.run_complete = False
-        #: The last step's report fields and its encoded ``mode`` value (reused while the fields stay the same).
+        #: The last step's report fields (the core's status as its values) and its encoded ``mode`` value (reused
+        #: while the fields stay the same).
         self._report: tuple[Any, ...] = ()
         self._mode_value: tuple[Status, ...] = ()
 
     def step(self, k: int, t: float, inp: dict[str, Any]) -> dict[str, Any]:
         """One step of the mode logic: ``mode`` (always), ``events`` (on transitions), ``diagnostics``."""
         diagnostics: list[Status] = []
+        accepted = self.host.answer_due(t, diagnostics)
         forwarded = tuple((result.route, result.command or text)
-                          for text, result in self.host.answer_due(t, diagnostics) if result.route is not None)
+                          for text, result in accepted if result.route is not None) if accepted else ()
         transitions: list[Transition] = []
         omega = xyz(None if inp['gyro'] is None else inp['gyro'][0])
         sun = xyz(inp['sun'])
         if all_finite((*omega, *sun)):
-            transitions = self.core.step(t, omega, sun, math.sqrt(sun[0] ** 2 + sun[1] ** 2 + sun[2] ** 2) > 0.0)
+            # Checked here, t_k from the host's step clock: the core's unchecked path. The sun sensor sends a zero
+            # vector when the sun is absent, which the core reads as absent.
+            transitions = self.core.advance(t, omega, sun, True)
         else:
             message = f'non-finite gyro/sun input rejected at step {k}: mode logic held'
             self.host.log('warn', message)
@@ -111,10 +114,13 @@ class HeaoPart:
             text = event_text(tr)
             self.host.log('info', text)
             events.append(text)
-        report = (self.core.mode, '; '.join(tr.cause for tr in transitions) if transitions else '',
-                  self.core.captured, tuple(self.core.status().items()), self.run_complete, forwarded)
+        core = self.core
+        cause = '; '.join(tr.cause for tr in transitions) if transitions else ''
+        report = (core.mode, cause, core.captured, core.status_state(), self.run_complete, forwarded)
         if report != self._report:  # most steps report what the last one did: its encoding is reused
-            self._report, self._mode_value = report, ModeReport(*report).encode()
+            self._report = report
+            self._mode_value = ModeReport(core.mode, cause, core.captured, tuple(core.status().items()),
+                                          self.run_complete, forwarded).encode()
         out: dict[str, Any] = {'mode': self._mode_value}
         if events:
             out['events'] = events

@@ -16,7 +16,7 @@ from __future__ import annotations
 from typing import Any
 
 from acds_common.messages import ERROR, OK, WARN, diagnostic, xyz
-from acds_common.mode_report import mode_status
+from acds_common.mode_report import ModeStatusReader
 from acds_common.stepper import Stepper
 from acds_common.validation import all_finite, scenario_key
 
@@ -40,12 +40,13 @@ class MagnetometerStep(Stepper):
         self._fault_pending = self.cfg['fault'] != 'none'
         self._b_true = (0.0, 0.0, 0.0)
         self._dipole = (0.0, 0.0, 0.0)
+        self._mode_status = ModeStatusReader(self.node)
 
     def sample(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Apply commands and faults due at step k, sample both units, return the active one."""
         events: list[str] = []
         errors: list[str] = []
-        for text in mode_status(inp['mode'], self.node)[1]:
+        for text in self._mode_status(inp['mode'])[1]:
             try:
                 events.append(apply_command(parse_command(text), self.mag))
             except MagnetometerError as exc:
@@ -59,15 +60,18 @@ class MagnetometerStep(Stepper):
                           + (f' {value:+g} V' if value is not None else '')
                           + (' on all axes' if axis is None else f' on axis {"xyz"[axis]}'))
         b_true = (0.0, 0.0, 0.0) if inp['b_true'] is None else inp['b_true'][0]
-        if all_finite(b_true):
-            self._b_true = b_true
-        else:
-            errors.append(f'rejected non-finite B_true {list(b_true)}; holding the last valid field')
         dipole = xyz(inp['dipole'])
-        if all_finite(dipole):
-            self._dipole = dipole
+        if all_finite((*b_true, *dipole)):  # the usual step: one check of both
+            self._b_true, self._dipole = b_true, dipole
         else:
-            errors.append(f'rejected non-finite achieved dipole {list(dipole)}; holding the last valid dipole')
+            if all_finite(b_true):
+                self._b_true = b_true
+            else:
+                errors.append(f'rejected non-finite B_true {list(b_true)}; holding the last valid field')
+            if all_finite(dipole):
+                self._dipole = dipole
+            else:
+                errors.append(f'rejected non-finite achieved dipole {list(dipole)}; holding the last valid dipole')
         reading = self.mag.read_xyz(self._b_true, self._dipole)  # float triples, checked finite above
         out: dict[str, Any] = {
             'volts': reading.volts_xyz,
