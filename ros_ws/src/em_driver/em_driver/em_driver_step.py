@@ -23,7 +23,7 @@ from __future__ import annotations
 from typing import Any
 
 from acds_common.messages import ERROR, OK, WARN, diagnostic, vector3
-from acds_common.mode_report import mode_status
+from acds_common.mode_report import ModeStatusReader
 from acds_common.stepper import Stepper
 from acds_common.validation import scenario_key
 
@@ -48,12 +48,13 @@ class EmDriverStep(Stepper):
         self._bench_command = vector3(self.cfg['bench_command'])
         self._commanded = self.present(self.source)
         self._alarms = (False, False, False)
+        self._mode_status = ModeStatusReader(self.node)
 
     def drive(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Apply commands and failures due at step k, drive the coils for one control period."""
         events: list[str] = []
         rejected: list[str] = []
-        for text in mode_status(inp['mode'], self.node)[1]:
+        for text in self._mode_status(inp['mode'])[1]:
             try:
                 events.append(apply_command(parse_command(text), self.assembly))
             except EmDriverError as exc:
