@@ -66,7 +66,12 @@ def test_sigkilled_launcher_takes_its_nodes_within_two_seconds(tmp_path):
     for pid in left:  # never leave an orphan behind, even when the test fails
         os.kill(pid, signal.SIGKILL)
     assert left == [], 'a node outlived its SIGKILLed launcher by more than 2 s'
-    assert not _domain_locked(run_dir)
+    # A dying process leaves pgrep's sight (its memory, hence its command line, goes first) before the kernel
+    # closes its files, the lease among them: the lease gets the same bounded wait (CI, loaded: seen held).
+    deadline = time.monotonic() + 2.0
+    while _domain_locked(run_dir) and time.monotonic() < deadline:
+        time.sleep(0.05)  # polling the lock, not synchronising the graph
+    assert not _domain_locked(run_dir), 'the domain lease outlived the nodes of a SIGKILLed launcher by more than 2 s'
 
 
 def test_the_domain_stays_leased_while_any_holder_lives(tmp_path):
