@@ -78,12 +78,11 @@ class StepProgram:
 
 
 def _missing(stage: Stage, k: int) -> LaunchError:
-    """The first input of ``stage`` at step k its producer has not given (a node that produced nothing)."""
-    for inp in stage.inputs:
-        if k - inp.lag not in inp.store:
-            return LaunchError(f'node {inp.source} produced no {inp.topic} for step {k - inp.lag} '
-                               f'({stage.node}.{stage.name} needs it)')
-    return LaunchError(f'{stage.node}.{stage.name}: an input store failed at step {k}')  # not reached
+    """The first input of ``stage`` at step k its producer has not given (a node that produced nothing): the
+    compiled step calls this on the KeyError of an input's store, so there is one."""
+    inp = next(inp for inp in stage.inputs if k - inp.lag not in inp.store)
+    return LaunchError(f'node {inp.source} produced no {inp.topic} for step {k - inp.lag} '
+                       f'({stage.node}.{stage.name} needs it)')
 
 
 def _failed(stage: Stage, k: int, exc: Exception) -> LaunchError:
