@@ -83,9 +83,8 @@ class DirectRun:
         self._routes: dict[str, dict[str, Route]] = {name: {} for name in self.graph.nodes}
         for (node, key), (topic, codec, out) in self._codecs.items():
             self._routes[node][key] = Route(self._store.get(topic), out.stamp_offset, out.many,
-                                            self.observer.truth_sink(topic), codec.encode,
-                                            self.observer.reads_per_step(topic), self.observer.event_sink(topic),
-                                            topic, codec)
+                                            self.observer.truth_sink(topic), self.observer.reads_per_step(topic),
+                                            self.observer.event_sink(topic), topic, codec)
         self._max_lag = max((i.lag for spec in self.graph.nodes.values() for st in spec.stages for i in st.inputs),
                             default=0)
         self._writer: Any = None

@@ -49,14 +49,13 @@ class Stage:
 @dataclass(frozen=True)
 class Route:
     """Where one output of a node goes: its consumers' store (or None), its stamp offset, whether it is a
-    list of messages (``many``), the observer's sink of its bytes (truth) or None with the codec's
-    ``encode``, whether the summaries read it per step, the observer's event sink or None, topic, codec."""
+    list of messages (``many``), the observer's sink of its bytes (truth) or None, whether the summaries
+    read it per step, the observer's event sink or None, topic, codec."""
 
     store: dict[int, Any] | None
     offset: int
     many: bool
     truth: Callable[[bytes], None] | None
-    encode: Callable[[int, Any], bytes]
     per_step: bool
     event: Callable[[str, Any], None] | None
     topic: str
@@ -134,7 +133,7 @@ def _route_lines(w: _Writer, indent: int, route: Route, value: str, step: str, p
             w.add(indent + 1, f'{w.name("EV", route.event)}({route.topic!r}, item)')
         return
     if route.truth is not None:
-        w.add(indent, f'{w.name("T", route.truth)}({w.name("E", route.encode)}({step} * DT, {value}))')
+        w.add(indent, f'{w.name("T", route.truth)}({w.name("E", route.codec.encode)}({step} * DT, {value}))')
     if route.per_step:  # RunObserver.feed_value without the call: the step goes once its values are all there
         w.add(indent, f'values = PENDING.get({step})')
         w.add(indent, 'if values is None:')
