@@ -445,7 +445,8 @@ class FormationDynamics:
             return np.zeros((n, 3)), np.zeros((n, 3))
         if self.cfg.em_model == "far_field":
             ii, jj = self._ii, self._jj
-            f_a, t_a, f_b, t_b = dipole_pair_wrench(dip_frame[ii], dip_frame[jj], pos[jj] - pos[ii])
+            f_a, t_a, f_b, t_b = dipole_pair_wrench(dip_frame.take(ii, axis=0), dip_frame.take(jj, axis=0),
+                                                    pos.take(jj, axis=0) - pos.take(ii, axis=0))
             return self._sum_pairs(f_a, f_b), self._sum_pairs(t_a, t_b)
         force, torque = np.zeros((n, 3)), np.zeros((n, 3))
         nodes = [biot_savart.discretise(self._loops(k, pos[k], to_frame[k], dip_frame[k]), self.cfg.segments)
@@ -531,16 +532,16 @@ class FormationDynamics:
         if self.cfg.frame == "hill":
             acc = acc + np.stack([3.0 * n * n * pos[:, 0] + 2.0 * n * vel[:, 1], -2.0 * n * vel[:, 0],
                                   -n * n * pos[:, 2]], axis=1)
+        if self.cfg.frame == "line":  # the track reacts every torque
+            acc[:, 0] += self._track_gravity
+            acc[:, 1:] = 0.0
+            acc[self._fixed] = 0.0
+            return vel, acc, quat_rates(q, w), np.zeros_like(w), wr
         torque = em_t + earth_t + gg_t - hdot
         if self.cfg.frame == "planar":
             acc[:, 2] = 0.0
             wdot = np.zeros_like(w)
             wdot[:, 2] = torque[:, 2] / self._inertia[:, 2, 2]
-        elif self.cfg.frame == "line":
-            acc[:, 0] += self._track_gravity
-            acc[:, 1:] = 0.0
-            acc[self._fixed] = 0.0
-            wdot = np.zeros_like(w)
         else:
             h = h0 + hdot * tau_s
             iw = np.einsum("nij,nj->ni", self._inertia, w)
