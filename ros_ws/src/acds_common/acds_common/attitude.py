@@ -65,7 +65,7 @@ def to_body(q: Sequence[float], v: Sequence[float]) -> Vec3:
 def quat_rates(q: np.ndarray, w: np.ndarray) -> np.ndarray:
     """q̇ = ½ q ⊗ (ω, 0) for (N, 4) quaternions (x, y, z, w) and (N, 3) body rates (rad/s)."""
     qv, qw = q[:, :3], q[:, 3:]
-    return 0.5 * np.concatenate([qw * w + cross3(qv, w), -np.sum(qv * w, axis=1, keepdims=True)], axis=1)
+    return 0.5 * np.concatenate([qw * w + cross3(qv, w), -(qv * w).sum(axis=1, keepdims=True)], axis=1)
 
 
 def dcm_to_quat(m: np.ndarray) -> np.ndarray:

@@ -82,7 +82,7 @@ from typing import Any
 
 import numpy as np
 from acds_common import units
-from acds_common.attitude import quat_rates, quat_to_dcm
+from acds_common.attitude import dcm, quat_rates, quat_to_dcm
 from acds_common.dipole_field import cross3, dipole_pair_wrench
 from acds_common.environment import Orbit, hill_frame
 
@@ -375,8 +375,19 @@ class FormationDynamics:
             raise DynamicsError("a permanent magnet is a point dipole: em_model 'far_field' only")
         self._t = finite_float("t0_s", t0_s)
         self._pairs = [(i, j) for i in range(len(vehicles)) for j in range(i + 1, len(vehicles))]
+        self._ii = np.array([i for i, _ in self._pairs], dtype=np.intp)  # each pair's first vehicle
+        self._jj = np.array([j for _, j in self._pairs], dtype=np.intp)  # and its second
+        # ``_sum_pairs``' plan: vehicle k's rows of the stacked pair terms (row p: pair p's term on its first
+        # vehicle, row P + p: on its second), those as first vehicle then those as second, each in pair order;
+        # as n − 1 index arrays, the m-th holding every vehicle's m-th row.
+        n_pairs = len(self._pairs)
+        rows = [[p for p, (i, _) in enumerate(self._pairs) if i == k]
+                + [n_pairs + p for p, (_, j) in enumerate(self._pairs) if j == k] for k in range(len(vehicles))]
+        self._pair_rows = tuple(np.array(term, dtype=np.intp) for term in zip(*rows, strict=True))
         self._check_contact()
         self._n_rad_s = cfg.orbit.mean_motion_rad_s if cfg.frame == "hill" else 0.0
+        #: Gravity along the airtrack on every free vehicle (frame ``line``), m/s².
+        self._track_gravity = -units.STANDARD_GRAVITY_M_S2 * math.sin(cfg.track_tilt_rad)
         zeros = np.zeros((len(vehicles), 3))
         self._avg = Wrenches(zeros, zeros, zeros, zeros, zeros)
 
@@ -430,17 +441,14 @@ class FormationDynamics:
                      to_frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Inter-vehicle forces and torques (N, N·m; both formation frame) from every pair."""
         n = len(self.vehicles)
-        force, torque = np.zeros((n, 3)), np.zeros((n, 3))
         if not self._pairs:
-            return force, torque
+            return np.zeros((n, 3)), np.zeros((n, 3))
         if self.cfg.em_model == "far_field":
-            ii, jj = (np.array(x) for x in zip(*self._pairs, strict=True))
-            f_a, t_a, f_b, t_b = dipole_pair_wrench(dip_frame[ii], dip_frame[jj], pos[jj] - pos[ii])
-            np.add.at(force, ii, f_a)
-            np.add.at(force, jj, f_b)
-            np.add.at(torque, ii, t_a)
-            np.add.at(torque, jj, t_b)
-            return force, torque
+            ii, jj = self._ii, self._jj
+            f_a, t_a, f_b, t_b = dipole_pair_wrench(dip_frame.take(ii, axis=0), dip_frame.take(jj, axis=0),
+                                                    pos.take(jj, axis=0) - pos.take(ii, axis=0))
+            return self._sum_pairs(f_a, f_b), self._sum_pairs(t_a, t_b)
+        force, torque = np.zeros((n, 3)), np.zeros((n, 3))
         nodes = [biot_savart.discretise(self._loops(k, pos[k], to_frame[k], dip_frame[k]), self.cfg.segments)
                  for k in range(n)]
         for i, j in self._pairs:
@@ -451,6 +459,17 @@ class FormationDynamics:
             torque[i] -= t_b + cross3(pos[j] - pos[i], f_b)
         return force, torque
 
+    def _sum_pairs(self, on_first: np.ndarray, on_second: np.ndarray) -> np.ndarray:
+        """Every vehicle's sum (N, 3) of its pairs' terms, ``on_first[p]`` acting on pair p's first vehicle and
+        ``on_second[p]`` on its second: from +0.0, its terms as first vehicle then as second, each in pair order.
+        That is the order (and so the bits) of np.add.at into zeros over the first vehicles then the second,
+        without its per-call cost; the plan is ``_pair_rows``."""
+        terms = np.concatenate((on_first, on_second))
+        total = 0.0
+        for rows in self._pair_rows:
+            total = total + terms.take(rows, axis=0)
+        return total
+
     def _loops(self, k: int, centre: np.ndarray, body_to_frame: np.ndarray,
                dip_frame: np.ndarray) -> list[biot_savart.Loop]:
         """Vehicle k's coils as Biot–Savart loops in the formation frame (amp-turns from the dipole)."""
@@ -460,27 +479,29 @@ class FormationDynamics:
         return [biot_savart.Loop(centre, axes[:, c], coil.radius_m, moments[c] / coil.area_m2)
                 for c, coil in enumerate(spec.coils)]
 
-    def _wrenches(self, t_s: float, pos: np.ndarray, q: np.ndarray, dip_body: np.ndarray) -> Wrenches:
-        """All forces (frame) and torques (body) at time ``t_s`` and state (pos, q)."""
+    def _wrenches(self, t_s: float, pos: np.ndarray, q: np.ndarray, dip_body: np.ndarray) -> np.ndarray:
+        """All forces (frame) and torques (body) at time ``t_s`` and state (pos, q): one (5, N, 3) array, its
+        rows the ``Wrenches`` fields in their order (zeros where not modelled), so that ``advance`` sums a
+        stage's five in one operation."""
         n = len(self.vehicles)
-        rot = np.stack([quat_to_dcm(q[k]) for k in range(n)])  # body → inertial
-        zeros = np.zeros((n, 3))
-        earth_f, earth_t, gg_t = zeros, zeros, zeros
+        rot = np.array([dcm(qk) for qk in q.tolist()])  # body → inertial (``quat_to_dcm`` of each row)
+        out = np.zeros((5, n, 3))
         if self.cfg.frame == "hill":
             h2e, r_ref, _ = self._hill_to_eci(t_s)
             to_frame = np.einsum("ji,njk->nik", h2e, rot)  # body → Hill
             dip_eci = np.einsum("nij,nj->ni", rot, dip_body)
             r_eci = r_ref + pos @ h2e.T
             if self.cfg.earth_field is not None:
-                earth_f, earth_t = self._earth_wrench(t_s, r_eci, dip_eci, rot, h2e)
+                out[2], out[3] = self._earth_wrench(t_s, r_eci, dip_eci, rot, h2e)
             if self.cfg.gravity_gradient:
-                gg_t = np.stack([gravity_gradient_torque_nm(self._inertia[k], rot[k].T @ r_eci[k]) for k in range(n)])
+                for k in range(n):
+                    out[4, k] = gravity_gradient_torque_nm(self._inertia[k], rot[k].T @ r_eci[k])
         else:
             to_frame = rot
         dip_frame = np.einsum("nij,nj->ni", to_frame, dip_body)
-        em_f, em_t_frame = self._em_wrenches(pos, dip_frame, to_frame)
-        em_t = np.einsum("nji,nj->ni", to_frame, em_t_frame)
-        return Wrenches(em_f, em_t, earth_f, earth_t, gg_t)
+        out[0], em_t_frame = self._em_wrenches(pos, dip_frame, to_frame)
+        out[1] = np.einsum("nji,nj->ni", to_frame, em_t_frame)
+        return out
 
     def _earth_wrench(self, t_s: float, r_eci: np.ndarray, dip_eci: np.ndarray, rot: np.ndarray,
                       h2e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -501,26 +522,26 @@ class FormationDynamics:
         return force, torque
 
     def _deriv(self, t_s: float, y: Sequence[np.ndarray], inputs: tuple[np.ndarray, ...],
-               tau_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Wrenches]:
-        """(ṗ, v̇, q̇, ω̇) and the wrenches at time ``t_s``, state y, ``tau_s`` into the step."""
+               tau_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(ṗ, v̇, q̇, ω̇) and the wrenches (``_wrenches``' array) at time ``t_s``, state y, ``tau_s`` into the step."""
         pos, vel, q, w = y
         dip_body, h0, hdot = inputs
-        wr = self._wrenches(t_s, pos, q, dip_body)
-        acc = (wr.em_force_n + wr.earth_force_n) / self._mass[:, None]
+        em_f, em_t, earth_f, earth_t, gg_t = wr = self._wrenches(t_s, pos, q, dip_body)
+        acc = (em_f + earth_f) / self._mass[:, None]
         n = self._n_rad_s
         if self.cfg.frame == "hill":
             acc = acc + np.stack([3.0 * n * n * pos[:, 0] + 2.0 * n * vel[:, 1], -2.0 * n * vel[:, 0],
                                   -n * n * pos[:, 2]], axis=1)
-        torque = wr.em_torque_body_nm + wr.earth_torque_body_nm + wr.gg_torque_body_nm - hdot
+        if self.cfg.frame == "line":  # the track reacts every torque
+            acc[:, 0] += self._track_gravity
+            acc[:, 1:] = 0.0
+            acc[self._fixed] = 0.0
+            return vel, acc, quat_rates(q, w), np.zeros_like(w), wr
+        torque = em_t + earth_t + gg_t - hdot
         if self.cfg.frame == "planar":
             acc[:, 2] = 0.0
             wdot = np.zeros_like(w)
             wdot[:, 2] = torque[:, 2] / self._inertia[:, 2, 2]
-        elif self.cfg.frame == "line":
-            acc[:, 0] += -units.STANDARD_GRAVITY_M_S2 * math.sin(self.cfg.track_tilt_rad)
-            acc[:, 1:] = 0.0
-            acc[self._fixed] = 0.0
-            wdot = np.zeros_like(w)
         else:
             h = h0 + hdot * tau_s
             iw = np.einsum("nij,nj->ni", self._inertia, w)
@@ -548,7 +569,7 @@ class FormationDynamics:
         sub = dt / m
         self._check_resolution(sub, step[1])
         y = (self._pos, self._vel, self._q, self._w)
-        sums = [np.zeros((len(self.vehicles), 3)) for _ in range(5)]
+        sums = np.zeros((5, len(self.vehicles), 3))  # the Wrenches fields' weighted sums
         for k in range(m):
             t_k = self._t + k * sub
 
@@ -558,17 +579,14 @@ class FormationDynamics:
 
             y, stages = rk4_step(y, rate, sub)
             for weight, stage in zip((1.0, 2.0, 2.0, 1.0), stages, strict=True):
-                wr = stage[4]
-                for s, part in zip(sums, (wr.em_force_n, wr.em_torque_body_nm, wr.earth_force_n,
-                                          wr.earth_torque_body_nm, wr.gg_torque_body_nm), strict=True):
-                    s += weight * part
+                sums += weight * stage[4]
             y = (y[0], y[1], y[2] / np.linalg.norm(y[2], axis=1, keepdims=True), y[3])
         if not all(np.all(np.isfinite(a)) for a in y):
             raise DynamicsError("formation integration diverged (non-finite state): reduce dt_s or raise substeps")
         self._pos, self._vel, self._q, self._w = y
         self._check_contact()
         self._t += dt
-        self._avg = Wrenches(*(s / (6.0 * m) for s in sums))
+        self._avg = Wrenches(*(sums / (6.0 * m)))
 
     def _check_resolution(self, sub_s: float, wheel_h: np.ndarray) -> None:
         """Refuse a substep the RK4 cannot resolve: a vehicle turning (body rate |ω| plus the wheels'
@@ -618,7 +636,7 @@ class FormationDynamics:
         permanent magnets added)."""
         dip = np.array([s.with_magnet(finite_vector3(f"{s.name} dipole_body_am2", d))
                         for s, d in zip(self.vehicles, dipoles_body_am2, strict=True)])
-        return self._wrenches(self._t, self._pos, self._q, dip)
+        return Wrenches(*self._wrenches(self._t, self._pos, self._q, dip))
 
     def momentum(self, wheel_h_body_nms: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
         """Total linear (N·s) and angular (N·m·s, about the frame origin) momentum in the inertial frame,
