@@ -34,7 +34,8 @@ def cmd_test(args: argparse.Namespace) -> int:
     if lint.returncode != 0:
         print('[acds] lint failed (ruff): fix the findings above', file=sys.stderr)
         return lint.returncode
-    cmd = [sys.executable, '-m', 'pytest', '-q', '-n', str(args.jobs), *args.pytest_args]
+    # worksteal: a worker that runs out takes queued tests from the others (the graph tests' lengths differ).
+    cmd = [sys.executable, '-m', 'pytest', '-q', '-n', str(args.jobs), '--dist', 'worksteal', *args.pytest_args]
     return subprocess.run(cmd, cwd=root, env=env, check=False).returncode
 
 
@@ -56,7 +57,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser('test', help='run the whole test suite (lint + pytest)',
                        description='Lint (ruff) and run every test (pytest). Extra args go to pytest.')
-    p.add_argument('--jobs', '-j', type=positive_int, default=2, help='parallel test workers (default 2)')
+    p.add_argument('--jobs', '-j', type=positive_int, default=3,
+                   help='parallel test workers (default 3: the graph tests wait on node processes, pauses and '
+                        'timeouts part of their time, so a 2-core machine keeps a third worker busy)')
     p.add_argument('pytest_args', nargs=argparse.REMAINDER, help='passed to pytest')
     p.set_defaults(func=cmd_test)
 
