@@ -47,7 +47,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The command-line surface (later verbs register here too)."""
-    parser = OneLineParser(prog='acds', description='ACDS emulator: HEAO wheels+magnetics, SSS magnetic control.')
+    parser = OneLineParser(prog='acds', description=(
+        'ACDS emulator of spacecraft magnetic attitude control: HEAO wheels + electromagnets, SSS magnetic '
+        'spin/attitude control, AAP Workshop CMG momentum dump, OreSat torque rods, electromagnetic formation '
+        'flight (EMFF).'))
     sub = parser.add_subparsers(dest='verb', metavar='VERB', required=True)
 
     for module in _verb_modules():
