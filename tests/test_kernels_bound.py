@@ -170,11 +170,45 @@ def test_checked_drive_kernel_refuses_another_array():
     args = [assembly._state, assembly._params, (1.0, 2.0, 3.0), (0, 0, 0), 0.5]
     assembly._period(*args)
     for index, value in [(0, assembly._state.astype(np.int64)), (1, np.asfortranarray(assembly._params)),
-                         (3, (0.0, 0.0, 0.0))]:
+                         (1, _readonly(assembly._params)), (3, (0.0, 0.0, 0.0))]:
         wrong = list(args)
         wrong[index] = value
         with pytest.raises(TypeError, match=f'argument {index}:'):
             assembly._period(*wrong)
+
+
+def _readonly(a):
+    a = a.copy()
+    a.flags.writeable = False
+    return a
+
+
+#: Values of many numba types, some of one Python type and another numba type (layout, readonly, int width).
+VALUES = [0.0, -1.5, 0, 7, 2 ** 63 - 1, 2 ** 63, -(2 ** 63), -(2 ** 63) - 1, True, False, None, np.float64(1.0),
+          np.int64(1), (), (1.0,), (1.0, 2.0), (1.0, 2), (1, 2.0), (1.0, (2.0, 3.0)), (1.0, (2.0, 3)), ((1.0,), 2.0),
+          (None, 1.0), (True, 1.0), np.zeros(3), np.zeros(3, dtype=np.int64), np.zeros(3, dtype=np.float32),
+          np.zeros((2, 3)), np.zeros((2, 3), order='F'), np.zeros((3, 4))[:, ::2],
+          np.zeros(6)[::2], _readonly(np.zeros(3)), _readonly(np.zeros((2, 3))), (np.zeros(3), 1.0)]
+
+
+def test_the_shape_check_passes_only_values_of_the_bound_numba_type():
+    """The checked call compares a walk of the arguments' Python types (``kernels._shape``) and types them with numba
+    only when that differs: any two values of one shape have one numba type (else a call of another numba type
+    would run unchecked), and a value the walk does not describe matches nothing, not even itself."""
+    from numba import typeof
+
+    def numba_type(value):
+        try:
+            return typeof(value)
+        except ValueError as exc:  # an int past 64 bits: numba refuses it
+            return type(exc)
+
+    for a in VALUES:
+        for b in VALUES:
+            if kernels._shape(a) == kernels._shape(b):
+                assert numba_type(a) == numba_type(b), (a, b)
+    assert kernels._shape(2 ** 63) != kernels._shape(2 ** 63)
+    assert kernels._shape(np.float64(1.0)) != kernels._shape(np.float64(1.0))
 
 
 def test_unchecked_entry_point_converts_silently():
