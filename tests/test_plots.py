@@ -165,3 +165,25 @@ def test_formation_plane_draws_vehicles_that_run_no_node(tmp_path):
     finally:
         for fig in figs.values():
             plt.close(fig)
+
+
+def test_direct_engine_run_titles_name_its_run_folder(tmp_path):
+    """``acds run --engine direct``: the plots' titles name the run folder, as the graph's do (before: ``run bag``,
+    the bag folder's name)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    run = tmp_path / 'my_run'
+    proc = subprocess.run([sys.executable, '-m', 'acds_cli', 'run', 'heao_b_acquisition_short', '--steps', '10',
+                           '--engine', 'direct', '--quiet', '--run-dir', str(run)], capture_output=True, text=True,
+                          cwd=Path(__file__).resolve().parents[1], timeout=300, check=False)
+    assert proc.returncode == 0, proc.stderr
+    bag = open_bag(run / 'bag')
+    assert bag.info.get('run_id') == 'my_run'
+    figs = dict(figures(bag))
+    try:
+        assert all('— run my_run' in fig._suptitle.get_text() for fig in figs.values())
+    finally:
+        for fig in figs.values():
+            plt.close(fig)
