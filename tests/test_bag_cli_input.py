@@ -106,3 +106,14 @@ def test_ctrl_c_ends_plays_wait_for_a_client_at_once(bag):
             play.wait()
     assert 'published 0 messages (stopped)' in rest, rest
     assert 'no Foxglove client' not in rest and 'Traceback' not in rest, rest
+
+
+def test_record_refuses_the_folder_of_a_run_that_has_ended(tmp_path):
+    """A run folder keeps its domain_id after the run: recording it joined an empty domain and, at Ctrl-C, closed
+    a bag of 0 messages with exit 0. Now one line, exit 2, no bag (domain 5: outside the launcher's leases)."""
+    run = tmp_path / 'run'
+    run.mkdir()
+    (run / 'domain_id').write_text('5\n')
+    one_line_exit_2(run_acds('record', str(tmp_path / 'bag'), '--run-dir', str(run)),
+                    'its graph is not running (no run holds its domain 5)')
+    assert not (tmp_path / 'bag').exists()

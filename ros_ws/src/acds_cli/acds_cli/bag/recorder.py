@@ -120,7 +120,12 @@ def record(path: Path | str, *, storage: str = 'mcap', compression: str | None =
     info: dict[str, str] = {}
     if run_dir is not None:
         found, info = run_folder_info(run_dir)
-        domain_id = domain_id if domain_id is not None else found
+        if domain_id is None:
+            from acds_runtime.launcher import DomainLease
+            if not DomainLease.held(found):  # the run has ended (its folder keeps domain_id): nothing would come
+                raise BagError(f'run folder {run_dir}: its graph is not running (no run holds its domain {found}); '
+                               'record joins a running graph')
+            domain_id = found
     coverage = step_coverage(run_dir)
     if domain_id is None:
         raise BagError('record: which graph? give --domain N or --run-dir RUN_FOLDER')
