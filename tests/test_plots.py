@@ -148,3 +148,42 @@ def test_mission_plots_are_plugins_chosen_by_the_nodes_that_ran_not_the_scenario
     finally:
         for fig in figs.values():
             plt.close(fig)
+
+
+def test_formation_plane_draws_vehicles_that_run_no_node(tmp_path):
+    """The airtrack's slider is a passive vehicle (no node of its own): its track and the baseline length to the
+    electromagnet are still drawn (before: only the electromagnet's dot, and an empty baseline panel)."""
+    DirectRun(load_scenario('emff_airtrack_unstable_open_loop'), steps=20, record=tmp_path / 'bag').run()
+    figs = dict(figures(open_bag(tmp_path / 'bag')))
+    try:
+        ax_xy, ax_d = figs['emff_formation_plane'].axes
+        assert {line.get_label() for line in ax_xy.lines if not line.get_label().startswith('_')} == {'magnet',
+                                                                                                     'slider'}
+        assert ax_d.get_ylabel() == '|r_slider − r_magnet|, m'
+        baseline = ax_d.lines[0].get_ydata()
+        assert len(baseline) == 21 and baseline[0] == pytest.approx(0.45)  # the scenario's 0.45 m start
+    finally:
+        for fig in figs.values():
+            plt.close(fig)
+
+
+def test_direct_engine_run_titles_name_its_run_folder(tmp_path):
+    """``acds run --engine direct``: the plots' titles name the run folder, as the graph's do (before: ``run bag``,
+    the bag folder's name)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    run = tmp_path / 'my_run'
+    proc = subprocess.run([sys.executable, '-m', 'acds_cli', 'run', 'heao_b_acquisition_short', '--steps', '10',
+                           '--engine', 'direct', '--quiet', '--run-dir', str(run)], capture_output=True, text=True,
+                          cwd=Path(__file__).resolve().parents[1], timeout=300, check=False)
+    assert proc.returncode == 0, proc.stderr
+    bag = open_bag(run / 'bag')
+    assert bag.info.get('run_id') == 'my_run'
+    figs = dict(figures(bag))
+    try:
+        assert all('— run my_run' in fig._suptitle.get_text() for fig in figs.values())
+    finally:
+        for fig in figs.values():
+            plt.close(fig)

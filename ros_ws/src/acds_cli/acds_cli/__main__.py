@@ -127,6 +127,13 @@ def main(argv: list[str] | None = None) -> int:
         signum = getattr(exc, 'signum', signal.SIGINT)
         print(f'\n[acds] stopped by {signal.Signals(signum).name}', file=sys.stderr)
         return 128 + signum
+    except BrokenPipeError:
+        # The reader of the output went away (`acds info BAG | head`): nothing left to print to, and no
+        # traceback; stdout goes to /dev/null so that the interpreter's final flush does not fail again.
+        # The verb's own clean-up (finally blocks, bags closed) has run; exit as a SIGPIPE'd process does.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 128 + signal.SIGPIPE
 
 
 if __name__ == '__main__':

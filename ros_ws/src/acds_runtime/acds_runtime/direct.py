@@ -53,8 +53,10 @@ class DirectRun:
                  progress: Callable[[int, int, float], None] | None = None, record: Path | None = None,
                  record_storage: str = 'mcap', record_compression: str | None = None,
                  overrides: dict[str, dict[str, Any]] | None = None,
-                 live: Callable[[dict[str, dict[str, Any]]], Any] | None = None) -> None:
+                 live: Callable[[dict[str, dict[str, Any]]], Any] | None = None, run_id: str | None = None) -> None:
         self.scenario = scenario
+        #: The run folder's name, stored with the bag for the plots' titles (as the graph's launcher stores it).
+        self.run_id = run_id
         self.steps = steps if steps is not None else scenario.total_steps()
         self.echo = echo or (lambda line: None)
         self.progress = progress
@@ -126,7 +128,7 @@ class DirectRun:
             from .bag.writer import BagError, BagWriter, run_info
             try:
                 self._writer = BagWriter(self.record, self.record_storage, run_info(self.scenario, self.steps,
-                                                                                    self.params),
+                                                                                    self.params, run_id=self.run_id),
                                          compression=self.record_compression)
             except BagError as exc:
                 raise LaunchError(str(exc)) from None

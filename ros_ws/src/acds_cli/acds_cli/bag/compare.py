@@ -77,7 +77,11 @@ def parse_sets(items: list[str] | None) -> dict[str, Any]:
         name, sep, value = item.partition(':=')
         if not sep or not name:
             raise BagError(f'--set {item!r}: expected NAME:=VALUE')
-        out[name] = yaml.safe_load(value)
+        try:
+            out[name] = yaml.safe_load(value)
+        except yaml.YAMLError as exc:
+            raise BagError(f'--set {item!r}: the value is not valid YAML '
+                           f'({str(exc).splitlines()[0]})') from None
     return out
 
 

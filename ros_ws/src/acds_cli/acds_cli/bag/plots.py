@@ -125,8 +125,11 @@ class RunContext:
 
     @property
     def vehicles(self) -> list[str]:
-        """The formation's vehicles (the prefixes of the vehicles' nodes), by name; [] for a single vehicle."""
-        return sorted({node.rpartition('/')[0] for node in self.nodes if '/' in node})
+        """The formation's vehicles, by name; [] for a single vehicle: those the formation dynamics flew
+        (``formation_vehicles``, with vehicles that run no node, e.g. the airtrack's passive slider) and the
+        prefixes of the vehicles' nodes."""
+        flown = self.params.get('formation_dynamics', {}).get('formation_vehicles') or ()
+        return sorted({*flown, *(node.rpartition('/')[0] for node in self.nodes if '/' in node)})
 
     def section(self, node: str, name: str) -> dict[str, Any] | None:
         """{field: SI value} of scenario section ``name`` as node ``node`` received it (None: not recorded)."""

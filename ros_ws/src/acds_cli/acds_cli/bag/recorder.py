@@ -40,7 +40,13 @@ def run_folder_info(run_dir: Path) -> tuple[int | None, dict[str, str]]:
     run_dir = Path(run_dir)
     if not (run_dir / 'domain_id').exists():
         raise BagError(f'run folder {run_dir}: no domain_id file (is a graph running there?)')
-    domain = int((run_dir / 'domain_id').read_text().strip())
+    text = (run_dir / 'domain_id').read_text().strip()
+    try:
+        domain = int(text)
+    except ValueError:
+        domain = -1
+    if not 0 <= domain <= 232:
+        raise BagError(f'run folder {run_dir}: its domain_id file holds {text[:40]!r}, not a ROS domain id (0..232)')
     info: dict[str, str] = {'domain_id': str(domain)}
     if (run_dir / 'scenario.yaml').exists():
         text = (run_dir / 'scenario.yaml').read_text()
@@ -114,7 +120,12 @@ def record(path: Path | str, *, storage: str = 'mcap', compression: str | None =
     info: dict[str, str] = {}
     if run_dir is not None:
         found, info = run_folder_info(run_dir)
-        domain_id = domain_id if domain_id is not None else found
+        if domain_id is None:
+            from acds_runtime.launcher import DomainLease
+            if not DomainLease.held(found):  # the run has ended (its folder keeps domain_id): nothing would come
+                raise BagError(f'run folder {run_dir}: its graph is not running (no run holds its domain {found}); '
+                               'record joins a running graph')
+            domain_id = found
     coverage = step_coverage(run_dir)
     if domain_id is None:
         raise BagError('record: which graph? give --domain N or --run-dir RUN_FOLDER')

@@ -26,6 +26,35 @@ def add_bag_options(p: argparse.ArgumentParser, storage: bool = True) -> None:
     p.add_argument('--compression', choices=COMPRESSIONS, help=COMPRESSION_HELP)
 
 
+#: ROS domain ids DDS can map to ports (Fast DDS refuses a domain above 232; rclpy one below 0).
+ROS_DOMAINS = range(0, 233)
+
+
+def ros_domain(text: str) -> int:
+    """``--domain`` of ``play`` and ``record``: any ROS domain id, checked before a ROS context is made."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value not in ROS_DOMAINS:
+        raise argparse.ArgumentTypeError(f'expected a ROS domain id in {ROS_DOMAINS.start}..{ROS_DOMAINS.stop - 1}, '
+                                         f'got {text!r}')
+    return value
+
+
+def wait_seconds(text: str) -> float:
+    """``play --wait``: a finite number of seconds >= 0."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f'expected a finite number of seconds >= 0, got {text!r}')
+    return value
+
+
 def _record(args: argparse.Namespace) -> int:
     from ..bag.recorder import main_record
     return main_record(args)
@@ -38,7 +67,14 @@ def check_domain_free(domain: int | None) -> None:
     from acds_runtime.bag.writer import BagError
     from acds_runtime.launcher import DomainLease
 
-    target = domain if domain is not None else int(os.environ.get('ROS_DOMAIN_ID', '0') or 0)
+    if domain is not None:
+        target = domain
+    else:
+        text = os.environ.get('ROS_DOMAIN_ID', '') or '0'
+        try:
+            target = ros_domain(text)
+        except argparse.ArgumentTypeError as exc:
+            raise BagError(f'ROS_DOMAIN_ID {text!r}: {exc} (or give --domain)') from None
     if DomainLease.held(target):
         raise BagError(f'domain {target} belongs to a running graph (acds run): playing into it would inject data '
                        'into that run; choose a free --domain')
@@ -71,9 +107,9 @@ def _play(args: argparse.Namespace) -> int:
             print(f'[play] Foxglove live view on ws://{args.foxglove_host}:{live.port} (subprotocol foxglove.sdk.v1): '
                   f'waiting up to {args.wait:g} s '
                   'for a Foxglove client', file=sys.stderr, flush=True)
-            if not live.wait_for_client(args.wait):
+            if not _wait(live.wait_for_client, args.wait, stop) and not stop.is_set():
                 print(f'[play] no Foxglove client after {args.wait:g} s: playing anyway', file=sys.stderr)
-        elif args.wait > 0 and not player.wait_for_subscribers(args.wait):
+        elif args.wait > 0 and not _wait(player.wait_for_subscribers, args.wait, stop) and not stop.is_set():
             print(f'[play] no subscriber after {args.wait:g} s: playing anyway', file=sys.stderr)
         pace = f'at {args.rate:g}x real time' if args.rate > 0 else 'as fast as possible'
         print(f'[play] {bag.path} → domain {args.domain if args.domain is not None else "(ROS_DOMAIN_ID)"}: '
@@ -85,6 +121,21 @@ def _play(args: argparse.Namespace) -> int:
         if live is not None:
             live.close()
     return 0
+
+
+def _wait(ready: Any, timeout_s: float, stop: Any) -> bool:
+    """``ready(timeout_s)`` polled in slices of at most 0.1 s, so that Ctrl-C / SIGTERM (``stop``) ends the wait at
+    once (True: ready; False: the timeout passed or ``stop`` was set)."""
+    import time
+
+    deadline = time.monotonic() + timeout_s
+    while not stop.is_set():
+        left = deadline - time.monotonic()
+        if left <= 0:
+            return False
+        if ready(min(left, 0.1)):
+            return True
+    return False
 
 
 def _live_view(bag: Any, port: int, host: str) -> Any:
@@ -173,7 +224,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('path', help='bag folder to create (must not exist)')
     add_bag_options(p)
     p.add_argument('--topics', nargs='+', metavar='TOPIC', help='record only these topics (default: all)')
-    p.add_argument('--domain', type=int, help='ROS domain id of the graph (printed by acds run, in RUN/domain_id)')
+    p.add_argument('--domain', type=ros_domain,
+                   help='ROS domain id of the graph (printed by acds run, in RUN/domain_id)')
     p.add_argument('--run-dir', help='run folder of the graph: domain, scenario and parameters are read from it (and '
                                      'the control period and per-step topics that the gap check needs)')
     p.add_argument('--allow-gaps', action='store_true',
@@ -188,8 +240,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--topics', nargs='+', metavar='TOPIC', help='play only these topics (/clock always)')
     p.add_argument('--rate', type=float, default=0.0, help='sim time per wall time (default 0: as fast as possible)')
     p.add_argument('--remap', nargs='+', metavar='FROM:=TO', help='publish topic FROM under the name TO')
-    p.add_argument('--domain', type=int, help='ROS domain id to publish on (default: ROS_DOMAIN_ID)')
-    p.add_argument('--wait', type=float, default=2.0,
+    p.add_argument('--domain', type=ros_domain, help='ROS domain id to publish on (default: ROS_DOMAIN_ID)')
+    p.add_argument('--wait', type=wait_seconds, default=2.0,
                    help='wait up to this many s for a subscriber (with --foxglove: for a Foxglove client; default 2)')
     add_foxglove_options(p, "the bag's messages")
     p.set_defaults(func=_play)

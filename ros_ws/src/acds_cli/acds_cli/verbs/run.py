@@ -110,7 +110,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     options = dict(record=bag, record_storage=args.storage, record_compression=args.compression, live=live)
     if direct:
         run_dir.mkdir(parents=True, exist_ok=True)
-        engine = DirectRun(scenario, steps=steps, echo=echo, progress=progress, **options)
+        engine = DirectRun(scenario, steps=steps, echo=echo, progress=progress, run_id=run_dir.name, **options)
     else:
         engine = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=progress,
                           overrides=overrides, external=args.external, domain=args.domain, peers=args.peer,
