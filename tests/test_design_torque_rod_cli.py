@@ -36,3 +36,14 @@ def test_infeasible_and_bad_requests_exit_non_zero_with_one_line() -> None:
     assert proc.returncode == 2 and 'envelope must be AxBxC' in proc.stderr
     proc = run_acds('design-torque-rod', '--awg', '20')
     assert proc.returncode == 2 and 'insulation' in proc.stderr and 'Traceback' not in proc.stderr
+
+
+def test_json_path_is_checked_before_the_search_and_its_folder_created(tmp_path: Path) -> None:
+    proc = run_acds('design-torque-rod', '--awg', '35', '--json', '/proc/acds_rod.json')
+    assert proc.returncode == 2 and proc.stdout == '' and 'Traceback' not in proc.stderr
+    assert proc.stderr.strip().splitlines() == [
+        'acds design-torque-rod: error: --json /proc/acds_rod.json: cannot write in /proc: No such file or directory']
+    out = tmp_path / 'new' / 'rod.json'
+    proc = run_acds('design-torque-rod', '--awg', '35', '--json', str(out))
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(out.read_text())['awg'] == 35

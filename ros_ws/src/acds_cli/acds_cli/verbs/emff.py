@@ -323,6 +323,7 @@ def cmd_radius_sweep(args: argparse.Namespace) -> int:
         if r['nonlinear_failure']:
             print(f'           nonlinear run: {r["nonlinear_failure"]}')
     if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         with open(args.json, 'w') as fh:
             json.dump(rows, fh)
     return 0

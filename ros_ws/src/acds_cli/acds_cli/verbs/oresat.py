@@ -58,6 +58,10 @@ def cmd_design(args: argparse.Namespace) -> int:
     """Design the rod, print it, optionally write the JSON record."""
     from em_driver.bridge_switch import EmDriverError
     from em_driver.torque_rod_design import DesignRequest, InfeasibleDesignError, design_torque_rod
+
+    from ..arguments import check_output_file
+    if args.json:
+        check_output_file('--json', Path(args.json))
     try:
         req = DesignRequest(mass_max_kg=args.mass_g * 1e-3, power_max_w=args.power_w, voltage_v=args.voltage,
                             moment_min_am2=args.moment_am2, envelope_m=tuple(x * 1e-3 for x in args.envelope_mm),
@@ -77,6 +81,7 @@ def cmd_design(args: argparse.Namespace) -> int:
           f'{args.voltage:g} V, envelope {"x".join(f"{x:g}" for x in args.envelope_mm)} mm')
     print('\n'.join(_report(record)))
     if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(record, indent=2) + '\n')
     return 0
 
