@@ -226,6 +226,14 @@ def test_an_interrupted_study_resumes_to_the_clean_result(tmp_path, clean_study,
     assert _journal_lines(out) == 6
 
 
+def test_a_resume_with_another_run_length_names_the_option(clean_study):
+    """--until-min is what the user changed: the refusal names it, not the step count it implies."""
+    proc = run_acds(*STUDY[:-3], '--until-min', '4', '--quiet', '--resume', str(clean_study))
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        f'acds montecarlo: error: --resume {clean_study}: the study there has until_min 5.0, this command 4.0']
+
+
 def test_a_resume_with_another_seed_is_refused(clean_study):
     proc = run_acds(*STUDY, '--seed', '2', '--resume', str(clean_study))
     assert proc.returncode == 2
