@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ..arguments import UsageError, check_output_file
+from ..arguments import UsageError, check_output_dir, check_output_file
 
 #: The review's deviations (slides 46–47) and a finer grid, percent of the nominal array radius.
 DEFAULT_DEVIATIONS_PCT = (0.001, 0.5, 1.0, 2.0, 3.0, 3.5, 4.0, 5.0, 6.0, 8.0)
@@ -439,6 +439,7 @@ def cmd_airtrack(args: argparse.Namespace) -> int:
         if not (math.isfinite(value) and value > 0.0):
             raise UsageError(f'{name}: must be > 0, got {value:g}')
     out_dir = Path(args.out)
+    check_output_dir('--out', out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     import matplotlib
     matplotlib.use('Agg')
