@@ -438,6 +438,12 @@ def cmd_airtrack(args: argparse.Namespace) -> int:
     for name, value in (('--step-m', args.step_m), ('--duration-s', args.duration_s), ('--dt-s', args.dt_s)):
         if not (math.isfinite(value) and value > 0.0):
             raise UsageError(f'{name}: must be > 0, got {value:g}')
+    if not args.graph:
+        from dynamics.airtrack import AirtrackConfig
+        x0 = min(AirtrackConfig(configuration=c).separation_m for c in ('stable', 'unstable'))
+        if args.step_m >= x0:
+            raise UsageError(f'--step-m: the slider starts at x0 − step = {x0 - args.step_m:g} m, off the track '
+                             f'(x0 = {x0:g} m): must be < {x0:g}, got {args.step_m:g}')
     out_dir = Path(args.out)
     check_output_dir('--out', out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
