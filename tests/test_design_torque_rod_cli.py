@@ -47,3 +47,15 @@ def test_json_path_is_checked_before_the_search_and_its_folder_created(tmp_path:
     proc = run_acds('design-torque-rod', '--awg', '35', '--json', str(out))
     assert proc.returncode == 0, proc.stderr
     assert json.loads(out.read_text())['awg'] == 35
+
+
+def test_a_bad_value_is_named_by_its_option_in_the_unit_typed() -> None:
+    """Not 'DesignRequest.mass_max_kg must be a finite positive number, got 0.0' for --mass-g 0, nor
+    'insulation_build_m must be > 0 m, got -0.001' for --insulation-mm -1."""
+    for option, value in (('--mass-g', '0'), ('--insulation-mm', '-1'), ('--power-w', 'inf'),
+                          ('--min-core-radius-mm', 'nan')):
+        proc = run_acds('design-torque-rod', '--awg', '35', f'{option}={value}')
+        assert proc.returncode == 2 and proc.stdout == ''
+        assert proc.stderr.strip().splitlines() == [
+            f'acds design-torque-rod: error: argument {option}: must be a finite number > 0, got {value} '
+            '(see acds design-torque-rod --help)'], proc.stderr
