@@ -99,6 +99,11 @@ class Journal:
         if head.get('samples_hash') != self.study.get('samples_hash'):
             raise JournalError(f'--resume {self.path.parent}: the samples drawn now differ from the study\'s '
                                '(the scenario file or the sampler changed since it began)')
+        for n, rec in enumerate(records, start=2):
+            if not (isinstance(rec, dict) and isinstance(rec.get('summary'), dict)
+                    and {'case', 'index', 'scenario_hash'} <= rec.keys()):
+                raise JournalError(f'--resume {self.path.parent}: {JOURNAL} line {n} is not a sample record '
+                                   '({"index", "case", "scenario_hash", "summary"})')
         for rec in records:
             key = (rec['case'], rec['index'])
             if self.hashes.get(key) != rec['scenario_hash']:
