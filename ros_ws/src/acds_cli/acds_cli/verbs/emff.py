@@ -444,8 +444,9 @@ def cmd_airtrack(args: argparse.Namespace) -> int:
         if args.step_m >= x0:
             raise UsageError(f'--step-m: the slider starts at x0 − step = {x0 - args.step_m:g} m, off the track '
                              f'(x0 = {x0:g} m): must be < {x0:g}, got {args.step_m:g}')
-    out_dir = Path(args.out)
-    check_output_dir('--out', out_dir)
+    from ..workspace import workspace
+    out_dir = Path(args.out) if args.out else workspace() / 'runs' / 'emff_airtrack'
+    check_output_dir('--out' if args.out else 'plot folder', out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     import matplotlib
     matplotlib.use('Agg')
@@ -506,7 +507,8 @@ def _register_airtrack(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--weight-position-m', type=float, default=0.01, help='Bryson scale of the position, m (default 0.01)')
     p.add_argument('--weight-velocity-m-s', type=float, default=0.01, help='Bryson scale of the velocity (default 0.01)')
     p.add_argument('--weight-dipole-am2', type=float, default=100.0, help='Bryson scale of the dipole (default 100)')
-    p.add_argument('--out', default='runs/emff_airtrack', help='folder for the plots (default runs/emff_airtrack)')
+    p.add_argument('--out', help='folder for the plots (default runs/emff_airtrack in the workspace, as every '
+                   'verb\'s runs/)')
     p.add_argument('--graph', action='store_true',
                    help='fly the shipped scenarios (emff_airtrack_stable[_open_loop], emff_airtrack_unstable[_open_loop]) '
                         'on the direct engine instead of the core model; the step, duration, period and weights are '
