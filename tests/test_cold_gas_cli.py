@@ -84,3 +84,16 @@ def test_gas_modes_and_the_cold_gas_node_go_together(tmp_path, text, message):
     with pytest.raises(ScenarioError) as err:
         load_scenario(str(path))
     assert message in str(err.value)
+
+
+def test_budget_json_goes_into_a_folder_it_creates(tmp_path):
+    """``--json`` passes the writability check with missing folders (they are created): the budget writes
+    there instead of ending in a FileNotFoundError traceback after every acquisition has run."""
+    out = tmp_path / 'new' / 'budget.json'
+    env = {'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': str(tmp_path / 'ros_log')}
+    proc = subprocess.run([sys.executable, '-m', 'acds_cli', 'cold-gas-budget', 'heao_b_acquisition_cold_gas_short',
+                           '--acquisitions', '1', '--json', str(out)],
+                          capture_output=True, text=True, cwd=ROOT, env=env, timeout=300, check=False)
+    assert proc.returncode == 0 and 'Traceback' not in proc.stderr, proc.stderr
+    import json
+    assert len(json.loads(out.read_text())['acquisitions']) == 1

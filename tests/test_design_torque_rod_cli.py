@@ -36,3 +36,26 @@ def test_infeasible_and_bad_requests_exit_non_zero_with_one_line() -> None:
     assert proc.returncode == 2 and 'envelope must be AxBxC' in proc.stderr
     proc = run_acds('design-torque-rod', '--awg', '20')
     assert proc.returncode == 2 and 'insulation' in proc.stderr and 'Traceback' not in proc.stderr
+
+
+def test_json_path_is_checked_before_the_search_and_its_folder_created(tmp_path: Path) -> None:
+    proc = run_acds('design-torque-rod', '--awg', '35', '--json', '/proc/acds_rod.json')
+    assert proc.returncode == 2 and proc.stdout == '' and 'Traceback' not in proc.stderr
+    assert proc.stderr.strip().splitlines() == [
+        'acds design-torque-rod: error: --json /proc/acds_rod.json: cannot write in /proc: No such file or directory']
+    out = tmp_path / 'new' / 'rod.json'
+    proc = run_acds('design-torque-rod', '--awg', '35', '--json', str(out))
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(out.read_text())['awg'] == 35
+
+
+def test_a_bad_value_is_named_by_its_option_in_the_unit_typed() -> None:
+    """Not 'DesignRequest.mass_max_kg must be a finite positive number, got 0.0' for --mass-g 0, nor
+    'insulation_build_m must be > 0 m, got -0.001' for --insulation-mm -1."""
+    for option, value in (('--mass-g', '0'), ('--insulation-mm', '-1'), ('--power-w', 'inf'),
+                          ('--min-core-radius-mm', 'nan')):
+        proc = run_acds('design-torque-rod', '--awg', '35', f'{option}={value}')
+        assert proc.returncode == 2 and proc.stdout == ''
+        assert proc.stderr.strip().splitlines() == [
+            f'acds design-torque-rod: error: argument {option}: must be a finite number > 0, got {value} '
+            '(see acds design-torque-rod --help)'], proc.stderr

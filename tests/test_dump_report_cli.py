@@ -93,3 +93,12 @@ def test_bad_inputs_are_one_line(tmp_path, capsys, args, fragment) -> None:
     assert main(['dump-report', *args, '--out', str(tmp_path / 'out')]) == 2
     err = capsys.readouterr().err.strip()
     assert fragment in err and len(err.splitlines()) == 1, err
+
+
+def test_a_bad_set_key_is_named_against_the_scenario_not_a_temporary_file(tmp_path, capsys) -> None:
+    """--set goes through a temporary file that extends the scenario; its schema error named that file
+    (/tmp/tmpXXXX/dump_study_scenario.yaml, gone when the user reads it)."""
+    assert main(['dump-report', 'aap_workshop_pop_test', '--set', 'controller.foo=1', '--out', str(tmp_path / 'o')]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and 'dump_study_scenario' not in err, err
+    assert err.startswith('acds dump-report: aap_workshop_pop_test with --set: unknown key "controller.foo"'), err

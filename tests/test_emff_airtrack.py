@@ -143,3 +143,27 @@ def test_bad_airtrack_is_one_line_exit_2(tmp_path, edit, message):
 def test_bad_airtrack_study_weight_is_one_line_exit_2():
     proc = _run_acds('emff-airtrack', '--weight-dipole-am2', '0')
     assert proc.returncode == 2 and 'must be > 0' in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize('step', ['0.5', '10'])
+def test_a_step_that_starts_the_slider_off_the_track_is_one_line_exit_2(tmp_path, step):
+    """x0 − step must be a separation on the track (> 0): 0.5 m was a ZeroDivisionError traceback, 10 m a 'response'
+    from −9.5 m, behind the electromagnet."""
+    proc = _run_acds('emff-airtrack', '--step-m', step, '--out', str(tmp_path))
+    assert proc.returncode == 2, proc.stderr
+    assert 'Traceback' not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    assert '--step-m' in proc.stderr and 'must be < 0.5' in proc.stderr, proc.stderr
+
+
+def test_the_default_plot_folder_is_in_the_workspace_not_the_current_folder(tmp_path):
+    """Every other verb writes its default runs/... in the workspace (ACDS_WORKSPACE, which ./scripts/acds sets to
+    the checkout); emff-airtrack wrote runs/emff_airtrack into whatever folder the user stood in."""
+    work, here = tmp_path / 'work', tmp_path / 'here'
+    work.mkdir()
+    here.mkdir()
+    env = {'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': '/tmp/acds_ros_log', 'ACDS_WORKSPACE': str(work)}
+    proc = subprocess.run([sys.executable, '-m', 'acds_cli', 'emff-airtrack', '--duration-s', '1'], capture_output=True,
+                          text=True, cwd=here, env=env, timeout=120, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert (work / 'runs' / 'emff_airtrack' / 'airtrack_stable.png').is_file()
+    assert not (here / 'runs').exists()

@@ -226,8 +226,60 @@ def test_an_interrupted_study_resumes_to_the_clean_result(tmp_path, clean_study,
     assert _journal_lines(out) == 6
 
 
+def test_a_resume_with_another_run_length_names_the_option(clean_study):
+    """--until-min is what the user changed: the refusal names it, not the step count it implies."""
+    proc = run_acds(*STUDY[:-3], '--until-min', '4', '--quiet', '--resume', str(clean_study))
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        f'acds montecarlo: error: --resume {clean_study}: the study there has until_min 5.0, this command 4.0']
+
+
 def test_a_resume_with_another_seed_is_refused(clean_study):
     proc = run_acds(*STUDY, '--seed', '2', '--resume', str(clean_study))
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == [
         f'acds montecarlo: error: --resume {clean_study}: the study there has seed 1, this command 2']
+
+
+@pytest.mark.slow
+def test_ctrl_c_on_a_local_cluster_prints_no_worker_traceback(tmp_path):
+    """Ctrl-C in a terminal reaches the whole foreground process group, the local cluster's worker processes
+    too: the study stops with its one message and exit 130, and no worker prints a KeyboardInterrupt traceback."""
+    import time
+
+    out = tmp_path / 'mc'
+    env = {'PATH': os.environ.get('PATH', '/usr/bin:/bin'),
+           'ROS_LOG_DIR': '/tmp/acds_ros_log', 'HOME': os.environ.get('HOME', '/tmp')}
+    proc = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'montecarlo', 'heao_b_acquisition_short', '--runs', '40',
+                             '--jobs', '2', '--quiet', '--out', str(out)], cwd=ROOT, env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    deadline = time.monotonic() + 300
+    while _journal_lines(out) < 2 and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)  # polling the journal on disk, not synchronising
+    assert proc.poll() is None, f'the study ended before it could be interrupted: {proc.stderr.read()[-2000:]}'
+    os.killpg(proc.pid, signal.SIGINT)  # what the terminal does on Ctrl-C: the whole process group
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert 'Traceback' not in err and 'KeyboardInterrupt' not in err, err
+    assert f'--resume {out}' in err, err
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize('sig', [signal.SIGTERM, signal.SIGHUP], ids=['sigterm', 'sighup'])
+def test_a_study_stopped_by_a_signal_exits_128_plus_its_number(tmp_path, sig):
+    """The CLI's convention (acds_cli.__main__, and ``run``): 143 for SIGTERM, 129 for SIGHUP, not Ctrl-C's 130."""
+    import time
+
+    out = tmp_path / 'mc'
+    env = {'PATH': os.environ.get('PATH', '/usr/bin:/bin'),
+           'ROS_LOG_DIR': '/tmp/acds_ros_log', 'HOME': os.environ.get('HOME', '/tmp')}
+    proc = subprocess.Popen([sys.executable, '-m', 'acds_cli', *STUDY, '--out', str(out)], cwd=ROOT, env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 300
+    while _journal_lines(out) < 1 and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)  # polling the journal on disk, not synchronising
+    assert proc.poll() is None, f'the study ended before it could be stopped: {proc.stderr.read()[-2000:]}'
+    os.kill(proc.pid, sig)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 128 + sig, err
+    assert f'interrupted ({signal.Signals(sig).name})' in err and f'--resume {out}' in err, err

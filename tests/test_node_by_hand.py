@@ -52,6 +52,16 @@ def test_params_verb_prints_the_launchers_params_file():
     assert one['/acds/em_driver']['ros__parameters'] == node_parameters(sc, 40)['em_driver']
 
 
+@pytest.mark.parametrize('rtf', ['-1', 'nan', '2e6'])
+def test_params_verb_refuses_a_pacing_the_node_cannot_run(capsys, rtf):
+    """``--rtf`` is checked as ``run --rtf`` is ([0, 1e6]), not written into the parameters file as given."""
+    with pytest.raises(SystemExit) as exc:
+        main(['params', SCENARIO, '--node', 'rigid_body', f'--rtf={rtf}'])
+    assert exc.value.code == 2
+    captured = capsys.readouterr()
+    assert captured.out == '' and 'argument --rtf: must be a finite number in [0, ' in captured.err
+
+
 @pytest.fixture
 def ros_domain(tmp_path):
     """A leased ROS domain and the environment of a node started in it by hand."""

@@ -78,3 +78,37 @@ def test_section_12_estimate_and_errors(tmp_path, capsys) -> None:
     assert main(['size-magnet', '--mode', 'day-night', '--core', 'air', '--m-n-am2', '300', '--m-d-am2', '1',
                  '--m-m-am2', '200']) == 2
     assert 'exceeds the maximum' in capsys.readouterr().err
+
+
+def _exit_code(argv: list[str]) -> int:
+    """main's return value, or the code of the SystemExit argparse raises on a bad option."""
+    try:
+        return main(argv)
+    except SystemExit as exc:
+        return int(exc.code)
+
+
+@pytest.mark.parametrize(('args', 'message'), [
+    (['--h-b-ftlbs', '-5'], 'argument --h-b-ftlbs: must be a finite number > 0, got -5'),
+    (['--h-b-ftlbs', '255', '--altitude-nmi', '-100'], 'argument --altitude-nmi: must be a finite number > 0, got -100'),
+    (['--h-b-ftlbs', '255', '--wire-area-in2', '0'], 'argument --wire-area-in2: must be a finite number > 0, got 0'),
+    (['--h-b-ftlbs', '255', '--iz-minus-ix-slugft2', '1000'],
+     'the moments come from one source; got --h-b-ftlbs and --iz-minus-ix-slugft2'),
+])
+def test_bad_options_are_one_line_in_the_units_typed_before_any_output(capsys, args, message) -> None:
+    """A bad value is named by its option in the unit the user typed (not converted to SI), two sources of the
+    moments are refused rather than one silently ignored, and nothing is printed first."""
+    assert _exit_code(['size-magnet', '--mode', 'day-night', '--core', 'air', *args]) == 2
+    captured = capsys.readouterr()
+    assert message in captured.err and len(captured.err.strip().splitlines()) == 1, captured.err
+    assert captured.out == ''
+
+
+def test_json_path_is_checked_first_and_its_folder_created(tmp_path, capsys) -> None:
+    assert main(['size-magnet', '--mode', 'day-night', '--core', 'air', '--h-b-ftlbs', '255',
+                 '--json', '/proc/acds.json']) == 2
+    captured = capsys.readouterr()
+    assert captured.out == '' and '--json /proc/acds.json: cannot write' in captured.err
+    out = tmp_path / 'new' / 'folder' / 'design.json'
+    assert main(['size-magnet', '--mode', 'day-night', '--core', 'air', '--h-b-ftlbs', '255', '--json', str(out)]) == 0
+    assert json.loads(out.read_text())['mode'] == 'day-night'

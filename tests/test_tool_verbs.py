@@ -65,3 +65,20 @@ def test_mechanizations_tool_readable(capsys: pytest.CaptureFixture[str]) -> Non
     assert main(["mechanizations"]) == 0
     out = capsys.readouterr().out
     assert "one_channel_constant" in out and "Table 1" in out
+
+
+@pytest.mark.parametrize('argv', [
+    ['duty-curve', '--png'],
+    ['torque-meter', '--field', '0.3', '--dwell-s', '1', '--png'],
+    ['emff-airtrack', '--duration-s', '1', '--out'],
+], ids=['duty-curve', 'torque-meter', 'emff-airtrack'])
+@pytest.mark.parametrize('where', ['unwritable', 'a file'])
+def test_a_plot_folder_that_cannot_be_written_is_one_line_exit_2_before_any_output(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], where: str) -> None:
+    folder = '/proc/acds_plots' if where == 'unwritable' else str(tmp_path / 'file.txt')
+    (tmp_path / 'file.txt').write_text('x')
+    assert main([*argv, folder]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ''
+    assert captured.err.startswith(f'acds {argv[0]}: error: --{argv[-1].lstrip("-")} {folder}: ')
+    assert len(captured.err.strip().splitlines()) == 1

@@ -93,3 +93,12 @@ def test_bad_arguments() -> None:
     with pytest.raises(AscsError):
         torque_meter.run_torque_meter((0.3,), dt_s=0.0)
     assert main(["torque-meter", "--field", "-1"]) == 2
+
+
+@pytest.mark.parametrize("argv", [["--dt-s", "1e-9"], ["--dwell-s", "1e9"]])
+def test_a_run_too_long_to_sample_is_one_line_exit_2(capsys: pytest.CaptureFixture[str], argv: list[str]) -> None:
+    """A dwell/period that asks for more samples than memory holds was a numpy MemoryError traceback (exit 1)."""
+    assert main(["torque-meter", *argv]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and len(captured.err.strip().splitlines()) == 1
+    assert "samples, more than the" in captured.err

@@ -354,18 +354,16 @@ def _read_yaml(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:
     if 'extends' not in data:
         return data
     base = _read_yaml(_extends_path(data.pop('extends'), path), (*chain, path.resolve()))
+    # A key given in another unit replaces the base's, never one the extending file gives itself: its own
+    # two units of one key stay both, for the schema to refuse as a key given twice.
+    top = {_stem('', key) for key, value in data.items() if not (isinstance(value, dict)
+                                                                and isinstance(base.get(key), dict))}
+    for old in [o for o in base if not isinstance(base[o], dict) and _stem('', o) in top]:
+        del base[old]  # top level: duration_min vs duration_orbits
     for key, value in data.items():
         if isinstance(value, dict) and isinstance(base.get(key), dict):
-            merged = dict(base[key])
-            for sub, v in value.items():  # a key given in another unit replaces the base's
-                stem = _stem(key, sub)
-                for old in [o for o in merged if _stem(key, o) == stem]:
-                    del merged[old]
-                merged[sub] = v
-            base[key] = merged
-        else:  # top level: a key given in another unit (duration_min vs duration_orbits) replaces the base's
-            for old in [o for o in base if not isinstance(base[o], dict) and _stem('', o) == _stem('', key)]:
-                del base[old]
+            base[key] = _merge_units(key, base[key], value)
+        else:
             base[key] = value
     return base
 
@@ -536,12 +534,9 @@ def _check_graph(path: Path, sc: Scenario) -> None:
 
 def _merge_units(section: str, base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
     """``over``'s keys over ``base``'s; a key given in another unit replaces the base's (as ``extends`` does)."""
-    merged = dict(base)
-    for key, value in over.items():
-        stem = _stem(section, key)
-        for old in [o for o in merged if _stem(section, o) == stem]:
-            del merged[old]
-        merged[key] = value
+    stems = {_stem(section, key) for key in over}
+    merged = {key: value for key, value in base.items() if _stem(section, key) not in stems}
+    merged.update(over)  # ``over``'s own two units of one key both stay: the schema refuses them as given twice
     return merged
 
 

@@ -93,6 +93,19 @@ def test_every_shipped_scenario_loads():
         assert load_scenario(name).name == name
 
 
+@pytest.mark.parametrize(('child', 'message'), [
+    ('orbit:\n  altitude_nmi: 225\n  altitude_km: 400\n', '"orbit.altitude" is given twice'),
+    ('orbit:\n  altitude_km: 400\n  altitude_nmi: 225\n', '"orbit.altitude" is given twice'),
+    ('duration_min: 2\nduration_orbits: 1\n', '"duration" is given twice'),
+])
+def test_an_extending_file_giving_one_key_in_two_units_is_refused(tmp_path, child, message):
+    """``extends`` lets a key in another unit replace the base's, but the extending file's own two units of one key
+    are the same key given twice (as in a file without ``extends``), not the last one silently winning."""
+    write(tmp_path, BASE + 'orbit:\n  altitude_nmi: 225\n', 'base.yaml')
+    with pytest.raises(ScenarioError, match=message):
+        load_scenario(write(tmp_path, f'extends: {tmp_path / "base.yaml"}\nname: c\n{child}', 'c.yaml'))
+
+
 def test_extends_replaces_a_top_level_duration_given_in_another_unit(tmp_path):
     write(tmp_path, BASE.replace('duration_s: 10', 'duration_orbits: 3'), 'base.yaml')
     sc = load_scenario(write(tmp_path, f'extends: {tmp_path / "base.yaml"}\nname: c\nduration_min: 2\n', 'c.yaml'))

@@ -14,7 +14,7 @@ shortest censoring time). The time quantities and their sample sets:
 - time on magnetics only (separation → Mode 1B): every sample; censored if Mode 1B was not reached;
 - acquisition time (separation → capture): every sample; censored if capture was not reached;
 - time on wheels + magnetics (Mode 1B → capture): the samples that reached Mode 1B; censored if
-  capture was not reached after it.
+  capture was not reached after it, at the run's length less its time on magnetics only.
 
 Final stored wheel momentum is the Table 4-7 column *at capture*: its percentiles are over the
 captured samples only (``n`` says how many). Peaks (wheel |h|, moment command) are over the whole
@@ -152,7 +152,9 @@ def values_of(rows: Sequence[dict[str, Any]], q: Quantity) -> tuple[np.ndarray, 
         v = row.get(q.key)
         if v is None and q.censored:
             vals.append(math.inf)
-            censor_at.append(row['sim_minutes'])
+            # known only to exceed the time the run had left for it: from Mode 1B for the time on the wheels
+            start = (row.get('time_magnetics_only_min') or 0.0) if q.when == 'mode_1b' else 0.0
+            censor_at.append(row['sim_minutes'] - start)
         elif v is not None:
             vals.append(float(v))
     return np.array(vals, dtype=float), censor_at

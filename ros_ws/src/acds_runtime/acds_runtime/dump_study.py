@@ -59,7 +59,10 @@ def scenario_with_sets(name: str, sets: list[str]) -> Scenario:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / 'dump_study_scenario.yaml'
         path.write_text(yaml.safe_dump(overlay, sort_keys=False))
-        return load_scenario(str(path))
+        try:
+            return load_scenario(str(path))
+        except ScenarioError as exc:  # name what the user gave, not the temporary file
+            raise ScenarioError(str(exc).replace(str(path), f'{name} with --set')) from None
 
 
 def parse_range(text: str, what: str) -> np.ndarray:

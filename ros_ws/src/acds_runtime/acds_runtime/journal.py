@@ -90,13 +90,20 @@ class Journal:
             raise JournalError(f'--resume {self.path.parent}: {JOURNAL} is not a study journal ({exc})') from None
         if not isinstance(head, dict):
             raise JournalError(f'--resume {self.path.parent}: {JOURNAL} has no study line')
-        for key in sorted((set(head) | set(self.study)) - {'command', 'samples_hash'}):
+        # in the study's own order: the option the user gave (until_min) before what it implies (steps)
+        for key in [k for k in [*self.study, *(k for k in head if k not in self.study)]
+                    if k not in ('command', 'samples_hash')]:
             if head.get(key) != self.study.get(key):
                 raise JournalError(f'--resume {self.path.parent}: the study there has {key} '
                                    f'{json.dumps(head.get(key))}, this command {json.dumps(self.study.get(key))}')
         if head.get('samples_hash') != self.study.get('samples_hash'):
             raise JournalError(f'--resume {self.path.parent}: the samples drawn now differ from the study\'s '
                                '(the scenario file or the sampler changed since it began)')
+        for n, rec in enumerate(records, start=2):
+            if not (isinstance(rec, dict) and isinstance(rec.get('summary'), dict)
+                    and {'case', 'index', 'scenario_hash'} <= rec.keys()):
+                raise JournalError(f'--resume {self.path.parent}: {JOURNAL} line {n} is not a sample record '
+                                   '({"index", "case", "scenario_hash", "summary"})')
         for rec in records:
             key = (rec['case'], rec['index'])
             if self.hashes.get(key) != rec['scenario_hash']:

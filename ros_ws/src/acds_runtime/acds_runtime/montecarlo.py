@@ -180,6 +180,21 @@ def quiet_resource_tracker() -> None:
     resource_tracker.ensure_running()
 
 
+def dask_setup(_worker: Any) -> None:
+    """A local cluster's worker process (this module is its Dask preload) ignores SIGINT.
+
+    The workers are in the terminal's foreground process group, so Ctrl-C reaches them as well as this
+    process; each printed a KeyboardInterrupt traceback over the study's one-line message. The study
+    stops them itself (it closes the cluster), as on SIGTERM. They start with SIGINT blocked
+    (:func:`_connect`), so a Ctrl-C while they import is held, then discarded here; SIGINT is unblocked
+    for the threads this one starts (a graph sample's nodes set their own handler and are stopped by it).
+    """
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
 def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:
     """(client, cluster or None) for a local cluster of ``jobs`` workers or the user's ``scheduler``."""
     import logging
@@ -187,10 +202,28 @@ def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:
     from dask.distributed import Client, LocalCluster
 
     if scheduler is None:
+        import signal
+
         quiet_resource_tracker()
-        cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None,
-                               silence_logs=logging.ERROR)
-        return Client(cluster, set_as_default=False), cluster
+        # The cluster's event-loop thread, and so every worker process it starts (a restarted one too), has
+        # SIGINT blocked until the worker's preload (dask_setup) ignores it; here a Ctrl-C meanwhile is held
+        # and raised when the mask is restored, after which the cluster is closed.
+        cluster = client = None
+        try:
+            blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+            try:
+                cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None,
+                                       silence_logs=logging.ERROR, preload=[__name__])
+                client = Client(cluster, set_as_default=False)
+            finally:
+                signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
+        except BaseException:
+            if client is not None:
+                client.close()
+            if cluster is not None:
+                cluster.close()
+            raise
+        return client, cluster
     try:
         client = Client(scheduler, timeout='20s', set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:

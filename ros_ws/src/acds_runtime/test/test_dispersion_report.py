@@ -42,6 +42,18 @@ def test_describe_counts_censored_and_uses_the_right_sample_sets():
     assert set(acq) >= {f'p{p}' for p in dr.PERCENTILES}
 
 
+def test_time_on_wheels_is_censored_at_the_time_the_run_left_it_on_the_wheels():
+    """Time on wheels + magnetics runs from Mode 1B: a run of T min that reached Mode 1B at t_1B and no capture
+    has spent only T − t_1B on the wheels, so its "> bound" is that, not T (it said "> 40" of a sample that
+    could not have had more than 33.2 min on the wheels)."""
+    rows = [_row(0, 0.5, 24.0, sim=40.0), _row(1, 6.8, None, sim=40.0), _row(2, 1.2, None, sim=40.0)]
+    wheels = dr.describe(rows, dr.QUANTITIES[1], 1, 1)
+    assert (wheels['n'], wheels['censored']) == (3, 2)
+    assert wheels['censored_above'] == pytest.approx(40.0 - 6.8)
+    acq = dr.describe(rows, dr.QUANTITIES[2], 1, 2)  # separation → capture: the whole run
+    assert acq['censored_above'] == 40.0
+
+
 def test_spearman_ranks_ties_and_censored_values():
     x = np.arange(10.0)
     assert dr.spearman(x, x ** 3) == pytest.approx(1.0)

@@ -79,6 +79,10 @@ def _tilt_body_to_stand(attitude: bool) -> np.ndarray:
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
+#: The most samples one stand run records (the default run: 45,750); more does not fit in memory for long.
+MAX_SAMPLES = 5_000_000
+
+
 def run_torque_meter(field_steps_g: tuple[float, ...] = DEFAULT_FIELD_STEPS_G, *, attitude: bool = False,
                      dwell_s: float = 60.0, dt_s: float = 0.02, spin_rpm: float = NOMINAL_SPIN_RPM,
                      direction: str = "spin_up", settle_s: float | None = None,
@@ -103,6 +107,10 @@ def run_torque_meter(field_steps_g: tuple[float, ...] = DEFAULT_FIELD_STEPS_G, *
     n_settle = int(round(settle / dt_s))
     if per_step < 1:
         raise AscsError(f"dwell_s={dwell_s} must hold at least one step of dt_s={dt_s}")
+    samples = n_settle + len(steps) * per_step
+    if samples > MAX_SAMPLES:
+        raise AscsError(f"dwell_s={dwell_s:g} and dt_s={dt_s:g} give {samples:,} samples, more than the "
+                        f"{MAX_SAMPLES:,} the stand records (lengthen dt_s or shorten dwell_s)")
     mag_g = np.concatenate([np.full(n_settle, steps[0]), np.repeat(steps, per_step)])
     step_index = np.concatenate([np.full(n_settle, -1), np.repeat(np.arange(len(steps)), per_step)])
     t = (np.arange(mag_g.size) - n_settle) * dt_s

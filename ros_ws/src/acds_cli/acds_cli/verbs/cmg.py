@@ -31,6 +31,13 @@ def _moments(args: argparse.Namespace) -> tuple[Any, str]:
         estimate_max_moment_am2,
     )
 
+    given = [option for option, value in (('--from-report', args.from_report), ('--h-b-ftlbs', args.h_b_ftlbs),
+                                          ('--iz-minus-ix-slugft2', args.iz_minus_ix_slugft2),
+                                          ('--m-*-am2', args.m_m_am2 if args.m_m_am2 is not None else
+                                           args.m_n_am2 if args.m_n_am2 is not None else args.m_d_am2))
+             if value is not None]
+    if len(given) > 1:
+        raise MagnetSizingError(f'the moments come from one source; got {" and ".join(given)}')
     if args.from_report:
         try:
             rep = json.loads(Path(args.from_report).read_text())
@@ -113,6 +120,10 @@ def cmd_size_magnet(args: argparse.Namespace) -> int:
     from acds_common import units
     from em_driver import magnet_sizing as ms
 
+    from ..arguments import check_output_file
+
+    if args.json:
+        check_output_file('--json', Path(args.json))
     try:
         moments, source = _moments(args)
         ps = ms.with_power_supply_orbit(ms.SEED_POWER_SUPPLY, args.altitude_nmi * units.NMI_M, args.daylight_deg)
@@ -166,6 +177,7 @@ def cmd_size_magnet(args: argparse.Namespace) -> int:
                'M_n_am2': moments.m_n_am2, 'M_d_am2': moments.m_d_am2, 'M_o_am2': moments.m_o_am2,
                'M_m_am2': moments.m_m_am2, 'night_s': ps.night_s, 'day_s': ps.day_s,
                'designs': {s: {label: value for label, value, _ in r} for s, r in rows.items()}}
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(out, indent=2) + '\n')
         print(f'wrote {args.json}', file=sys.stderr)
     return 0
@@ -249,7 +261,7 @@ def cmd_dump_report(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``size-magnet`` and ``dump-report`` verbs."""
-    from ..arguments import step_count
+    from ..arguments import positive_number, step_count
 
     p = sub.add_parser('dump-report', help='AAP Workshop CMG dump report of a bag or a scenario (seed 000 §5)',
                        description=DUMP_REPORT_DOC)
@@ -277,19 +289,21 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--core', choices=['air', 'iron'], required=True, help='air coils or iron-core coils')
     for name, text in (('n', 'rms |M| over orbital night'), ('d', 'rms |M| over orbital day'),
                        ('o', 'rms |M| over the orbit (reported only)'), ('m', 'maximum |M|')):
-        p.add_argument(f'--m-{name}-am2', type=float, help=f'M_{name}: {text}, A·m²')
+        p.add_argument(f'--m-{name}-am2', type=positive_number if name == 'm' else float,
+                       help=f'M_{name}: {text}, A·m²')
     p.add_argument('--from-report', metavar='DUMP_REPORT.json', help='take M_n, M_d, M_o, M_m from a dump report')
-    p.add_argument('--h-b-ftlbs', type=float, help='§12 estimate M_m = 12.5 H_b for a bias H_b in the orbital plane')
-    p.add_argument('--iz-minus-ix-slugft2', type=float, help='§12 estimate for 45° OP: M_m = 0.0665 (I_z - I_x)')
-    p.add_argument('--diameter-ft', type=float, default=20.0, help='air coil diameter, ft (default 20, §8)')
+    p.add_argument('--h-b-ftlbs', type=positive_number, help='§12 estimate M_m = 12.5 H_b for a bias H_b in the orbital plane')
+    p.add_argument('--iz-minus-ix-slugft2', type=positive_number, help='§12 estimate for 45° OP: M_m = 0.0665 (I_z - I_x)')
+    p.add_argument('--diameter-ft', type=positive_number, default=20.0, help='air coil diameter, ft (default 20, §8)')
     p.add_argument('--conductor', choices=['copper', 'aluminium'], default='copper', help='coil conductor')
     p.add_argument('--q', type=int, choices=[20, 30, 40], default=30, help='iron core length/diameter (§7 chart)')
-    p.add_argument('--b-core-t', type=float, help='iron core maximum flux density, Wb/m² (default 1, §8)')
-    p.add_argument('--day-constant-factor', type=float, default=1.3,
+    p.add_argument('--b-core-t', type=positive_number, help='iron core maximum flux density, Wb/m² (default 1, §8)')
+    p.add_argument('--day-constant-factor', type=positive_number, default=1.3,
                    help='day-constant |M| as a multiple of the day-and-night M_m (default 1.3, §10)')
-    p.add_argument('--altitude-nmi', type=float, default=220.0, help='circular orbit altitude for T_n, T_d (default 220)')
+    p.add_argument('--altitude-nmi', type=positive_number, default=220.0,
+                   help='circular orbit altitude for T_n, T_d (default 220)')
     p.add_argument('--daylight-deg', type=float, default=220.0, help='orbital daylight arc, degrees (default 220)')
-    p.add_argument('--wire-area-in2', type=float,
+    p.add_argument('--wire-area-in2', type=positive_number,
                    help='also wind each coil with this conductor area, in.² (§8: #10 wire is 0.008155)')
     p.add_argument('--json', metavar='PATH', help='write the inputs and both designs as JSON (seed units)')
     p.set_defaults(func=cmd_size_magnet)

@@ -75,6 +75,7 @@ def cmd_budget(args: argparse.Namespace) -> int:
     if ended:
         print(f'  chain ended: {ended}')
     if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps({'scenario': base.name, 'load_lb': load_lb, 'acquisitions': rows,
                                                'total_used_lb': used, 'left_lb': left_kg / LB_KG,
                                                'ended': ended or None}, indent=2) + '\n')

@@ -83,6 +83,10 @@ def _write_pngs(out_dir: Path, rows: list[tuple[float, float, float, float, floa
 
 def cmd_duty_curve(args: argparse.Namespace) -> int:
     """Print the table (or CSV) and write the PNGs when asked."""
+    from ..arguments import check_output_dir
+
+    if args.png is not None:
+        check_output_dir('--png', args.png)
     coil, driver = FIG_4_10_COIL, FIG_4_10_DRIVER
     rows = duty_table(coil, driver)
     if args.csv:

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ..arguments import UsageError, check_output_file
+from ..arguments import UsageError, check_output_dir, check_output_file
 
 #: The review's deviations (slides 46–47) and a finer grid, percent of the nominal array radius.
 DEFAULT_DEVIATIONS_PCT = (0.001, 0.5, 1.0, 2.0, 3.0, 3.5, 4.0, 5.0, 6.0, 8.0)
@@ -323,6 +323,7 @@ def cmd_radius_sweep(args: argparse.Namespace) -> int:
         if r['nonlinear_failure']:
             print(f'           nonlinear run: {r["nonlinear_failure"]}')
     if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         with open(args.json, 'w') as fh:
             json.dump(rows, fh)
     return 0
@@ -437,7 +438,15 @@ def cmd_airtrack(args: argparse.Namespace) -> int:
     for name, value in (('--step-m', args.step_m), ('--duration-s', args.duration_s), ('--dt-s', args.dt_s)):
         if not (math.isfinite(value) and value > 0.0):
             raise UsageError(f'{name}: must be > 0, got {value:g}')
-    out_dir = Path(args.out)
+    if not args.graph:
+        from dynamics.airtrack import AirtrackConfig
+        x0 = min(AirtrackConfig(configuration=c).separation_m for c in ('stable', 'unstable'))
+        if args.step_m >= x0:
+            raise UsageError(f'--step-m: the slider starts at x0 − step = {x0 - args.step_m:g} m, off the track '
+                             f'(x0 = {x0:g} m): must be < {x0:g}, got {args.step_m:g}')
+    from ..workspace import workspace
+    out_dir = Path(args.out) if args.out else workspace() / 'runs' / 'emff_airtrack'
+    check_output_dir('--out' if args.out else 'plot folder', out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     import matplotlib
     matplotlib.use('Agg')
@@ -498,7 +507,8 @@ def _register_airtrack(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--weight-position-m', type=float, default=0.01, help='Bryson scale of the position, m (default 0.01)')
     p.add_argument('--weight-velocity-m-s', type=float, default=0.01, help='Bryson scale of the velocity (default 0.01)')
     p.add_argument('--weight-dipole-am2', type=float, default=100.0, help='Bryson scale of the dipole (default 100)')
-    p.add_argument('--out', default='runs/emff_airtrack', help='folder for the plots (default runs/emff_airtrack)')
+    p.add_argument('--out', help='folder for the plots (default runs/emff_airtrack in the workspace, as every '
+                   'verb\'s runs/)')
     p.add_argument('--graph', action='store_true',
                    help='fly the shipped scenarios (emff_airtrack_stable[_open_loop], emff_airtrack_unstable[_open_loop]) '
                         'on the direct engine instead of the core model; the step, duration, period and weights are '

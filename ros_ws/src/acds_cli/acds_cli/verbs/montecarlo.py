@@ -192,7 +192,8 @@ def run_journaled(journal: Any, samples: dict[tuple[str, int], Any], args: argpa
                   verb: str) -> Any:
     """Run the samples the journal lacks (one batch per run length, ``steps_of(key)``), appending each as it
     finishes; the execution, or None when every sample was kept already. Ctrl-C, SIGTERM or SIGHUP:
-    print how many samples are kept and the resume command, exit 130 (:class:`SystemExit`)."""
+    print how many samples are kept and the resume command, exit 128 + the signal's number (130, 143, 129:
+    :class:`SystemExit`, the CLI's convention)."""
     import signal
 
     from acds_runtime.montecarlo import MonteCarloError, run_samples
@@ -203,7 +204,7 @@ def run_journaled(journal: Any, samples: dict[tuple[str, int], Any], args: argpa
               f'{len(todo)} to run', file=sys.stderr, flush=True)
 
     def stop(signum: int, _frame: Any) -> None:
-        raise _Stop(signal.Signals(signum).name)
+        raise _Stop(signal.Signals(signum).name, signum)
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGHUP)}
     execution = None
     try:
@@ -215,11 +216,12 @@ def run_journaled(journal: Any, samples: dict[tuple[str, int], Any], args: argpa
                                     scheduler=args.scheduler, progress=not args.quiet,
                                     on_result=lambda i, summary, keys=keys: journal.record(keys[i], summary))[1]
     except (KeyboardInterrupt, _Stop) as exc:
-        why = 'Ctrl-C' if isinstance(exc, KeyboardInterrupt) else str(exc)
+        why = 'Ctrl-C' if isinstance(exc, KeyboardInterrupt) else exc.args[0]
+        signum = exc.args[1] if isinstance(exc, _Stop) else getattr(exc, 'signum', signal.SIGINT)
         print(f'\n[{verb}] interrupted ({why}): {journal.kept()} of {len(samples)} samples kept in '
               f'{journal.path}; continue with:\n  {journal.study["command"]} --resume {journal.path.parent}',
               file=sys.stderr, flush=True)
-        raise SystemExit(130) from None
+        raise SystemExit(128 + signum) from None
     except MonteCarloError as exc:
         raise UsageError(str(exc)) from None
     finally:

@@ -58,6 +58,10 @@ def cmd_design(args: argparse.Namespace) -> int:
     """Design the rod, print it, optionally write the JSON record."""
     from em_driver.bridge_switch import EmDriverError
     from em_driver.torque_rod_design import DesignRequest, InfeasibleDesignError, design_torque_rod
+
+    from ..arguments import check_output_file
+    if args.json:
+        check_output_file('--json', Path(args.json))
     try:
         req = DesignRequest(mass_max_kg=args.mass_g * 1e-3, power_max_w=args.power_w, voltage_v=args.voltage,
                             moment_min_am2=args.moment_am2, envelope_m=tuple(x * 1e-3 for x in args.envelope_mm),
@@ -77,18 +81,21 @@ def cmd_design(args: argparse.Namespace) -> int:
           f'{args.voltage:g} V, envelope {"x".join(f"{x:g}" for x in args.envelope_mm)} mm')
     print('\n'.join(_report(record)))
     if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(record, indent=2) + '\n')
     return 0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``design-torque-rod`` verb."""
+    from ..arguments import positive_number
+
     text = 'size a CubeSat torque rod (seed 003 design procedure as a bounded minimum-mass search)'
     p = sub.add_parser('design-torque-rod', help=text, description=text + '. Defaults: the seed 003 constraints.')
-    p.add_argument('--mass-g', type=float, default=100.0, help='mass limit per rod, g (default 100)')
-    p.add_argument('--power-w', type=float, default=0.5, help='power per rod at full current, W (default 0.5)')
-    p.add_argument('--voltage', type=float, default=7.2, help='bus voltage, V (default 7.2)')
-    p.add_argument('--moment-am2', type=float, default=0.1552, help='required dipole, A·m² (default 0.1552)')
+    p.add_argument('--mass-g', type=positive_number, default=100.0, help='mass limit per rod, g (default 100)')
+    p.add_argument('--power-w', type=positive_number, default=0.5, help='power per rod at full current, W (default 0.5)')
+    p.add_argument('--voltage', type=positive_number, default=7.2, help='bus voltage, V (default 7.2)')
+    p.add_argument('--moment-am2', type=positive_number, default=0.1552, help='required dipole, A·m² (default 0.1552)')
     p.add_argument('--envelope-mm', type=_envelope_mm, default=(35.0, 35.0, 25.0),
                    help='envelope AxBxC, mm (default 35x35x25)')
     p.add_argument('--core', choices=('permalloy', 'permendur', 'ck30'), default='permalloy',
@@ -96,8 +103,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--awg', type=int, default=36, help='wire gauge (default 36)')
     p.add_argument('--windings', type=int, choices=(1, 2), default=2, help='redundant windings (default 2)')
     p.add_argument('--bridge-ohm', type=float, default=0.36, help='H-bridge resistance in the loop, Ω (default 0.36)')
-    p.add_argument('--insulation-mm', type=float, help='enamel build on the diameter, mm (default: heavy build)')
-    p.add_argument('--min-core-radius-mm', type=float, default=0.5, help='smallest core radius, mm (default 0.5)')
+    p.add_argument('--insulation-mm', type=positive_number, help='enamel build on the diameter, mm (default: heavy build)')
+    p.add_argument('--min-core-radius-mm', type=positive_number, default=0.5, help='smallest core radius, mm (default 0.5)')
     p.add_argument('--allow-saturation', action='store_true',
                    help='accept a core that saturates at full current (its saturated moment must meet the requirement)')
     p.add_argument('--json', metavar='PATH', help='write the design as one JSON object')

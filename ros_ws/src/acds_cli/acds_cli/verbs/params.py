@@ -16,7 +16,7 @@ import argparse
 import sys
 from typing import Any
 
-from ..arguments import UsageError, step_count
+from ..arguments import UsageError, real_time_factor, step_count
 from .run import DEFAULT_SCENARIO
 
 
@@ -75,5 +75,5 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('scenario', nargs='?', help=f'scenario name or path (default {DEFAULT_SCENARIO})')
     p.add_argument('--node', help='only this node (e.g. rigid_body, reaction_wheels)')
     p.add_argument('--steps', type=step_count, help='total_steps of rigid_body (default: the scenario duration)')
-    p.add_argument('--rtf', type=float, default=0.0, help='real_time_factor of rigid_body (default 0)')
+    p.add_argument('--rtf', type=real_time_factor, default=0.0, help='real_time_factor of rigid_body (default 0)')
     p.set_defaults(func=_params)

@@ -92,6 +92,12 @@ def write_png(run: StandRun, directory: str) -> str:
 
 def cmd_torque_meter(args: argparse.Namespace) -> int:
     """Run the stand and print its table (or CSV); write the strip chart when asked."""
+    from pathlib import Path
+
+    from ..arguments import check_output_dir
+
+    if args.png:
+        check_output_dir("--png", Path(args.png))
     try:
         run = run_torque_meter(tuple(args.field) if args.field else DEFAULT_FIELD_STEPS_G,
                                attitude=args.attitude, dwell_s=args.dwell_s, dt_s=args.dt_s,
