@@ -437,7 +437,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_execution_options(p)
     add_sample_options(p, run=False)
     p.add_argument('--until-min', type=positive_minutes,
-                   help='cap every run at this sim time, minutes (a sample not captured by then is censored)')
+                   help='run every sample for this sim time instead of the scenario\'s duration, minutes (longer or '
+                        'shorter; it still stops at capture; a sample not captured by then is censored)')
     p.add_argument('--out', metavar='DIR', help='output folder (default runs/montecarlo_<scenario>_s<seed>_n<N>_<time>)')
     p.add_argument('--target-width', type=_width, default=None, metavar='PCT',
                    help='report the samples each percentile needs for a confidence interval this wide, %% of its value '

@@ -86,6 +86,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     check_output_dir('--run-dir' if args.run_dir else 'run folder', Path(args.run_dir or workspace() / 'runs'))
     if args.summary_json:
         check_output_file('--summary-json', Path(args.summary_json))
+    if args.record is not None and not args.record.strip():
+        raise UsageError('--record: an empty path (give the bag folder to create, or leave --record out for '
+                         'RUN_DIR/bag)')
     # The default folder is created exclusively (a run started in the same second gets its own).
     run_dir = Path(args.run_dir) if args.run_dir else new_run_dir(scenario.name)
     if sample_text is not None:  # the drawn scenario with how it was drawn (the launcher adds scenario.yaml)

@@ -341,7 +341,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('scenarios', nargs='+', metavar='SCENARIO', help='scenario names or paths, or a group name')
     p.add_argument('--jobs', '-j', type=positive_int, default=2, help='runs at a time (default 2)')
     p.add_argument('--json', metavar='PATH', help='write the list of summary objects as JSON (non-finite as null)')
-    p.add_argument('--until-min', type=positive_minutes, help='cap every run at this sim time, minutes (> 0)')
+    p.add_argument('--until-min', type=positive_minutes, help='run every case for this sim time instead of its '
+                   'scenario\'s duration, minutes (> 0; longer or shorter)')
     p.add_argument('--runs', type=positive_int,
                    help='paired study: run every scenario on the same N drawn open conditions (module doc)')
     add_execution_options(p)
