@@ -92,3 +92,43 @@ def test_an_external_node_that_breaks_the_step_rule_fails_the_run_in_one_line(la
     assert got in line, line
     if fault == 'wallclock':
         assert line.endswith('expected one message for step 3, stamped 3000000000 ns (t = 3 s)'), line
+
+
+def _endpoint(node_name: str, topic_type: str):
+    from types import SimpleNamespace
+
+    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+    qos = SimpleNamespace(reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    return SimpleNamespace(node_name=node_name, node_namespace='/acds', topic_type=topic_type, qos_profile=qos)
+
+
+def test_an_external_node_with_another_message_type_is_named_by_its_type_not_its_qos():
+    """A publisher (or a subscription) of another type than the contract's never matches the graph's endpoints:
+    the readiness line names the topic and both types, never a QoS problem the node does not have, nor inputs
+    "arrived" at a node that cannot read them."""
+    from types import SimpleNamespace
+
+    from acds_common.graph import build_graph
+    from acds_common.parameters import node_parameters
+    from acds_runtime.external import ExternalWatch
+
+    sc = load_scenario('oresat_detumble')
+    external = sc.external(['acds_controller=my_fsw'])
+    watch = ExternalWatch(build_graph(node_parameters(sc, 10, external=external)), external, 10**9)
+    vector3s = 'geometry_msgs/msg/Vector3Stamped'
+    pubs = {'/acds/controller/moment_command': [_endpoint('my_fsw', 'geometry_msgs/msg/Vector3')]}
+    subs = {'/acds/magnetometer/volts': [_endpoint('my_fsw', 'sensor_msgs/msg/Imu')]}
+    node = SimpleNamespace(get_publishers_info_by_topic=lambda t: pubs.get(t, []),
+                           get_subscriptions_info_by_topic=lambda t: subs.get(t, []))
+    [line] = watch.missing(node, {})
+    assert 'QoS' not in line and 'no publisher' not in line, line
+    assert line == ('external node acds_controller (ROS node my_fsw): no subscription to any of its inputs '
+                    '/acds/magnetometer/volts, /acds/magnetometer/bias_volts, /acds/sensors/gyro, /acds/sensors/sun, '
+                    '/acds/truth/odometry, /acds/em_driver/coil_current; publishes another message type than the '
+                    "contract's: /acds/controller/moment_command as geometry_msgs/msg/Vector3 (the contract: "
+                    f"{vector3s}); subscribes to another message type than the contract's: /acds/magnetometer/volts "
+                    f'as sensor_msgs/msg/Imu (the contract: {vector3s})'), line
+    # The right types, matched: nothing missing.
+    pubs = {'/acds/controller/moment_command': [_endpoint('my_fsw', vector3s)]}
+    subs = {'/acds/magnetometer/volts': [_endpoint('my_fsw', vector3s)]}
+    assert watch.missing(node, {'/acds/controller/moment_command': 1}) == []
