@@ -53,6 +53,9 @@ def test_an_external_node_that_never_comes_is_named_with_what_it_should_serve(la
     ('wheel_law', "external node 'wheel_law': not a node of this graph"),
     ('rigid_body', "external node 'rigid_body': it owns sim time"),
     ('acds_controller=9lives', "'9lives' is not a ROS node name"),
+    ('acds_controller=em_driver', "external node 'acds_controller': ROS node name 'em_driver' is that of the node "
+                                  'em_driver the launcher starts'),
+    ('acds_controller=run_monitor', "ROS node name 'run_monitor' is that of the launcher's run monitor"),
 ])
 def test_bad_external_nodes_are_one_line_before_any_process(launch_graph, item, message):
     with pytest.raises(LaunchError, match=message) as err:
