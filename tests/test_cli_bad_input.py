@@ -69,3 +69,17 @@ def test_a_scenario_with_a_bad_external_key_is_one_line(tmp_path):
     assert proc.returncode == 2
     assert "external: external node 'rigid_body': it owns sim time" in proc.stderr, proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_a_reader_that_leaves_early_gets_no_traceback():
+    """``acds params SCENARIO | head -1``: the reader may be gone before the command writes (head exits on its first
+    line, or is given none); the command stops without a traceback (exit 141, a writer's SIGPIPE status, as the
+    shell reports it). Here the pipe has no reader from the start."""
+    env = {'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': '/tmp/acds_ros_log'}
+    proc = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'params', 'emff_testbed_hold'], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, cwd=ROOT, env=env)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert proc.wait(timeout=120) == 141, err
+    assert 'Traceback' not in err and err == '', err
