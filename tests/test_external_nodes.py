@@ -49,6 +49,19 @@ def test_an_external_node_that_never_comes_is_named_with_what_it_should_serve(la
     assert '\n' not in text
 
 
+def test_a_harness_wait_before_the_external_node_came_names_it(launch_graph):
+    """``wait_for_messages`` on a graph that has not started (its external node not there yet) says so, with what the
+    graph waits for, rather than only that nothing arrived."""
+    from acds_runtime.testing import wait_for_messages
+
+    with launch_graph('oresat_detumble', steps=10, external=['acds_controller=my_detumble']) as graph:
+        with pytest.raises(pytest.fail.Exception) as err:
+            wait_for_messages(graph, 'controller/moment_command', 1, timeout_s=3.0)
+    text = str(err.value)
+    assert 'the graph has not started, it waits for: external node acds_controller (ROS node my_detumble): no ' \
+           'publisher of /acds/controller/moment_command' in text, text
+
+
 @pytest.mark.parametrize(('item', 'message'), [
     ('wheel_law', "external node 'wheel_law': not a node of this graph"),
     ('rigid_body', "external node 'rigid_body': it owns sim time"),
