@@ -148,3 +148,16 @@ def test_an_external_node_with_another_message_type_is_named_by_its_type_not_its
     pubs = {'/acds/controller/moment_command': [_endpoint('my_fsw', vector3s)]}
     subs = {'/acds/magnetometer/volts': [_endpoint('my_fsw', vector3s)]}
     assert watch.missing(node, {'/acds/controller/moment_command': 1}) == []
+
+
+def test_steps_that_go_back_are_named_as_such():
+    """A user's node left running from an earlier run on the same domain hands a new run that run's steps from its
+    transient-local history, then this run's step 0: the line says the steps went back and what to do, not only
+    "a second message" (measured: step 0 after step 200 of the earlier run)."""
+    from acds_common.lockstep import sequence_error
+
+    line = sequence_error('/acds/controller/moment_command', 'my_fsw', 0, 200, 10**9)
+    assert line == ('/acds/controller/moment_command: my_fsw sent step 0 after step 200 (its steps went back: were '
+                    'its earlier messages kept from another run on this ROS domain? restart the node for each run); '
+                    'expected one message for step 201, stamped 201000000000 ns (t = 201 s)'), line
+    assert 'a second message for step 3;' in sequence_error('/t', 'my_fsw', 3 * 10**9, 3, 10**9)
