@@ -52,6 +52,9 @@ def test_unknown_verb_and_option_are_clear_errors():
     (['--domain', '5'], "argument --domain: expected a ROS domain in 11..99, got '5'"),
     (['--deadline-ms', 'acds_controller=inf'], "expected NODE=MS with a finite MS > 0, got 'acds_controller=inf'"),
     (['--deadline-ms', 'gyro=2'], '--deadline-ms gyro=2: scenario oresat_detumble runs no such node'),
+    (['--external', 'acds_controller=em_driver'], "ROS node name 'em_driver' is that of the node em_driver"),
+    (['--peer', 'no such host!'], "argument --peer: cannot resolve host 'no such host!'"),
+    (['--peer', '10.0.0.2;10.0.0.3'], 'argument --peer: expected one host name or address (repeat --peer for more)'),
 ])
 def test_bad_external_node_options_are_one_line_before_any_process(tmp_path, args, message):
     """Issue 20, bad input: checked before any process starts (no run folder is made)."""
