@@ -161,3 +161,22 @@ def test_steps_that_go_back_are_named_as_such():
                     'its earlier messages kept from another run on this ROS domain? restart the node for each run); '
                     'expected one message for step 201, stamped 201000000000 ns (t = 201 s)'), line
     assert 'a second message for step 3;' in sequence_error('/t', 'my_fsw', 3 * 10**9, 3, 10**9)
+
+
+def test_quiet_keeps_the_line_that_says_how_to_join(tmp_path):
+    """``--quiet`` drops the nodes' output, not the launcher's line that tells the user where and how their node
+    joins (the domain, the ROS node name, the contract command): without it a quiet run waited without saying for
+    what until its timeout."""
+    import subprocess
+    import sys
+
+    path = tmp_path / 'quiet.yaml'
+    path.write_text('extends: oresat_detumble\nname: oresat_quiet\ninput_timeout_s: 1\n')
+    proc = subprocess.run([sys.executable, '-m', 'acds_cli', 'run', str(path), '--steps', '3', '--no-record', '--quiet',
+                           '--external', 'acds_controller=my_fsw', '--run-dir', str(tmp_path / 'run')],
+                          capture_output=True, text=True, timeout=120, check=False,
+                          env={'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': str(tmp_path / 'ros_log')})
+    assert proc.returncode == 1, proc.stderr
+    assert '[acds] external node acds_controller: waiting (at most 20 s) for ROS node my_fsw in namespace /acds on ' \
+           'ROS_DOMAIN_ID=' in proc.stderr, proc.stderr
+    assert 'its contract: ./scripts/acds contract oresat_quiet --node acds_controller' in proc.stderr, proc.stderr

@@ -115,7 +115,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     else:
         engine = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=progress,
                           overrides=overrides, external=args.external, domain=args.domain, peers=args.peer,
-                          **options)
+                          notice=lambda line: print(line, file=sys.stderr, flush=True), **options)
     print(f'[acds] scenario {scenario.name}: {engine.steps} steps of {scenario.control_period_s} s '
           f'({engine.steps * scenario.control_period_s / 60:.1f} min sim), '
           + ('direct engine (one process, no DDS)' if direct else 'nodes ' + ', '.join(
