@@ -54,6 +54,9 @@ def test_unknown_verb_and_option_are_clear_errors():
     (['--deadline-ms', 'gyro=2'], '--deadline-ms gyro=2: scenario oresat_detumble runs no such node'),
     (['--record', ''], '--record: an empty path'),
     (['--record', ' ', '--engine', 'direct'], '--record: an empty path'),
+    (['--external', 'acds_controller=em_driver'], "ROS node name 'em_driver' is that of the node em_driver"),
+    (['--peer', 'no such host!'], "argument --peer: cannot resolve host 'no such host!'"),
+    (['--peer', '10.0.0.2;10.0.0.3'], 'argument --peer: expected one host name or address (repeat --peer for more)'),
 ])
 def test_bad_external_node_options_are_one_line_before_any_process(tmp_path, args, message):
     """Issue 20, bad input: checked before any process starts (no run folder is made)."""
@@ -71,3 +74,17 @@ def test_a_scenario_with_a_bad_external_key_is_one_line(tmp_path):
     assert proc.returncode == 2
     assert "external: external node 'rigid_body': it owns sim time" in proc.stderr, proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_a_reader_that_leaves_early_gets_no_traceback():
+    """``acds params SCENARIO | head -1``: the reader may be gone before the command writes (head exits on its first
+    line, or is given none); the command stops without a traceback (exit 141, a writer's SIGPIPE status, as the
+    shell reports it). Here the pipe has no reader from the start."""
+    env = {'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': '/tmp/acds_ros_log'}
+    proc = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'params', 'emff_testbed_hold'], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, cwd=ROOT, env=env)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert proc.wait(timeout=120) == 141, err
+    assert 'Traceback' not in err and err == '', err

@@ -49,10 +49,26 @@ def test_an_external_node_that_never_comes_is_named_with_what_it_should_serve(la
     assert '\n' not in text
 
 
+def test_a_harness_wait_before_the_external_node_came_names_it(launch_graph):
+    """``wait_for_messages`` on a graph that has not started (its external node not there yet) says so, with what the
+    graph waits for, rather than only that nothing arrived."""
+    from acds_runtime.testing import wait_for_messages
+
+    with launch_graph('oresat_detumble', steps=10, external=['acds_controller=my_detumble']) as graph:
+        with pytest.raises(pytest.fail.Exception) as err:
+            wait_for_messages(graph, 'controller/moment_command', 1, timeout_s=3.0)
+    text = str(err.value)
+    assert 'the graph has not started, it waits for: external node acds_controller (ROS node my_detumble): no ' \
+           'publisher of /acds/controller/moment_command' in text, text
+
+
 @pytest.mark.parametrize(('item', 'message'), [
     ('wheel_law', "external node 'wheel_law': not a node of this graph"),
     ('rigid_body', "external node 'rigid_body': it owns sim time"),
     ('acds_controller=9lives', "'9lives' is not a ROS node name"),
+    ('acds_controller=em_driver', "external node 'acds_controller': ROS node name 'em_driver' is that of the node "
+                                  'em_driver the launcher starts'),
+    ('acds_controller=run_monitor', "ROS node name 'run_monitor' is that of the launcher's run monitor"),
 ])
 def test_bad_external_nodes_are_one_line_before_any_process(launch_graph, item, message):
     with pytest.raises(LaunchError, match=message) as err:
@@ -92,3 +108,75 @@ def test_an_external_node_that_breaks_the_step_rule_fails_the_run_in_one_line(la
     assert got in line, line
     if fault == 'wallclock':
         assert line.endswith('expected one message for step 3, stamped 3000000000 ns (t = 3 s)'), line
+
+
+def _endpoint(node_name: str, topic_type: str):
+    from types import SimpleNamespace
+
+    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+    qos = SimpleNamespace(reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    return SimpleNamespace(node_name=node_name, node_namespace='/acds', topic_type=topic_type, qos_profile=qos)
+
+
+def test_an_external_node_with_another_message_type_is_named_by_its_type_not_its_qos():
+    """A publisher (or a subscription) of another type than the contract's never matches the graph's endpoints:
+    the readiness line names the topic and both types, never a QoS problem the node does not have, nor inputs
+    "arrived" at a node that cannot read them."""
+    from types import SimpleNamespace
+
+    from acds_common.graph import build_graph
+    from acds_common.parameters import node_parameters
+    from acds_runtime.external import ExternalWatch
+
+    sc = load_scenario('oresat_detumble')
+    external = sc.external(['acds_controller=my_fsw'])
+    watch = ExternalWatch(build_graph(node_parameters(sc, 10, external=external)), external, 10**9)
+    vector3s = 'geometry_msgs/msg/Vector3Stamped'
+    pubs = {'/acds/controller/moment_command': [_endpoint('my_fsw', 'geometry_msgs/msg/Vector3')]}
+    subs = {'/acds/magnetometer/volts': [_endpoint('my_fsw', 'sensor_msgs/msg/Imu')]}
+    node = SimpleNamespace(get_publishers_info_by_topic=lambda t: pubs.get(t, []),
+                           get_subscriptions_info_by_topic=lambda t: subs.get(t, []))
+    [line] = watch.missing(node, {})
+    assert 'QoS' not in line and 'no publisher' not in line, line
+    assert line == ('external node acds_controller (ROS node my_fsw): no subscription to any of its inputs '
+                    '/acds/magnetometer/volts, /acds/magnetometer/bias_volts, /acds/sensors/gyro, /acds/sensors/sun, '
+                    '/acds/truth/odometry, /acds/em_driver/coil_current; publishes another message type than the '
+                    "contract's: /acds/controller/moment_command as geometry_msgs/msg/Vector3 (the contract: "
+                    f"{vector3s}); subscribes to another message type than the contract's: /acds/magnetometer/volts "
+                    f'as sensor_msgs/msg/Imu (the contract: {vector3s})'), line
+    # The right types, matched: nothing missing.
+    pubs = {'/acds/controller/moment_command': [_endpoint('my_fsw', vector3s)]}
+    subs = {'/acds/magnetometer/volts': [_endpoint('my_fsw', vector3s)]}
+    assert watch.missing(node, {'/acds/controller/moment_command': 1}) == []
+
+
+def test_steps_that_go_back_are_named_as_such():
+    """A user's node left running from an earlier run on the same domain hands a new run that run's steps from its
+    transient-local history, then this run's step 0: the line says the steps went back and what to do, not only
+    "a second message" (measured: step 0 after step 200 of the earlier run)."""
+    from acds_common.lockstep import sequence_error
+
+    line = sequence_error('/acds/controller/moment_command', 'my_fsw', 0, 200, 10**9)
+    assert line == ('/acds/controller/moment_command: my_fsw sent step 0 after step 200 (its steps went back: were '
+                    'its earlier messages kept from another run on this ROS domain? restart the node for each run); '
+                    'expected one message for step 201, stamped 201000000000 ns (t = 201 s)'), line
+    assert 'a second message for step 3;' in sequence_error('/t', 'my_fsw', 3 * 10**9, 3, 10**9)
+
+
+def test_quiet_keeps_the_line_that_says_how_to_join(tmp_path):
+    """``--quiet`` drops the nodes' output, not the launcher's line that tells the user where and how their node
+    joins (the domain, the ROS node name, the contract command): without it a quiet run waited without saying for
+    what until its timeout."""
+    import subprocess
+    import sys
+
+    path = tmp_path / 'quiet.yaml'
+    path.write_text('extends: oresat_detumble\nname: oresat_quiet\ninput_timeout_s: 1\n')
+    proc = subprocess.run([sys.executable, '-m', 'acds_cli', 'run', str(path), '--steps', '3', '--no-record', '--quiet',
+                           '--external', 'acds_controller=my_fsw', '--run-dir', str(tmp_path / 'run')],
+                          capture_output=True, text=True, timeout=120, check=False,
+                          env={'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': str(tmp_path / 'ros_log')})
+    assert proc.returncode == 1, proc.stderr
+    assert '[acds] external node acds_controller: waiting (at most 20 s) for ROS node my_fsw in namespace /acds on ' \
+           'ROS_DOMAIN_ID=' in proc.stderr, proc.stderr
+    assert 'its contract: ./scripts/acds contract oresat_quiet --node acds_controller' in proc.stderr, proc.stderr

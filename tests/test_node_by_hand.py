@@ -52,14 +52,26 @@ def test_params_verb_prints_the_launchers_params_file():
     assert one['/acds/em_driver']['ros__parameters'] == node_parameters(sc, 40)['em_driver']
 
 
-@pytest.mark.parametrize('rtf', ['-1', 'nan', '2e6'])
-def test_params_verb_refuses_a_pacing_the_node_cannot_run(capsys, rtf):
-    """``--rtf`` is checked as ``run --rtf`` is ([0, 1e6]), not written into the parameters file as given."""
+def test_params_verb_prints_a_formation_vehicles_node_with_its_namespace():
+    """``--node VEHICLE/NODE`` (the names its own error lists): the node's file, started in its vehicle's namespace
+    (it was a KeyError traceback)."""
+    text = _params_text('emff_testbed_hold', '--node', 'a/em_driver', '--steps', '40')
+    head = [line for line in text.splitlines() if line.startswith('#')]
+    assert head[1] == '# Start it by hand: .venv/bin/em_driver --ros-args -r __ns:=/acds/a --params-file THIS_FILE'
+    assert head[3] == '#   a publisher on /acds/a/controller/moment_command (from a/formation_controller)', head
+    sc = load_scenario('emff_testbed_hold')
+    assert yaml.safe_load(text) == {'/acds/a/em_driver': {'ros__parameters': node_parameters(sc, 40)['a/em_driver']}}
+
+
+@pytest.mark.parametrize('rtf', ['-1', 'nan', 'inf', '2e6'])
+def test_params_verb_refuses_a_real_time_factor_that_run_refuses(rtf, capsys):
+    """``--rtf`` as ``acds run`` takes it (finite, in [0, 1e6]): one line, exit 2, no file with a value the time owner
+    cannot start with."""
     with pytest.raises(SystemExit) as exc:
-        main(['params', SCENARIO, '--node', 'rigid_body', f'--rtf={rtf}'])
+        main(['params', SCENARIO, '--rtf', rtf])
     assert exc.value.code == 2
-    captured = capsys.readouterr()
-    assert captured.out == '' and 'argument --rtf: must be a finite number in [0, ' in captured.err
+    err = capsys.readouterr()
+    assert err.out == '' and 'argument --rtf: must be a finite number in [0, 1e+06]' in err.err, err
 
 
 @pytest.fixture

@@ -116,7 +116,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return args.func(args)
+        code = args.func(args)
+        sys.stdout.flush()  # inside: a reader gone before the last write is the BrokenPipeError below
+        return code
     except ScenarioError as exc:
         print(f'acds: scenario error: {exc}', file=sys.stderr)
         return 2
@@ -128,11 +130,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f'\n[acds] stopped by {signal.Signals(signum).name}', file=sys.stderr)
         return 128 + signum
     except BrokenPipeError:
-        # The reader of the output went away (`acds info BAG | head`): nothing left to print to, and no
-        # traceback; stdout goes to /dev/null so that the interpreter's final flush does not fail again.
-        # The verb's own clean-up (finally blocks, bags closed) has run; exit as a SIGPIPE'd process does.
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
+        # The reader of stdout left (``acds params ... | head``): nothing more to say, no traceback; the shell's
+        # exit status of a writer killed by SIGPIPE. Python would flush stdout again at exit: point it at devnull.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 128 + signal.SIGPIPE
 
 

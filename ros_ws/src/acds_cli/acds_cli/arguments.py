@@ -85,6 +85,20 @@ def real_time_factor(text: str) -> float:
     return value
 
 
+def peer_host(text: str) -> str:
+    """A host discovery can reach (``--peer``; one entry of ROS_STATIC_PEERS): a name or address that resolves, as
+    Fast DDS resolves it when the first participant is created (there, an unresolvable peer was a traceback)."""
+    import socket
+
+    if not text or ';' in text or text != text.strip():
+        raise argparse.ArgumentTypeError(f'expected one host name or address (repeat --peer for more), got {text!r}')
+    try:
+        socket.getaddrinfo(text, None)
+    except (OSError, UnicodeError) as exc:
+        raise argparse.ArgumentTypeError(f'cannot resolve host {text!r}: {exc}') from None
+    return text
+
+
 def tcp_port(text: str) -> int:
     """A TCP port to listen on: 0 (any free port) … 65535."""
     value = _whole(text)

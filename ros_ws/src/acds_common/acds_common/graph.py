@@ -295,7 +295,7 @@ ROS_NODE_NAME = re.compile(r'[A-Za-z_][A-Za-z0-9_]*')
 def external_nodes(items: Iterable[str], instances: Iterable[str], time_owner: str) -> dict[str, str]:
     """``NODE[=ROS_NODE_NAME]`` items (``acds run --external``, scenario key ``external``; issue 20 §1) → {instance:
     the ROS identity its publishers must carry}, ValueError (one line) for a node not in the graph, the time owner,
-    a node given twice or a name rcl would refuse.
+    a node given twice, a name rcl would refuse or one a node the launcher starts (or its run monitor) has.
 
     An external node is one of the graph's nodes that the launcher does not start: the user's own process, in any
     language, takes its place under the given ROS node name (default: the node's own name). A formation vehicle's
@@ -319,6 +319,14 @@ def external_nodes(items: Iterable[str], instances: Iterable[str], time_owner: s
                              '_, not starting with a digit)')
         vehicle = node.rpartition('/')[0]
         out[node] = f'{vehicle}/{name}' if vehicle else name
+    # ROS node names are unique in a graph, and the graph knows its publishers by them: a name the launcher gives
+    # one of its own processes would make the user's node and that one indistinguishable (neither an intruder).
+    taken = {i: f'the node {i} the launcher starts' for i in known if i not in out}
+    taken[MONITOR_NAME] = "the launcher's run monitor"
+    for node, identity in out.items():
+        if identity in taken:
+            raise ValueError(f'external node {node!r}: ROS node name {identity.rpartition("/")[2]!r} is that of '
+                             f'{taken[identity]} (ROS node names are unique in a graph): give yours another')
     return out
 
 

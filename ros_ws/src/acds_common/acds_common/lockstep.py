@@ -215,7 +215,10 @@ def sequence_error(topic: str, publisher: str, t_ns: int, last: int, dt_ns: int)
     k, rem = divmod(t_ns, dt_ns)
     if rem:
         got = f'stamp {t_ns} ns, not a step time (a multiple of Δt = {dt_ns} ns)'
-    elif k <= last:
+    elif k < last:  # a publisher whose steps start over: its transient-local history held another run's steps
+        got = (f'step {k} after step {last} (its steps went back: were its earlier messages kept from another run on '
+               'this ROS domain? restart the node for each run)')
+    elif k == last:
         got = f'a second message for step {k}'
     else:
         got = f'step {k}, skipping step {expected}' if k > expected else f'step {k}'

@@ -36,11 +36,23 @@ class _External:
     #: Per stage, the topics it may read (its present inputs; /clock when none is of the same step).
     stage_inputs: list[list[str]]
     triggers: list[str]
+    #: {topic: 'pkg/msg/Type'} of its outputs and inputs, as the contract declares them.
+    types: dict[str, str]
     times: StepTimes
     strict: bool
     inputs_at: dict[int, list[float]] = field(default_factory=dict)
     outputs_at: dict[int, list[float]] = field(default_factory=dict)
     last: dict[str, int] = field(default_factory=dict)
+
+
+def _own(ext: _External, infos: Any, topic: str, wrong: dict[str, list[str]]) -> list[Any]:
+    """The endpoints of ``ext`` among ``infos`` (discovery's, on ``topic``) of the contract's type; the other types
+    it has there are added to ``wrong[topic]``."""
+    mine = [i for i in infos if publisher_name(i) == ext.identity]
+    for i in mine:
+        if i.topic_type != ext.types[topic] and i.topic_type not in wrong.setdefault(topic, []):
+            wrong[topic].append(i.topic_type)
+    return [i for i in mine if i.topic_type == ext.types[topic]]
 
 
 class ExternalWatch:
@@ -54,14 +66,16 @@ class ExternalWatch:
             spec = graph.nodes[inst]
             stage_inputs: list[list[str]] = []
             triggers: list[str] = []
+            types = {topics.CLOCK: topics.TYPES[topics.CLOCK], **{spec.topic(o.topic): o.msg_type for o in spec.outputs}}
             for st in spec.stages:
                 present = [i for i in st.inputs if i.source in graph.nodes]
+                types.update({spec.topic(i.topic): topics.type_of(i.topic) for i in present})
                 same_step = [spec.topic(i.topic) for i in present if i.lag == 0]
                 triggers += same_step or [topics.CLOCK]
                 stage_inputs.append([spec.topic(i.topic) for i in present] + ([] if same_step else [topics.CLOCK]))
             ms, strict = (deadlines or {}).get(inst, (0.0, False))
             self.nodes[inst] = _External(identity, [spec.topic(o.topic) for o in spec.outputs if o.every_step],
-                                         stage_inputs, sorted(set(triggers)), StepTimes(ms / 1e3), strict)
+                                         stage_inputs, sorted(set(triggers)), types, StepTimes(ms / 1e3), strict)
 
     def publisher(self, instance: str) -> str:
         """The ROS identity that publishes for ``instance`` (itself for a node the launcher starts)."""
@@ -76,11 +90,14 @@ class ExternalWatch:
             parts: list[str] = []
             unread: list[str] = []
             absent = []
+            # An endpoint of another type than the contract's never matches the graph's: named as such, not as QoS
+            # nor as a missing endpoint. {topic: the types it has there}, its publishers and its subscriptions.
+            mistyped: tuple[dict[str, list[str]], dict[str, list[str]]] = ({}, {})
             for topic in ext.outputs:
-                seen = [i for i in node.get_publishers_info_by_topic(topic) if publisher_name(i) == ext.identity]
-                if not seen:
+                seen = _own(ext, node.get_publishers_info_by_topic(topic), topic, mistyped[0])
+                if not seen and not mistyped[0].get(topic):
                     absent.append(topic)
-                elif matched.get(topic, 0) < 1:
+                elif seen and matched.get(topic, 0) < 1:
                     qos = seen[0].qos_profile
                     unread.append(f'{topic} ({qos.reliability.name}/{qos.durability.name})')
             if absent:
@@ -89,8 +106,13 @@ class ExternalWatch:
                 parts.append('publishers the graph cannot read, QoS not RELIABLE/TRANSIENT_LOCAL as the contract '
                              'says: ' + ', '.join(unread))
             for inputs in ext.stage_inputs:  # which of its inputs it reads is its own business; at least one
-                if not any(publisher_name(i) == ext.identity for t in inputs for i in node.get_subscriptions_info_by_topic(t)):
+                if not [t for t in inputs if _own(ext, node.get_subscriptions_info_by_topic(t), t, mistyped[1])]:
                     parts.append('no subscription to any of its inputs ' + ', '.join(inputs))
+            for verb, wrong in zip(('publishes', 'subscribes to'), mistyped, strict=True):
+                named = [f'{t} as {", ".join(types)} (the contract: {ext.types[t]})'
+                         for t, types in wrong.items() if types]
+                if named:
+                    parts.append(f'{verb} another message type than the contract\'s: ' + ', '.join(named))
             if parts:
                 out.append(f'external node {inst} (ROS node {ext.identity}): ' + '; '.join(parts))
         return out

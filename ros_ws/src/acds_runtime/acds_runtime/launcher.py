@@ -159,12 +159,15 @@ class GraphRun:
                  overrides: dict[str, dict[str, Any]] | None = None,
                  record: Path | None = None, record_storage: str = 'mcap', record_compression: str | None = None,
                  keep: bool = False, live: Callable[[dict[str, dict[str, Any]]], Any] | None = None,
-                 external: Iterable[str] = (), domain: int | None = None, peers: Iterable[str] = ()):
+                 external: Iterable[str] = (), domain: int | None = None, peers: Iterable[str] = (),
+                 notice: Callable[[str], None] | None = None):
         self.scenario = scenario
         self.run_dir = Path(run_dir)
         self.steps = steps if steps is not None else scenario.total_steps()
         self.rtf = rtf
         self.echo = echo or (lambda line: print(line, file=sys.stderr, flush=True))
+        #: The launcher's own lines for the user (what an external node must do to join), beside the nodes' output.
+        self.notice = notice or self.echo
         self.progress = progress
         self.overrides = overrides
         #: Record every topic into this rosbag2 bag (written by the run monitor, in lockstep).
@@ -303,7 +306,7 @@ class GraphRun:
         self._t0 = time.monotonic()
         for name, identity in self.external.items():
             spec = self.graph.nodes[name]
-            self.echo(f'[acds] external node {name}: waiting (at most {self.ready_timeout_s:g} s) for ROS node '
+            self.notice(f'[acds] external node {name}: waiting (at most {self.ready_timeout_s:g} s) for ROS node '
                       f'{identity.rpartition("/")[2]} in namespace {spec.namespace} on ROS_DOMAIN_ID='
                       f'{self.lease.domain_id} (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST on this host); its contract: '
                       f'./scripts/acds contract {self.scenario.name} --node {name}')

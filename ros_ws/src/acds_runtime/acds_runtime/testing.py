@@ -48,9 +48,18 @@ def wait_for_messages(graph: GraphRun, topic: str, count: int, timeout_s: float 
     if monitor.count(name) < count:
         got = {t: len(v) for t, v in monitor.snapshot().items()}
         ended = graph.exit_report()
-        why = f'; a node ended first: {ended}' if ended is not None else ''
+        why = f'; a node ended first: {ended}' if ended is not None else _not_started(graph)
         pytest.fail(f'waited for {count} messages on {name}; received per topic: {got}{why}')
     return monitor.messages(topic)
+
+
+def _not_started(graph: GraphRun) -> str:
+    """'' once the graph has started; before, what it still waits for (an external node's missing endpoints)."""
+    monitor = graph.monitor
+    if monitor is None or monitor.ready:
+        return ''
+    return '; the graph has not started, it waits for: ' + ' | '.join(
+        monitor.waiting_for or ['the run monitor to match every declared publisher'])
 
 
 def ground_command(graph: GraphRun, text: str, timeout_s: float = 60.0) -> str:
@@ -67,7 +76,7 @@ def ground_command(graph: GraphRun, text: str, timeout_s: float = 60.0) -> str:
         if not monitor.wait_for(lambda: pub.get_subscription_count() > 0 or graph.exit_report() is not None,
                                 timeout_s) or pub.get_subscription_count() == 0:
             pytest.fail(f'no node subscribed to {topics.resolve(topics.GROUND_COMMAND)} within {timeout_s:g} s; '
-                        f'{graph.exit_report() or "every node still runs"}')
+                        f'{graph.exit_report() or "every node still runs"}{_not_started(graph)}')
         pub.publish(String(data=text))
 
         def answers() -> list[str]:
@@ -77,7 +86,7 @@ def ground_command(graph: GraphRun, text: str, timeout_s: float = 60.0) -> str:
         if not answers():
             acks = [m.data for m in monitor.messages(topics.GROUND_ACK)]
             pytest.fail(f'no answer to the ground command {text!r} within {timeout_s:g} s; answers seen: {acks}; '
-                        f'{graph.exit_report() or "every node still runs"}')
+                        f'{graph.exit_report() or "every node still runs"}{_not_started(graph)}')
         return answers()[0]
     finally:
         monitor.node.destroy_publisher(pub)

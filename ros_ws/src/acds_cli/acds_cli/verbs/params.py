@@ -25,11 +25,11 @@ def waits_for(node: str, params: dict[str, Any]) -> list[str]:
     from acds_common import topics
     from acds_common.graph import MONITOR_NAME, declared_node, node_spec
 
-    spec = node_spec(node, params)
+    spec = node_spec(node.rpartition('/')[2], params)  # a formation vehicle's node: VEHICLE/NODE
     owner = next((n for n in params['graph_nodes'] if n != MONITOR_NAME and declared_node(n.rpartition('/')[2])[1].time_owner),
                  '')
     present = set(params['graph_nodes'])
-    lines = [f'a publisher on {topics.resolve(i.topic)} (from {i.source})'
+    lines = [f'a publisher on {spec.topic(i.topic)} (from {i.source})'
              for st in spec.stages for i in st.inputs if i.source in present]
     lines = list(dict.fromkeys(lines))
     if spec.time_owner:
@@ -57,8 +57,10 @@ def _params(args: argparse.Namespace) -> int:
                              f'(its nodes: {", ".join(params)})')
         params = {args.node: params[args.node]}
         timeout = max(params[args.node]['input_timeout_s'], 20.0)
+        vehicle, _, exe = args.node.rpartition('/')  # a formation vehicle's node runs in the vehicle's namespace
+        remap = f'-r __ns:=/acds/{vehicle} ' if vehicle else ''
         head = [f'ROS 2 parameters of /acds/{args.node}, scenario {scenario.name} ({steps} steps).',
-                f'Start it by hand: .venv/bin/{args.node} --ros-args --params-file THIS_FILE',
+                f'Start it by hand: .venv/bin/{exe} --ros-args {remap}--params-file THIS_FILE',
                 f'It then waits (at most {timeout:g} s, else it exits 3 naming what is missing) for:',
                 *(f'  {line}' for line in waits_for(args.node, params[args.node]))]
         sys.stdout.write(''.join(f'# {line}\n' for line in head))
@@ -75,5 +77,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('scenario', nargs='?', help=f'scenario name or path (default {DEFAULT_SCENARIO})')
     p.add_argument('--node', help='only this node (e.g. rigid_body, reaction_wheels)')
     p.add_argument('--steps', type=step_count, help='total_steps of rigid_body (default: the scenario duration)')
-    p.add_argument('--rtf', type=real_time_factor, default=0.0, help='real_time_factor of rigid_body (default 0)')
+    p.add_argument('--rtf', type=real_time_factor, default=0.0,
+                   help='real_time_factor of the time owner (default 0: as fast as possible)')
     p.set_defaults(func=_params)

@@ -15,6 +15,7 @@ from ..arguments import (
     add_foxglove_options,
     check_output_dir,
     check_output_file,
+    peer_host,
     positive_minutes,
     real_time_factor,
     step_count,
@@ -117,7 +118,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     else:
         engine = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=progress,
                           overrides=overrides, external=args.external, domain=args.domain, peers=args.peer,
-                          **options)
+                          notice=lambda line: print(line, file=sys.stderr, flush=True), **options)
     print(f'[acds] scenario {scenario.name}: {engine.steps} steps of {scenario.control_period_s} s '
           f'({engine.steps * scenario.control_period_s / 60:.1f} min sim), '
           + ('direct engine (one process, no DDS)' if direct else 'nodes ' + ', '.join(
@@ -236,7 +237,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         'SCENARIO --node NODE)')
     p.add_argument('--domain', type=domain_id, metavar='ID',
                    help='ROS_DOMAIN_ID of the run (default: the first free one, printed), e.g. for an external node')
-    p.add_argument('--peer', action='append', default=[], metavar='HOST',
+    p.add_argument('--peer', action='append', default=[], metavar='HOST', type=peer_host,
                    help='another host whose ROS 2 participants discovery contacts (repeatable; ROS_STATIC_PEERS): '
                         'where an external node runs (discovery otherwise stays on this host)')
     p.set_defaults(func=cmd_run)
