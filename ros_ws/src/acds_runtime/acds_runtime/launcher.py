@@ -346,6 +346,12 @@ class GraphRun:
 
     def _forward(self, proc: NodeProcess, stream: IO[str] | None) -> None:
         assert stream is not None
+        try:
+            self._forward_lines(proc, stream)
+        except ValueError:  # closed by stop() after its wait (a process outside the group kept the pipe open)
+            pass
+
+    def _forward_lines(self, proc: NodeProcess, stream: IO[str]) -> None:
         for line in stream:
             line = line.rstrip('\n')
             proc.completed_step = completed_step(line) if proc.completed_step is None else proc.completed_step
@@ -523,6 +529,8 @@ class GraphRun:
             self._stop_children()
         for proc in self.processes.values():
             if proc.popen.stdout is not None:
+                if proc.reader is not None:  # its last lines into the tail (the pipe ends with the process group)
+                    proc.reader.join(timeout=2.0)
                 proc.popen.stdout.close()
         if self.monitor is not None:
             self.monitor.close()  # also closes the bag, if recording
