@@ -88,3 +88,20 @@ def test_a_reader_that_leaves_early_gets_no_traceback():
     err = proc.stderr.read()
     assert proc.wait(timeout=120) == 141, err
     assert 'Traceback' not in err and err == '', err
+
+
+def test_a_domain_another_run_holds_is_one_line_before_the_run_folder(tmp_path):
+    """``--domain N`` that a running graph holds: refused before the run folder is made (the launcher's lease
+    refused it only after, leaving an empty folder)."""
+    from acds_runtime.launcher import DomainLease
+
+    lease = DomainLease()  # held by this test as a running graph's launcher holds it
+    try:
+        proc = run_acds('run', 'oresat_detumble', '--steps', '5', '--run-dir', str(tmp_path / 'run'),
+                        '--domain', str(lease.domain_id))
+    finally:
+        lease.close()
+    assert proc.returncode == 2, proc.stderr
+    assert f'--domain {lease.domain_id}: another run holds this ROS domain now' in proc.stderr, proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    assert not (tmp_path / 'run').exists()

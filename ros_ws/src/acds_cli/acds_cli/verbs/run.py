@@ -87,6 +87,11 @@ def cmd_run(args: argparse.Namespace) -> int:
     check_output_dir('--run-dir' if args.run_dir else 'run folder', Path(args.run_dir or workspace() / 'runs'))
     if args.summary_json:
         check_output_file('--summary-json', Path(args.summary_json))
+    if args.domain is not None and not direct:
+        from acds_runtime.launcher import DomainLease
+        if DomainLease.held(args.domain):  # (the launcher's lease still decides: this only spares a run folder)
+            raise UsageError(f'--domain {args.domain}: another run holds this ROS domain now; choose another or '
+                             'leave --domain out')
     if args.record is not None and not args.record.strip():
         raise UsageError('--record: an empty path (give the bag folder to create, or leave --record out for '
                          'RUN_DIR/bag)')
