@@ -166,17 +166,29 @@ def test_steps_that_go_back_are_named_as_such():
 def test_quiet_keeps_the_line_that_says_how_to_join(tmp_path):
     """``--quiet`` drops the nodes' output, not the launcher's line that tells the user where and how their node
     joins (the domain, the ROS node name, the contract command): without it a quiet run waited without saying for
-    what until its timeout."""
+    what until its timeout. The run is stopped (SIGINT) once the line is read; without the line it fails at its
+    20 s readiness floor and the output ends."""
+    import signal
     import subprocess
     import sys
 
     path = tmp_path / 'quiet.yaml'
     path.write_text('extends: oresat_detumble\nname: oresat_quiet\ninput_timeout_s: 1\n')
-    proc = subprocess.run([sys.executable, '-m', 'acds_cli', 'run', str(path), '--steps', '3', '--no-record', '--quiet',
-                           '--external', 'acds_controller=my_fsw', '--run-dir', str(tmp_path / 'run')],
-                          capture_output=True, text=True, timeout=120, check=False,
-                          env={'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': str(tmp_path / 'ros_log')})
-    assert proc.returncode == 1, proc.stderr
+    proc = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'run', str(path), '--steps', '3', '--no-record',
+                             '--quiet', '--external', 'acds_controller=my_fsw', '--run-dir', str(tmp_path / 'run')],
+                            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            env={'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': str(tmp_path / 'ros_log')})
+    assert proc.stderr is not None
+    seen = []
+    try:
+        for line in proc.stderr:
+            seen.append(line)
+            if line.startswith('[acds] external node acds_controller: waiting'):
+                break
+    finally:
+        proc.send_signal(signal.SIGINT)
+        proc.communicate(timeout=60)
+    text = ''.join(seen)
     assert '[acds] external node acds_controller: waiting (at most 20 s) for ROS node my_fsw in namespace /acds on ' \
-           'ROS_DOMAIN_ID=' in proc.stderr, proc.stderr
-    assert 'its contract: ./scripts/acds contract oresat_quiet --node acds_controller' in proc.stderr, proc.stderr
+           'ROS_DOMAIN_ID=' in text, text
+    assert 'its contract: ./scripts/acds contract oresat_quiet --node acds_controller' in text, text
