@@ -81,13 +81,16 @@ def test_bad_external_nodes_are_one_line_before_any_process(launch_graph, item, 
     ('twice', 'faulty_fsw sent a second message for step 3; expected one message for step 4, stamped 4000000000 ns '
               '(t = 4 s)'),
     ('wallclock', 'faulty_fsw sent stamp '),
+    ('frame', "/acds/controller/moment_command: faulty_fsw sent step 3 in frame 'eci'; the contract says 'base_link' "
+              '(header.frame_id: the axes of its components)'),
     # In lockstep a skipped step stalls the graph (step 4's inputs wait on step 3's output): the stall names it.
     ('skip', 'acds_controller (external, ROS node faulty_fsw) stopped at step 3: its inputs for that step had arrived, '
              'its outputs did not (/acds/controller/moment_command of step 3, t = 3 s)'),
 ])
 def test_an_external_node_that_breaks_the_step_rule_fails_the_run_in_one_line(launch_graph, fault, got):
-    """Issue 20 §1: twice for one step, a wrong stamp, a skipped step: one line naming the topic, the step and what
-    was expected (the run monitor and the node reading the topic find the same)."""
+    """Issue 20 §1: twice for one step, a wrong stamp, a skipped step, another frame than the contract's: one line
+    naming the topic, the step and what was expected (the run monitor and the node reading the topic find the
+    same; the frame, the run monitor)."""
     import sys
     from pathlib import Path
 

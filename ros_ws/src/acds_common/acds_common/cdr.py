@@ -71,6 +71,15 @@ def stamp_ns(data: bytes) -> int:
     return sec * 1_000_000_000 + nsec
 
 
+def frame_id_of(data: bytes) -> str:
+    """The ``header.frame_id`` of a message that starts with a std_msgs/Header (every stamped type but the clock);
+    '' when the bytes end before it (a message too short to hold one)."""
+    try:
+        return _Reader(data, 12).string()
+    except (struct.error, UnicodeDecodeError):
+        return ''
+
+
 def _string(text: str) -> bytes:
     raw = text.encode() + b'\0'
     return _U32.pack(len(raw)) + raw

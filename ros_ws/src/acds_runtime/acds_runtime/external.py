@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from acds_common import topics
+from acds_common.cdr import Codec, frame_id_of, stamp_ns
 from acds_common.graph import Graph
 from acds_common.lockstep import publisher_name, sequence_error
 from acds_common.timing import StepTimes, overrun
@@ -40,6 +41,8 @@ class _External:
     types: dict[str, str]
     times: StepTimes
     strict: bool
+    #: {output topic: header.frame_id the contract declares} of its per-step outputs with a header.
+    frames: dict[str, str] = field(default_factory=dict)
     inputs_at: dict[int, list[float]] = field(default_factory=dict)
     outputs_at: dict[int, list[float]] = field(default_factory=dict)
     last: dict[str, int] = field(default_factory=dict)
@@ -75,7 +78,9 @@ class ExternalWatch:
                 stage_inputs.append([spec.topic(i.topic) for i in present] + ([] if same_step else [topics.CLOCK]))
             ms, strict = (deadlines or {}).get(inst, (0.0, False))
             self.nodes[inst] = _External(identity, [spec.topic(o.topic) for o in spec.outputs if o.every_step],
-                                         stage_inputs, sorted(set(triggers)), types, StepTimes(ms / 1e3), strict)
+                                         stage_inputs, sorted(set(triggers)), types, StepTimes(ms / 1e3), strict,
+                                         {spec.topic(o.topic): o.frame_id for o in spec.outputs
+                                          if o.every_step and Codec(o.msg_type).stamped})
 
     def publisher(self, instance: str) -> str:
         """The ROS identity that publishes for ``instance`` (itself for a node the launcher starts)."""
@@ -117,13 +122,19 @@ class ExternalWatch:
                 out.append(f'external node {inst} (ROS node {ext.identity}): ' + '; '.join(parts))
         return out
 
-    def on_message(self, topic: str, t_ns: int, now: float) -> str:
-        """Account a message received at ``now`` (monotonic s); '' or the one line that fails the run."""
+    def on_message(self, topic: str, data: bytes, now: float) -> str:
+        """Account a message (CDR) received at ``now`` (monotonic s); '' or the one line that fails the run."""
+        t_ns = stamp_ns(data)
         for ext in self.nodes.values():
             if topic in ext.outputs:
                 problem = sequence_error(topic, ext.identity, t_ns, ext.last.get(topic, -1), self.dt_ns)
                 if problem:
                     return problem
+                frame = ext.frames.get(topic)
+                if frame is not None and frame_id_of(data) != frame:  # its values would be read in the wrong axes
+                    return (f'{topic}: {ext.identity} sent step {t_ns // self.dt_ns} in frame '
+                            f'{frame_id_of(data)!r}; the contract says {frame!r} (header.frame_id: the axes of its '
+                            'components)')
                 k = ext.last[topic] = t_ns // self.dt_ns
                 problem = self._arrived(ext, ext.outputs_at, k, now)
                 if problem:

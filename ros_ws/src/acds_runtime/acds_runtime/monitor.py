@@ -187,7 +187,7 @@ class RunMonitor:
     def _watch(self, topic: str, data: bytes) -> None:
         """Hand a message to the external nodes' watch; the first contract breach fails the run."""
         assert self.external is not None
-        problem = self.external.on_message(topic, stamp_ns(data), time.monotonic())
+        problem = self.external.on_message(topic, data, time.monotonic())
         if problem and self.failure is None:
             self.failure = problem
 
