@@ -148,3 +148,14 @@ def test_bad_bag_path_is_one_line_error_before_the_run(tmp_path, monkeypatch):
     with pytest.raises(LaunchError, match=r'MiB free on the disk'):
         graph.start()
     assert graph.processes == {} and not (tmp_path / 'bag').exists()
+
+
+def test_a_formation_bag_names_every_node_that_ran():
+    """A bag's ``nodes`` (``acds info``) are the graph's instances, a formation vehicle's nodes too (it named only
+    the scenario's top-level ``nodes``: formation_dynamics)."""
+    info = bag_writer.run_info(load_scenario('emff_testbed_hold'), 10)
+    nodes = info['nodes'].split(',')
+    assert nodes[0] == 'formation_dynamics'
+    assert {'a/em_driver', 'a/formation_controller', 'b/em_driver', 'b/formation_controller'} <= set(nodes[1:])
+    assert bag_writer.run_info(load_scenario('oresat_detumble'), 10)['nodes'] == \
+        ','.join(load_scenario('oresat_detumble').get('', 'nodes'))

@@ -56,8 +56,10 @@ def run_folder_info(run_dir: Path) -> tuple[int | None, dict[str, str]]:
                     nodes=','.join(data.get('nodes', [])))
     if (run_dir / 'params.yaml').exists():
         params = yaml.safe_load((run_dir / 'params.yaml').read_text()) or {}
-        per_node = {k.rsplit('/', 1)[-1]: v.get('ros__parameters', {}) for k, v in params.items()}
+        # by instance, as the launcher and the direct engine store them (a formation's a/em_driver and b/em_driver)
+        per_node = {k.removeprefix(f'{topics.NAMESPACE}/'): v.get('ros__parameters', {}) for k, v in params.items()}
         info['params'] = yaml.safe_dump(per_node, sort_keys=True)
+        info['nodes'] = ','.join(per_node)  # every node that ran, a formation vehicle's too
         steps = next((p.get('total_steps') for p in per_node.values() if 'total_steps' in p), None)
         if steps is not None:
             info['steps'] = str(steps)

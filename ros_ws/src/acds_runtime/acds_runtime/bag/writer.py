@@ -192,7 +192,7 @@ def run_info(scenario: Any, steps: int, params: dict[str, Any] | None = None,
         'scenario': yaml.safe_dump(scenario.raw, sort_keys=False),
         'control_period_s': repr(scenario.control_period_s),
         'steps': str(steps),
-        'nodes': ','.join(scenario.get('', 'nodes')),
+        'nodes': ','.join(instance for instance, _node, _vehicle in scenario.instances()),  # a vehicle's too
     }
     if params is not None:
         info['params'] = yaml.dump(params, Dumper=NoAliasDumper, sort_keys=True)
