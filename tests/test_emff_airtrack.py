@@ -155,6 +155,15 @@ def test_a_step_that_starts_the_slider_off_the_track_is_one_line_exit_2(tmp_path
     assert '--step-m' in proc.stderr and 'must be < 0.5' in proc.stderr, proc.stderr
 
 
+@pytest.mark.parametrize('args', [['--dt-s', '1e-9'], ['--duration-s', '1e12']])
+def test_a_response_of_more_steps_than_a_run_may_have_is_one_line_exit_2(tmp_path, args):
+    """duration / dt past the step bound of a run: it had no bound (--dt-s 1e-9 ran for hours)."""
+    proc = _run_acds('emff-airtrack', *args, '--out', str(tmp_path))
+    assert proc.returncode == 2, proc.stderr
+    assert 'Traceback' not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    assert 'steps, more than the' in proc.stderr, proc.stderr
+
+
 def test_the_default_plot_folder_is_in_the_workspace_not_the_current_folder(tmp_path):
     """Every other verb writes its default runs/... in the workspace (ACDS_WORKSPACE, which ./scripts/acds sets to
     the checkout); emff-airtrack wrote runs/emff_airtrack into whatever folder the user stood in."""

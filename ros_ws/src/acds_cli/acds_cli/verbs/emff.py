@@ -439,7 +439,12 @@ def cmd_airtrack(args: argparse.Namespace) -> int:
         if not (math.isfinite(value) and value > 0.0):
             raise UsageError(f'{name}: must be > 0, got {value:g}')
     if not args.graph:
+        from acds_common.scenario import MAX_STEPS
         from dynamics.airtrack import AirtrackConfig
+        steps = args.duration_s / args.dt_s
+        if steps > MAX_STEPS:  # as a run's step count is bounded (it had no bound: --dt-s 1e-9 ran for hours)
+            raise UsageError(f'--duration-s {args.duration_s:g} at --dt-s {args.dt_s:g}: {steps:,.0f} steps, more '
+                             f'than the {MAX_STEPS:,} a run may have')
         x0 = min(AirtrackConfig(configuration=c).separation_m for c in ('stable', 'unstable'))
         if args.step_m >= x0:
             raise UsageError(f'--step-m: the slider starts at x0 − step = {x0 - args.step_m:g} m, off the track '
