@@ -49,7 +49,7 @@ def test_unknown_verb_and_option_are_clear_errors():
     (['--external', 'acds_controller', '--engine', 'direct'], 'an external node joins the process graph'),
     (['--external', 'acds_controller=1x'], "'1x' is not a ROS node name"),
     (['--external', 'em_driver', '--external', 'em_driver'], "external node 'em_driver' is given twice"),
-    (['--domain', '5'], "argument --domain: expected a ROS domain in 11..99, got '5'"),
+    (['--domain', '5'], "argument --domain: expected a ROS domain id in 11..99, got '5'"),
     (['--deadline-ms', 'acds_controller=inf'], "expected NODE=MS with a finite MS > 0, got 'acds_controller=inf'"),
     (['--deadline-ms', 'gyro=2'], '--deadline-ms gyro=2: scenario oresat_detumble runs no such node'),
     (['--record', ''], '--record: an empty path'),

@@ -194,24 +194,30 @@ def _journal_lines(out: Path) -> int:
         return 0
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGKILL], ids=['ctrl-c', 'sigkill'])
-def test_an_interrupted_study_resumes_to_the_clean_result(tmp_path, clean_study, sig):
-    """Interrupt the study once two samples are kept; ``--resume`` runs only the rest, and samples.csv and
-    percentiles.json are byte for byte those of the uninterrupted study."""
+def _interrupt_study(out: Path, sig: int, after: int) -> tuple[subprocess.Popen[str], str]:
+    """Start the study into ``out``, send ``sig`` once ``after`` samples are kept; the process and its stderr."""
     import time
 
-    out = tmp_path / 'mc'
     env = {'PATH': os.environ.get('PATH', '/usr/bin:/bin'),
            'ROS_LOG_DIR': '/tmp/acds_ros_log', 'HOME': os.environ.get('HOME', '/tmp')}
     proc = subprocess.Popen([sys.executable, '-m', 'acds_cli', *STUDY, '--out', str(out)], cwd=ROOT, env=env,
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 300
-    while _journal_lines(out) < 2 and proc.poll() is None and time.monotonic() < deadline:
+    while _journal_lines(out) < after and proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.02)  # polling the journal on disk, not synchronising
     assert proc.poll() is None, f'the study ended before it could be interrupted: {proc.stderr.read()[-2000:]}'
     os.kill(proc.pid, sig)
     _, err = proc.communicate(timeout=120)
+    return proc, err
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGKILL], ids=['ctrl-c', 'sigkill'])
+def test_an_interrupted_study_resumes_to_the_clean_result(tmp_path, clean_study, sig):
+    """Interrupt the study once two samples are kept; ``--resume`` runs only the rest, and samples.csv and
+    percentiles.json are byte for byte those of the uninterrupted study."""
+    out = tmp_path / 'mc'
+    proc, err = _interrupt_study(out, sig, 2)
     kept = _journal_lines(out)
     assert 2 <= kept < 6
     if sig == signal.SIGINT:
@@ -268,18 +274,7 @@ def test_ctrl_c_on_a_local_cluster_prints_no_worker_traceback(tmp_path):
 @pytest.mark.parametrize('sig', [signal.SIGTERM, signal.SIGHUP], ids=['sigterm', 'sighup'])
 def test_a_study_stopped_by_a_signal_exits_128_plus_its_number(tmp_path, sig):
     """The CLI's convention (acds_cli.__main__, and ``run``): 143 for SIGTERM, 129 for SIGHUP, not Ctrl-C's 130."""
-    import time
-
     out = tmp_path / 'mc'
-    env = {'PATH': os.environ.get('PATH', '/usr/bin:/bin'),
-           'ROS_LOG_DIR': '/tmp/acds_ros_log', 'HOME': os.environ.get('HOME', '/tmp')}
-    proc = subprocess.Popen([sys.executable, '-m', 'acds_cli', *STUDY, '--out', str(out)], cwd=ROOT, env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    deadline = time.monotonic() + 300
-    while _journal_lines(out) < 1 and proc.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.02)  # polling the journal on disk, not synchronising
-    assert proc.poll() is None, f'the study ended before it could be stopped: {proc.stderr.read()[-2000:]}'
-    os.kill(proc.pid, sig)
-    _, err = proc.communicate(timeout=120)
+    proc, err = _interrupt_study(out, sig, 1)
     assert proc.returncode == 128 + sig, err
     assert f'interrupted ({signal.Signals(sig).name})' in err and f'--resume {out}' in err, err

@@ -52,6 +52,22 @@ def positive_int(text: str) -> int:
     return value
 
 
+#: ROS domain ids DDS can map to ports (Fast DDS refuses a domain above 232; rclpy one below 0).
+ROS_DOMAINS = range(0, 233)
+
+
+def domain_in(text: str, domains: range = ROS_DOMAINS) -> int:
+    """A ROS domain id in ``domains`` (``play``/``record --domain``: any; ``run --domain``: the launcher's range)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value not in domains:
+        raise argparse.ArgumentTypeError(f'expected a ROS domain id in {domains.start}..{domains.stop - 1}, '
+                                         f'got {text!r}')
+    return value
+
+
 def step_count(text: str) -> int:
     """A number of control steps: 1 … MAX_STEPS."""
     value = positive_int(text)

@@ -29,6 +29,7 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
+from ..arguments import ROS_DOMAINS
 from . import stop_on_signals
 from .player import ros_env
 
@@ -45,8 +46,9 @@ def run_folder_info(run_dir: Path) -> tuple[int | None, dict[str, str]]:
         domain = int(text)
     except ValueError:
         domain = -1
-    if not 0 <= domain <= 232:
-        raise BagError(f'run folder {run_dir}: its domain_id file holds {text[:40]!r}, not a ROS domain id (0..232)')
+    if domain not in ROS_DOMAINS:
+        raise BagError(f'run folder {run_dir}: its domain_id file holds {text[:40]!r}, not a ROS domain id '
+                       f'({ROS_DOMAINS.start}..{ROS_DOMAINS.stop - 1})')
     info: dict[str, str] = {'domain_id': str(domain)}
     if (run_dir / 'scenario.yaml').exists():
         text = (run_dir / 'scenario.yaml').read_text()

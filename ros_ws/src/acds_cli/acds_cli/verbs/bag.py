@@ -10,7 +10,7 @@ import argparse
 import sys
 from typing import Any
 
-from ..arguments import add_foxglove_options
+from ..arguments import add_foxglove_options, domain_in
 from ..bag import FORMATS
 
 STORAGE_HELP = 'mcap (default) or sqlite3'
@@ -24,22 +24,6 @@ def add_bag_options(p: argparse.ArgumentParser, storage: bool = True) -> None:
     if storage:
         p.add_argument('--storage', choices=STORAGE_NAMES, default='mcap', help=STORAGE_HELP)
     p.add_argument('--compression', choices=COMPRESSIONS, help=COMPRESSION_HELP)
-
-
-#: ROS domain ids DDS can map to ports (Fast DDS refuses a domain above 232; rclpy one below 0).
-ROS_DOMAINS = range(0, 233)
-
-
-def ros_domain(text: str) -> int:
-    """``--domain`` of ``play`` and ``record``: any ROS domain id, checked before a ROS context is made."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if value not in ROS_DOMAINS:
-        raise argparse.ArgumentTypeError(f'expected a ROS domain id in {ROS_DOMAINS.start}..{ROS_DOMAINS.stop - 1}, '
-                                         f'got {text!r}')
-    return value
 
 
 def wait_seconds(text: str) -> float:
@@ -72,7 +56,7 @@ def check_domain_free(domain: int | None) -> None:
     else:
         text = os.environ.get('ROS_DOMAIN_ID', '') or '0'
         try:
-            target = ros_domain(text)
+            target = domain_in(text)
         except argparse.ArgumentTypeError as exc:
             raise BagError(f'ROS_DOMAIN_ID {text!r}: {exc} (or give --domain)') from None
     if DomainLease.held(target):
@@ -224,7 +208,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('path', help='bag folder to create (must not exist)')
     add_bag_options(p)
     p.add_argument('--topics', nargs='+', metavar='TOPIC', help='record only these topics (default: all)')
-    p.add_argument('--domain', type=ros_domain,
+    p.add_argument('--domain', type=domain_in,
                    help='ROS domain id of the graph (printed by acds run, in RUN/domain_id)')
     p.add_argument('--run-dir', help='run folder of the graph: domain, scenario and parameters are read from it (and '
                                      'the control period and per-step topics that the gap check needs)')
@@ -240,7 +224,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--topics', nargs='+', metavar='TOPIC', help='play only these topics (/clock always)')
     p.add_argument('--rate', type=float, default=0.0, help='sim time per wall time (default 0: as fast as possible)')
     p.add_argument('--remap', nargs='+', metavar='FROM:=TO', help='publish topic FROM under the name TO')
-    p.add_argument('--domain', type=ros_domain, help='ROS domain id to publish on (default: ROS_DOMAIN_ID)')
+    p.add_argument('--domain', type=domain_in, help='ROS domain id to publish on (default: ROS_DOMAIN_ID)')
     p.add_argument('--wait', type=wait_seconds, default=2.0,
                    help='wait up to this many s for a subscriber (with --foxglove: for a Foxglove client; default 2)')
     add_foxglove_options(p, "the bag's messages")

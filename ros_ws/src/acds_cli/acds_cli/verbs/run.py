@@ -15,6 +15,7 @@ from ..arguments import (
     add_foxglove_options,
     check_output_dir,
     check_output_file,
+    domain_in,
     peer_host,
     positive_minutes,
     real_time_factor,
@@ -252,12 +253,5 @@ def domain_id(text: str) -> int:
     """``--domain``: a ROS domain the launcher may lease (its range)."""
     from acds_runtime.launcher import DOMAIN_RANGE
 
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if value not in DOMAIN_RANGE:
-        raise argparse.ArgumentTypeError(f'expected a ROS domain in {DOMAIN_RANGE.start}..{DOMAIN_RANGE.stop - 1}, '
-                                         f'got {text!r}')
-    return value
+    return domain_in(text, DOMAIN_RANGE)
 
