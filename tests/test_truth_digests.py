@@ -8,7 +8,7 @@ machine shared by several engineers, before the open-graph redesign of issue 19)
 * Every scenario's prefix is checked on the direct engine (a few seconds each).
 * A scenario whose whole run took at most :data:`FULL_WALL_S` is checked whole; the longer ones (minutes
   each, the Workshop's 16 orbits, the SSS spin-up's 66,000 steps) only with ``ACDS_FULL_DIGESTS=1``
-  (``ACDS_FULL_DIGESTS=1 .venv/bin/python -m pytest tests/test_truth_digests.py``; about an hour on 2 cores).
+  (``ACDS_FULL_DIGESTS=1 .venv/bin/python -m pytest tests/test_truth_digests.py -n 2``; 203 s on 2 cores).
 * The per-process graph gives the recorded prefix digest for one scenario of each graph shape that
   ``tests/test_engines.py`` does not run (formation, wheels only, magnetics bench, SSS without controller).
 
