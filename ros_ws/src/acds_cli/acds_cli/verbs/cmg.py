@@ -173,12 +173,13 @@ def cmd_size_magnet(args: argparse.Namespace) -> int:
             print(f'    {s:16s} {w.turns:.1f} turns, {w.max_current_a:.3g} A max, {w.resistance_ohm:.3g} ohm, '
                   f'{w.max_voltage_v:.3g} V max')
     if args.json:
+        from acds_runtime.summary import write_summary_json
+
         out = {'mode': args.mode, 'core': args.core, 'conductor': conductor.name, 'moments_source': source,
                'M_n_am2': moments.m_n_am2, 'M_d_am2': moments.m_d_am2, 'M_o_am2': moments.m_o_am2,
                'M_m_am2': moments.m_m_am2, 'night_s': ps.night_s, 'day_s': ps.day_s,
                'designs': {s: {label: value for label, value, _ in r} for s, r in rows.items()}}
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(out, indent=2) + '\n')
+        write_summary_json(Path(args.json), out)
         print(f'wrote {args.json}', file=sys.stderr)
     return 0
 

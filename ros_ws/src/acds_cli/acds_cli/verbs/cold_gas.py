@@ -13,7 +13,6 @@ said so. ``--json PATH`` writes the acquisitions' rows and the totals.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -75,10 +74,10 @@ def cmd_budget(args: argparse.Namespace) -> int:
     if ended:
         print(f'  chain ended: {ended}')
     if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps({'scenario': base.name, 'load_lb': load_lb, 'acquisitions': rows,
-                                               'total_used_lb': used, 'left_lb': left_kg / LB_KG,
-                                               'ended': ended or None}, indent=2) + '\n')
+        from acds_runtime.summary import write_summary_json
+
+        write_summary_json(Path(args.json), {'scenario': base.name, 'load_lb': load_lb, 'acquisitions': rows,
+                                             'total_used_lb': used, 'left_lb': left_kg / LB_KG, 'ended': ended or None})
     print(f'[cold-gas-budget] {len(rows)} acquisition(s) run', file=sys.stderr)
     return 0
 

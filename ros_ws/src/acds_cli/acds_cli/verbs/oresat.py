@@ -8,7 +8,6 @@ scenario will load as its rods. An infeasible request exits 1 naming the binding
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -81,8 +80,9 @@ def cmd_design(args: argparse.Namespace) -> int:
           f'{args.voltage:g} V, envelope {"x".join(f"{x:g}" for x in args.envelope_mm)} mm')
     print('\n'.join(_report(record)))
     if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(record, indent=2) + '\n')
+        from acds_runtime.summary import write_summary_json
+
+        write_summary_json(Path(args.json), record)
     return 0
 
 
