@@ -20,15 +20,15 @@ Every run is a :class:`acds_runtime.direct.DirectRun` of the scenario with ``SEC
 from __future__ import annotations
 
 import math
-import tempfile
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import yaml
 from acds_common import units
 from acds_common.scenario import Scenario, ScenarioError, load_scenario, scenario_path
+
+from .sampling import scenario_from_text
 
 #: "The same M(t)" (§5): per-orbit M_o and M_m within this fraction of the initialised run's.
 SAME_M_TOLERANCE = 0.05
@@ -56,13 +56,7 @@ def scenario_with_sets(name: str, sets: list[str]) -> Scenario:
             overlay.setdefault(section, {})[field] = yaml.safe_load(value)
         else:
             overlay[section] = yaml.safe_load(value)
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / 'dump_study_scenario.yaml'
-        path.write_text(yaml.safe_dump(overlay, sort_keys=False))
-        try:
-            return load_scenario(str(path))
-        except ScenarioError as exc:  # name what the user gave, not the temporary file
-            raise ScenarioError(str(exc).replace(str(path), f'{name} with --set')) from None
+    return scenario_from_text(yaml.safe_dump(overlay, sort_keys=False), f'{name} with --set')
 
 
 def parse_range(text: str, what: str) -> np.ndarray:

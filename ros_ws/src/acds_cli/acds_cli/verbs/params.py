@@ -45,6 +45,7 @@ def waits_for(node: str, params: dict[str, Any]) -> list[str]:
 
 
 def _params(args: argparse.Namespace) -> int:
+    from acds_common import topics
     from acds_common.parameters import node_parameters, parameters_yaml
     from acds_common.scenario import load_scenario
 
@@ -58,7 +59,7 @@ def _params(args: argparse.Namespace) -> int:
         params = {args.node: params[args.node]}
         timeout = max(params[args.node]['input_timeout_s'], 20.0)
         vehicle, _, exe = args.node.rpartition('/')  # a formation vehicle's node runs in the vehicle's namespace
-        remap = f'-r __ns:=/acds/{vehicle} ' if vehicle else ''
+        remap = f'-r __ns:={topics.NAMESPACE}/{vehicle} ' if vehicle else ''
         head = [f'ROS 2 parameters of /acds/{args.node}, scenario {scenario.name} ({steps} steps).',
                 f'Start it by hand: .venv/bin/{exe} --ros-args {remap}--params-file THIS_FILE',
                 f'It then waits (at most {timeout:g} s, else it exits 3 naming what is missing) for:',
