@@ -1,5 +1,5 @@
 """Fault campaign, issue 9 §2–§5 and §7: who is blamed, intruders, impossible actuator values, shared memory,
-ground-command bursts, bounded launcher memory.
+ground-command bursts, bounded launcher memory, a slow end of the run.
 
 Each case is what a hostile but fair user does to a running graph; each must end loudly (or not at all),
 never with different results and exit 0.
@@ -22,7 +22,7 @@ from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS, message_class
 from acds_common.scenario import load_scenario
 from acds_runtime import shm
 from acds_runtime.launcher import LaunchError
-from acds_runtime.testing import wait_for_messages
+from acds_runtime.testing import external_node, wait_for_messages
 from rclpy.context import Context
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -47,6 +47,37 @@ def test_a_hung_controller_is_named_as_the_node_whose_outputs_stopped(launch_gra
         finally:
             os.kill(pid, signal.SIGCONT)
     assert str(err.value).startswith('acds_controller stopped at step'), str(err.value)
+
+
+#: A plain ROS 2 reader of /clock (``ros2 topic echo /clock`` with the lockstep QoS): one line per message.
+_CLOCK_READER = """
+import rclpy
+from rclpy.node import Node
+from acds_common import topics
+from acds_common.lockstep import LOCKSTEP_QOS, message_class
+rclpy.init()
+node = Node('clock_reader')
+node.create_subscription(message_class(topics.TYPES[topics.CLOCK]), topics.CLOCK, lambda _: print('clock', flush=True),
+                         LOCKSTEP_QOS, raw=True)
+rclpy.spin(node)
+"""
+
+
+def test_a_time_owner_slow_to_leave_does_not_fail_the_others(launch_graph):
+    """The time owner delivers its last messages before it leaves, for up to 5 s: a reader of /clock that was
+    stopped (a suspended ``ros2 topic echo``) holds it that long. The other nodes, told the run's last step on
+    /acds/lockstep/run_end, wait for no later step, so their input timeout (4 s, shorter) does not fail a run that
+    completed (before, the controller failed waiting for step 101)."""
+    with launch_graph(_short_timeout('heao_b_acquisition', 4.0), steps=100, rtf=5.0) as graph:
+        with external_node(graph, [sys.executable, '-c', _CLOCK_READER]) as reader:
+            log = graph.run_dir / 'external_0.log'
+            assert graph.monitor.wait_for(lambda: 'clock' in log.read_text(), timeout_s=30.0), log.read_text()
+            os.kill(reader.pid, signal.SIGSTOP)
+            try:
+                result = graph.wait()
+            finally:
+                os.kill(reader.pid, signal.SIGCONT)
+    assert result.steps == 100 and set(result.exit_codes.values()) == {0}, result.exit_codes
 
 
 class _Intruder:

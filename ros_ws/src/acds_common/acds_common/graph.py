@@ -257,6 +257,11 @@ def time_owner_name(formation: bool) -> str:
     return owners[0]
 
 
+def time_owner_among(instances: Iterable[str]) -> str:
+    """The time owner among a graph's instances (a node's ``graph_nodes``), '' when it is not one of them."""
+    return next((n for n in instances if n != MONITOR_NAME and declared_node(n.rpartition('/')[2])[1].time_owner), '')
+
+
 def node_spec(name: str, params: dict[str, Any]) -> NodeSpec:
     """The declaration of node ``name`` for its parameters (its package's :class:`Node`, ports resolved).
 

@@ -22,6 +22,11 @@ declare is on the topic: the node fails naming the topic, the step and the publi
 sees — injected data is never used silently. A stage blocked longer than
 ``input_timeout_s`` (wall time) fails naming the node, the step and every missing topic
 with its source. Step identity is exact: stamps are integer nanoseconds, k = t_ns / Δt_ns.
+
+End of a run: the time owner publishes its last step on ``/acds/lockstep/run_end`` as it
+finishes, before it delivers its last messages and leaves. A node then waits for no step after
+that one (it stays until the launcher stops it, however long the time owner's exit takes);
+a stage of an earlier step still has its timeout.
 """
 
 from __future__ import annotations
@@ -56,6 +61,7 @@ from acds_common.graph import (
     external_of,
     instance_name,
     node_spec,
+    time_owner_among,
 )
 from acds_common.parameters import (
     FORMATION_VEHICLES,
@@ -281,6 +287,8 @@ class LockstepNode(Node):
             paced = not any(i.lag == 0 for i in present)
             self._stages.append(_Stage(st.name, st.inputs, getattr(self.stepper, st.name), paced))
         self._clock_step = -1
+        #: The run's last step, once the time owner has announced it (no stage waits for a later one).
+        self._final_step: int | None = None
         self._monitor_acked = -1
         self._firing = False
         self._started = False
@@ -303,6 +311,8 @@ class LockstepNode(Node):
             self._clock_pub = self.create_publisher(message_class(topics.TYPES[topics.CLOCK]), topics.CLOCK,
                                                     LOCKSTEP_QOS)
             self._clock_codec = Codec(topics.TYPES[topics.CLOCK])
+            self._end_pub = self.create_publisher(message_class(topics.TYPES[topics.RUN_END]), topics.RUN_END,
+                                                  LOCKSTEP_QOS)
             self._pace_timer: Any = None
             self._wall_start = 0.0
             self._raw_sub(topics.READY, self._on_ready)
@@ -311,6 +321,7 @@ class LockstepNode(Node):
         else:
             if any(s.paced_by_clock for s in self._stages):
                 self._raw_sub(topics.CLOCK, self._on_clock)
+            self._raw_sub(topics.RUN_END, self._on_run_end)
             self._ready_pub = self.create_publisher(message_class(topics.TYPES[topics.READY]), topics.READY,
                                                     LOCKSTEP_QOS)
         if self.spec.ground_commands:
@@ -411,6 +422,9 @@ class LockstepNode(Node):
     def _on_monitor_ack(self, data: bytes) -> None:
         self._monitor_acked = max(self._monitor_acked, stamp_ns(data) // self.dt_ns)
         self._try_fire()
+
+    def _on_run_end(self, data: bytes) -> None:
+        self._final_step = self._step_of(topics.RUN_END, stamp_ns(data))
 
     def _step_of(self, topic: str, t_ns: int) -> int | None:
         k, rem = divmod(t_ns, self.dt_ns)
@@ -521,6 +535,8 @@ class LockstepNode(Node):
         if self.stepper.finished:
             self.done = True
             self.last_step = k
+            if self.time_owner:
+                self._end_pub.publish(self._clock_codec.encode(k * self.dt_ns))
         elif self.time_owner and stage is self._stages[-1]:
             self._publish_clock(k + 1)
 
@@ -558,6 +574,9 @@ class LockstepNode(Node):
         the handshake (every other node's READY, the run monitor's acknowledgements; a participant left
         on the domain by an earlier run must not start or pace this one)."""
         out = {self.resolve_topic_name(e.topic): {self.external.get(e.source, e.source)} for e in self._inputs.values()}
+        owner = time_owner_among(self.graph_nodes)
+        if not self.time_owner and owner:
+            out[topics.RUN_END] = {owner}
         if self.time_owner:
             # An external node need not say READY (plain ROS 2), but may: one of this project's nodes run by hand.
             out[self.resolve_topic_name(topics.READY)] = (set(self.graph_nodes) - {self.instance} - set(self.external)
@@ -592,6 +611,8 @@ class LockstepNode(Node):
             return
         for i, stage in enumerate(self._stages):
             k = stage.next_step
+            if self._final_step is not None and k > self._final_step:
+                continue  # the run ended before step k: nothing of it will come
             missing = [f'{self.resolve_topic_name(inp.topic)} (from {inp.source}, step {k - inp.lag})'
                        for inp in stage.inputs if not self._input_value(inp, k)[0]]
             if self.time_owner and k <= self._clock_step and self._monitor_acked < k - MONITOR_LAG \

@@ -69,6 +69,7 @@ EVENTS = 'events'                               #: std_msgs/String: mode transit
 
 DIAGNOSTICS = '/diagnostics'                    #: diagnostic_msgs/DiagnosticArray: health and telemetry of every node
 MONITOR_ACK = '/acds/lockstep/monitor_ack'      #: rosgraph_msgs/Clock: the run monitor has received /clock step k
+RUN_END = '/acds/lockstep/run_end'              #: rosgraph_msgs/Clock: the time owner's last step; no later step comes
 
 #: Message type of the mechanism's own topics (lockstep handshake, ground commands, diagnostics); every
 #: other topic's type is declared by the package that publishes it (:class:`acds_common.graph.Topic`).
@@ -78,6 +79,7 @@ TYPES: dict[str, str] = {
     GROUND_COMMAND: 'std_msgs/msg/String',
     DIAGNOSTICS: 'diagnostic_msgs/msg/DiagnosticArray',
     MONITOR_ACK: 'rosgraph_msgs/msg/Clock',
+    RUN_END: 'rosgraph_msgs/msg/Clock',
 }
 
 

@@ -96,8 +96,13 @@ def node_contract(scenario: Any, node: str, steps: int | None = None) -> dict[st
                      'step time of the inputs it answers (k·Δt), after holding all of step k\'s inputs; a second '
                      'message for a step, a skipped step or another stamp fails the run naming the topic and the step; '
                      'any other publisher on its topics fails the run as an intruder')
+        rules.append(f'the run ends at the step the time owner publishes on {topics.RUN_END} '
+                     f'({topics.TYPES[topics.RUN_END]}, transient local): no step after it comes, so a node waits '
+                     'for none (it stays until it is stopped)')
     else:
         rules.append('the time owner cannot be external (it publishes /clock and paces the graph)')
+        rules.append(f'as it finishes, it publishes its last step on {topics.RUN_END} '
+                     f'({topics.TYPES[topics.RUN_END]}) before it delivers its last messages and leaves')
     specs = {s.name: s for s in node_param_specs(spec.name, params[node].get('formation_vehicles') or ())}
     parameters = [{'name': name, 'type': specs[name].kind, 'unit': specs[name].unit,
                    'range': [specs[name].lo, specs[name].hi] if specs[name].lo is not None or specs[name].hi is not None

@@ -23,11 +23,10 @@ from .run import DEFAULT_SCENARIO
 def waits_for(node: str, params: dict[str, Any]) -> list[str]:
     """What ``node`` (with these parameters) waits for before its first step, one line each."""
     from acds_common import topics
-    from acds_common.graph import MONITOR_NAME, declared_node, node_spec
+    from acds_common.graph import MONITOR_NAME, node_spec, time_owner_among
 
     spec = node_spec(node.rpartition('/')[2], params)  # a formation vehicle's node: VEHICLE/NODE
-    owner = next((n for n in params['graph_nodes'] if n != MONITOR_NAME and declared_node(n.rpartition('/')[2])[1].time_owner),
-                 '')
+    owner = time_owner_among(params['graph_nodes'])
     present = set(params['graph_nodes'])
     lines = [f'a publisher on {spec.topic(i.topic)} (from {i.source})'
              for st in spec.stages for i in st.inputs if i.source in present]

@@ -59,7 +59,7 @@ STORAGES = dict(zip(STORAGE_NAMES, (StoragePlugin.MCAP, StoragePlugin.SQLITE3), 
 #: The distribution a bag says it was written by (rosbag2 writes its ROS_DISTRO).
 ROS_DISTRO = 'jazzy'
 #: Topics never recorded (lockstep handshake plumbing).
-SKIP = {topics.resolve(topics.READY), topics.resolve(topics.MONITOR_ACK)}
+SKIP = {topics.resolve(topics.READY), topics.resolve(topics.MONITOR_ACK), topics.resolve(topics.RUN_END)}
 
 _TYPESTORE = None
 
