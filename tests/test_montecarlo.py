@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from acds_common.scenario import load_scenario
 from acds_runtime import dispersion_report as dr
-from acds_runtime.montecarlo import run_sample, run_samples
+from acds_runtime.montecarlo import HEARTBEAT_AT_CLOSE, closing_heartbeat, run_sample, run_samples
 from acds_runtime.sampling import Sampler
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -245,6 +245,22 @@ def test_a_resume_with_another_seed_is_refused(clean_study):
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == [
         f'acds montecarlo: error: --resume {clean_study}: the study there has seed 1, this command 2']
+
+
+def test_a_local_worker_drops_only_its_heartbeat_error_as_the_scheduler_closes():
+    """The message is the pinned Dask worker's own words; any other worker error still reaches the terminal."""
+    import inspect
+
+    import distributed.worker
+
+    assert f'"{HEARTBEAT_AT_CLOSE}.' in inspect.getsource(distributed.worker)
+
+    def record(msg: str) -> logging.LogRecord:
+        return logging.LogRecord('distributed.worker', logging.ERROR, __file__, 1, msg, (), None)
+
+    assert not closing_heartbeat(record(HEARTBEAT_AT_CLOSE + '.'))
+    assert closing_heartbeat(record('Compute Failed'))
+    assert closing_heartbeat(record('Failed to communicate with scheduler'))
 
 
 @pytest.mark.slow

@@ -180,19 +180,35 @@ def quiet_resource_tracker() -> None:
     resource_tracker.ensure_running()
 
 
+#: What a local cluster's worker logs, with a traceback, when its heartbeat meets the scheduler closing: the study's
+#: own end (the scheduler lives in the study's process), never news for the user.
+HEARTBEAT_AT_CLOSE = 'Failed to communicate with scheduler during heartbeat'
+
+
+def closing_heartbeat(record: Any) -> bool:
+    """A ``logging`` filter of a local cluster's worker: False for :data:`HEARTBEAT_AT_CLOSE`, True for the rest."""
+    return not str(record.msg).startswith(HEARTBEAT_AT_CLOSE)
+
+
 def dask_setup(_worker: Any) -> None:
-    """A local cluster's worker process (this module is its Dask preload) ignores SIGINT.
+    """A local cluster's worker process (this module is its Dask preload) ignores SIGINT and does not report the
+    scheduler closing at the study's end.
 
     The workers are in the terminal's foreground process group, so Ctrl-C reaches them as well as this
     process; each printed a KeyboardInterrupt traceback over the study's one-line message. The study
     stops them itself (it closes the cluster), as on SIGTERM. They start with SIGINT blocked
     (:func:`_connect`), so a Ctrl-C while they import is held, then discarded here; SIGINT is unblocked
     for the threads this one starts (a graph sample's nodes set their own handler and are stopped by it).
+    A worker whose heartbeat was under way as the study closed the cluster printed a 30-line CommClosedError
+    traceback after the study's report (seen on a loaded machine, ``montecarlo --jobs 2``): its logger drops
+    that one message (:func:`closing_heartbeat`); a sample's own failure reaches the study as its result.
     """
+    import logging
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    logging.getLogger('distributed.worker').addFilter(closing_heartbeat)
 
 
 def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:
