@@ -224,6 +224,11 @@ def test_an_interrupted_study_resumes_to_the_clean_result(tmp_path, clean_study,
         assert proc.returncode == 130
         assert f'{kept} of 6 samples kept' in err and f'--resume {out}' in err, err
     assert not (out / 'samples.csv').exists()
+    journal = (out / 'samples.jsonl').read_bytes()
+    pick = run_acds('pick-sample', str(out))  # the baseline rule asked of the unfinished study: how to finish it
+    assert pick.returncode == 2 and len(pick.stderr.strip().splitlines()) == 1, pick.stderr
+    assert f'interrupted with {kept} of 6 samples finished' in pick.stderr and f' --resume {out}' in pick.stderr
+    assert (out / 'samples.jsonl').read_bytes() == journal  # read, never cut
     resumed = run_acds(*STUDY, '--resume', str(out))
     assert resumed.returncode == 0, resumed.stderr
     assert f'resuming {out}: {kept} of 6 samples kept, {6 - kept} to run' in resumed.stderr

@@ -128,12 +128,30 @@ class Journal:
 
     def kept(self) -> int:
         """The samples the journal on disk holds (after an interruption: what a resume will keep)."""
-        data = self.path.read_bytes()
-        lines = data[:data.rfind(b'\n') + 1].decode().splitlines()[1:]
-        return len({(rec['case'], rec['index']) for rec in map(json.loads, lines)})
+        return _samples_in(_whole_lines(self.path.read_bytes())[1:])
 
     def close(self) -> None:
         os.close(self._fd)
+
+
+def _whole_lines(data: bytes) -> list[str]:
+    """The journal's complete lines (one cut short by a kill mid-write left out)."""
+    return data[:data.rfind(b'\n') + 1].decode().splitlines()
+
+
+def _samples_in(lines: list[str]) -> int:
+    """The distinct samples of a journal's sample lines."""
+    return len({(rec['case'], rec['index']) for rec in map(json.loads, lines)})
+
+
+def journaled_study(folder: Path) -> tuple[dict[str, Any], int] | None:
+    """The study line of the journal in ``folder`` and the samples it holds, read only (nothing cut or
+    truncated); None when there is no readable journal."""
+    try:
+        lines = _whole_lines((Path(folder) / JOURNAL).read_bytes())
+        return json.loads(lines[0])['study'], _samples_in(lines[1:])
+    except (OSError, IndexError, KeyError, TypeError, ValueError):
+        return None
 
 
 def _fsync_dir(folder: Path) -> None:

@@ -324,9 +324,15 @@ def cmd_pick_sample(args: argparse.Namespace) -> int:
     """Apply the baseline rule to a Monte Carlo folder (module doc)."""
     from acds_common.scenario import load_scenario
     from acds_runtime.dispersion_report import pick_sample
+    from acds_runtime.journal import journaled_study
     from acds_runtime.sampling import h_parallel_b_attitude
 
     folder = Path(args.folder)
+    journaled = journaled_study(folder)
+    if not (folder / 'montecarlo.json').exists() and journaled and journaled[0].get('verb') == 'montecarlo':
+        study, kept = journaled
+        raise UsageError(f'{folder}: the study was interrupted with {kept} of {study.get("runs")} samples finished '
+                         f'(no report yet); finish it with {study.get("command")} --resume {folder}')
     try:
         spec = json.loads((folder / 'montecarlo.json').read_text())
         records = json.loads((folder / 'samples.json').read_text())
