@@ -27,10 +27,10 @@ def _comparable(summary: dict) -> dict:
     return {k: v for k, v in summary.items() if k != 'wall_seconds'}
 
 
-def run_acds(*args: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:
+def run_acds(*args: str, timeout: float = 300, cwd: Path = ROOT) -> subprocess.CompletedProcess[str]:
     env = {'PATH': os.environ.get('PATH', '/usr/bin:/bin'),
            'ROS_LOG_DIR': '/tmp/acds_ros_log', 'HOME': os.environ.get('HOME', '/tmp')}
-    return subprocess.run([sys.executable, '-m', 'acds_cli', *args], capture_output=True, text=True, cwd=ROOT,
+    return subprocess.run([sys.executable, '-m', 'acds_cli', *args], capture_output=True, text=True, cwd=cwd,
                           env=env, timeout=timeout, check=False)
 
 
@@ -136,6 +136,19 @@ def test_cli_outputs_and_run_sample_reruns_the_drawn_scenario(tmp_path):
     proc = run_acds('pick-sample', str(out), '--quantity', 'peak_moment_am2', '--percentile', '50')
     assert proc.returncode == 0, proc.stderr
     assert 'raan_deg:' in proc.stdout and 'case 4' in proc.stdout
+
+
+def test_pick_sample_finds_a_study_of_a_relative_scenario_path_from_another_folder(tmp_path):
+    """montecarlo.json keeps the scenario file's absolute path: pick-sample, run from elsewhere, redraws the sample
+    from the user's own file (was: the relative path, then 'no scenario named mine')."""
+    (tmp_path / 'mine.yaml').write_text(f'extends: {BASE}\nname: mine\n')
+    proc = run_acds('montecarlo', 'mine.yaml', '--runs', '2', '--jobs', '1', '--until-min', '0.25', '--out', 'mc',
+                    '--quiet', cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads((tmp_path / 'mc' / 'montecarlo.json').read_text())['scenario_path'] == str(tmp_path / 'mine.yaml')
+    proc = run_acds('pick-sample', str(tmp_path / 'mc'), '--quantity', 'peak_moment_am2', '--percentile', '50')
+    assert proc.returncode == 0, proc.stderr
+    assert 'mine_s1k' in proc.stdout, proc.stdout
 
 
 def test_bad_vary_is_one_line():

@@ -292,7 +292,7 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     where = _execution_text(execution) if execution is not None else 'nothing left to run'
     if kept:
         where += f'; {kept} sample(s) kept from an interrupted session'
-    spec = {'scenario': base.name, 'scenario_path': str(base.path), 'seed': args.seed, 'runs': args.runs,
+    spec = {'scenario': base.name, 'scenario_path': str(base.path.resolve()), 'seed': args.seed, 'runs': args.runs,
             'vary': variables, 'user_vary': args.vary, 'engine': args.engine, 'until_min': args.until_min,
             'steps': steps, 'run_length': run_length, 'execution': where,
             'wall_seconds': wall, 'command': command, 'rerun': rerun}
