@@ -34,8 +34,16 @@ def test_infeasible_and_bad_requests_exit_non_zero_with_one_line() -> None:
     assert proc.returncode == 1 and 'binding: moment, mass' in proc.stderr and 'Traceback' not in proc.stderr
     proc = run_acds('design-torque-rod', '--envelope-mm', '35x35')
     assert proc.returncode == 2 and 'envelope must be AxBxC' in proc.stderr
-    proc = run_acds('design-torque-rod', '--awg', '20')
-    assert proc.returncode == 2 and 'insulation' in proc.stderr and 'Traceback' not in proc.stderr
+    proc = run_acds('design-torque-rod', '--awg', '20')  # named as typed: not the core's insulation_build_m
+    assert proc.returncode == 2 and proc.stderr.strip().splitlines() == [
+        'acds design-torque-rod: error: --awg 20: the heavy-build insulation table covers AWG 30–40; give '
+        '--insulation-mm (the enamel build on the diameter) for another gauge']
+    for option, value, rule in (('--awg', '60', 'a whole wire gauge 0…56'), ('--bridge-ohm', 'nan', 'a finite number >= 0'),
+                                ('--bridge-ohm', '-1', 'a finite number >= 0')):
+        proc = run_acds('design-torque-rod', f'{option}={value}')
+        assert proc.returncode == 2 and proc.stderr.strip().splitlines() == [
+            f'acds design-torque-rod: error: argument {option}: must be {rule}, got {value} '
+            '(see acds design-torque-rod --help)'], proc.stderr
 
 
 def test_json_path_is_checked_before_the_search_and_its_folder_created(tmp_path: Path) -> None:

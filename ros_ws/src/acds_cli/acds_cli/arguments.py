@@ -84,6 +84,14 @@ def positive_number(text: str) -> float:
     return value
 
 
+def non_negative_number(text: str) -> float:
+    """A finite number ≥ 0, in the unit the option names."""
+    value = _number(text)
+    if not math.isfinite(value) or value < 0.0:
+        raise argparse.ArgumentTypeError(f'must be a finite number >= 0, got {text}')
+    return value
+
+
 def positive_minutes(text: str) -> float:
     """A finite sim time > 0, minutes."""
     value = _number(text)

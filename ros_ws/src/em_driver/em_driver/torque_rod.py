@@ -169,6 +169,8 @@ COPPER_RESISTIVITY_OHM_M = 1.0 / 58.0e6
 HEAVY_BUILD_INCREMENT_MIL = {30: 1.4, 31: 1.3, 32: 1.2, 33: 1.1, 34: 1.0, 35: 0.9, 36: 0.8, 37: 0.8,
                              38: 0.7, 39: 0.6, 40: 0.6}
 _MIL_M = 25.4e-6
+#: The gauges the ASTM B258 diameter formula is used for here (0 to 56 AWG).
+AWG_GAUGES = range(0, 57)
 
 
 def magnet_wire(awg: int, insulation_build_m: float | None = None) -> MagnetWire:
@@ -177,8 +179,8 @@ def magnet_wire(awg: int, insulation_build_m: float | None = None) -> MagnetWire
     36 AWG: 0.127 mm bare, 1.361 Ω/m (the seed's W_w = 0.001361 Ω/mm), 0.147 mm over the heavy
     film. ``insulation_build_m`` (diameter increase) defaults to the heavy build for AWG 30–40.
     """
-    if int(awg) != awg or not 0 <= awg <= 56:
-        raise EmDriverError(f'awg must be a whole gauge 0…56, got {awg!r}')
+    if int(awg) != awg or int(awg) not in AWG_GAUGES:
+        raise EmDriverError(f'awg must be a whole gauge {AWG_GAUGES[0]}…{AWG_GAUGES[-1]}, got {awg!r}')
     awg = int(awg)
     d = 0.127e-3 * 92.0 ** ((36 - awg) / 39.0)
     if insulation_build_m is None:

@@ -22,6 +22,16 @@ def _envelope_mm(text: str) -> tuple[float, float, float]:
     return parts  # type: ignore[return-value]
 
 
+def _gauge(text: str) -> int:
+    """``--awg``: a whole wire gauge the diameter formula covers (``em_driver.torque_rod.AWG_GAUGES``)."""
+    from em_driver.torque_rod import AWG_GAUGES
+
+    value = int(text) if text.strip().lstrip('-').isdigit() else None
+    if value is None or value not in AWG_GAUGES:
+        raise argparse.ArgumentTypeError(f'must be a whole wire gauge {AWG_GAUGES[0]}…{AWG_GAUGES[-1]}, got {text}')
+    return value
+
+
 def _report(d: dict) -> list[str]:
     """The design as aligned lines, seed units."""
     rows = [
@@ -58,7 +68,13 @@ def cmd_design(args: argparse.Namespace) -> int:
     from em_driver.bridge_switch import EmDriverError
     from em_driver.torque_rod_design import DesignRequest, InfeasibleDesignError, design_torque_rod
 
-    from ..arguments import check_output_file
+    from em_driver.torque_rod import HEAVY_BUILD_INCREMENT_MIL
+
+    from ..arguments import UsageError, check_output_file
+    if args.insulation_mm is None and args.awg not in HEAVY_BUILD_INCREMENT_MIL:
+        raise UsageError(f'--awg {args.awg}: the heavy-build insulation table covers AWG {min(HEAVY_BUILD_INCREMENT_MIL)}'
+                         f'–{max(HEAVY_BUILD_INCREMENT_MIL)}; give --insulation-mm (the enamel build on the diameter) '
+                         'for another gauge')
     if args.json:
         check_output_file('--json', Path(args.json))
     try:
@@ -88,7 +104,7 @@ def cmd_design(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``design-torque-rod`` verb."""
-    from ..arguments import positive_number
+    from ..arguments import non_negative_number, positive_number
 
     text = 'size a CubeSat torque rod (seed 003 design procedure as a bounded minimum-mass search)'
     p = sub.add_parser('design-torque-rod', help=text, description=text + '. Defaults: the seed 003 constraints.')
@@ -100,9 +116,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help='envelope AxBxC, mm (default 35x35x25)')
     p.add_argument('--core', choices=('permalloy', 'permendur', 'ck30'), default='permalloy',
                    help='core material (default permalloy)')
-    p.add_argument('--awg', type=int, default=36, help='wire gauge (default 36)')
+    p.add_argument('--awg', type=_gauge, default=36, help='wire gauge, AWG (default 36; the heavy-build enamel is '
+                   'tabulated for 30–40, give --insulation-mm for another)')
     p.add_argument('--windings', type=int, choices=(1, 2), default=2, help='redundant windings (default 2)')
-    p.add_argument('--bridge-ohm', type=float, default=0.36, help='H-bridge resistance in the loop, Ω (default 0.36)')
+    p.add_argument('--bridge-ohm', type=non_negative_number, default=0.36, help='H-bridge resistance in the loop, Ω (default 0.36)')
     p.add_argument('--insulation-mm', type=positive_number, help='enamel build on the diameter, mm (default: heavy build)')
     p.add_argument('--min-core-radius-mm', type=positive_number, default=0.5, help='smallest core radius, mm (default 0.5)')
     p.add_argument('--allow-saturation', action='store_true',
