@@ -122,3 +122,25 @@ def test_player_clock_drives_a_use_sim_time_node(recorded):
     assert set(now) <= set(clock), 'the node only ever saw recorded sim times'
     assert now == sorted(now) and now[-1] > 0
     assert final_now == clock[-1], 'after playback the node is at the last recorded sim time'
+
+
+def test_compare_replays_a_formation_vehicles_node_under_its_namespace(tmp_path):
+    """``--node VEHICLE/NODE``: the vehicle's node, its topics under /acds/VEHICLE, its own /diagnostics status
+    (each vehicle's em_driver and wheels name theirs VEHICLE/NODE: before, both vehicles' statuses were
+    'em_driver', and compare refused 'unknown node a/em_driver')."""
+    from acds_runtime.bag.writer import typestore
+    from acds_runtime.direct import DirectRun
+
+    bag = tmp_path / 'bag'
+    DirectRun(load_scenario('emff_two_vehicle_lqr'), steps=40, record=bag).run()
+    names = set()
+    for _topic, _t, raw in open_bag(bag).messages([topics.resolve(topics.DIAGNOSTICS)]):
+        names |= {s.name for s in typestore().deserialize_cdr(raw, 'diagnostic_msgs/msg/DiagnosticArray').status}
+    assert {'a/em_driver', 'b/em_driver', 'a/reaction_wheels', 'b/reaction_wheels'} <= names, names
+    for node in ('a/em_driver', 'b/reaction_wheels'):
+        result = run_compare(bag, node, log=lambda _t: None)
+        assert result.ok, result.report()
+        assert result.compared[topics.resolve(topics.DIAGNOSTICS)] >= 1
+        assert all(t.startswith(f'/acds/{node.partition("/")[0]}/') for t in result.compared if t != '/diagnostics')
+    result = run_compare(bag, 'b/em_driver', sets={'em_driver_coil_resistance_ohm': [99.0, 99.0, 99.0]}, log=lambda _t: None)
+    assert not result.ok and result.first.startswith('topic /acds/b/em_driver/'), result.first

@@ -390,7 +390,7 @@ class LockstepNode(Node):
 
     def _with_timing(self, statuses: Any) -> Any:
         """The node's diagnostics with its step timing added to its own status (wall-clock keys)."""
-        own = next((i for i, st in enumerate(statuses) if st.name == self.spec.name), 0)
+        own = next((i for i, st in enumerate(statuses) if st.name == self.instance), 0)
         return tuple(st._replace(values=st.values + self.timing.diagnostic_values()) if i == own else st
                      for i, st in enumerate(statuses))
 

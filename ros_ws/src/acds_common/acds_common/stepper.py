@@ -60,6 +60,12 @@ class Stepper:
         #: something happened (an event, a warning, an alarm change) it returns regardless.
         self.telemetry_wanted = True
 
+    @property
+    def instance(self) -> str:
+        """The graph's name of this node: ``VEHICLE/NODE`` for a formation vehicle's node, else the node's name (its
+        /diagnostics status is named so: two vehicles' nodes of one kind are told apart)."""
+        return f'{self.vehicle}/{self.node}' if self.vehicle else self.node
+
     def section(self, name: str, vehicle: str = '') -> dict[str, Any]:
         """{field: SI value} of a scenario section this node receives (``vehicle``: that vehicle's copy)."""
         return section(self.params, name, vehicle)

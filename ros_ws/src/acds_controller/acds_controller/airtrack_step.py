@@ -67,7 +67,7 @@ class AirtrackStep(Stepper):
         out: dict[str, Any] = {'moment': vector3(quat_to_dcm(magnet.orientation).T @ np.array([dipole, 0.0, 0.0])),
                                'wheel_torque': (0.0, 0.0, 0.0)}
         if k % TELEMETRY_EVERY == 0:
-            out['diagnostics'] = diagnostic(f'{self.vehicle}/{self.node}', {'separation_m': f'{x:.6g}',
+            out['diagnostics'] = diagnostic(self.instance, {'separation_m': f'{x:.6g}',
                                                                              'dipole_am2': f'{dipole:.6g}'})
         return out
 

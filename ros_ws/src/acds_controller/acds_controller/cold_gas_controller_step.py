@@ -65,7 +65,7 @@ class ColdGasControllerStep(DpaStep):
         out = gas_law(self.gas, mode, omega, sun, self.control_period_s)
         result: dict[str, Any] = {'moment': ZERO, 'volts': ZERO, 'gas_on_time': out.on_time_xyz}
         if k % self.telemetry_period == 0:
-            result['diagnostics'] = diagnostic(self.node, {
+            result['diagnostics'] = diagnostic(self.instance, {
                 'mode': mode,
                 'gas_rate_reference_deg_s': ' '.join(f'{deg(w):.4f}' for w in out.rate_reference_xyz),
                 'gas_sun_error_deg': ' '.join(f'{deg(a):.3f}' for a in out.sun_error_xyz),

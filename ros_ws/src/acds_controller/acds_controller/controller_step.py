@@ -127,7 +127,7 @@ class DpaStep(Stepper):
         if self.telemetry_wanted and k % self.telemetry_period == 0:
             alarms = [abs(i) > self.excess_current_a for i in coil]
             telemetry = {**out.telemetry, **self.ta.telemetry(b, out.moment_xyz, bias, coil, alarms)}
-            result['diagnostics'] = diagnostic(self.node, telemetry)
+            result['diagnostics'] = diagnostic(self.instance, telemetry)
         return result
 
 

@@ -89,7 +89,7 @@ class FormationControllerStep(Stepper):
         frame_to_inertial = None if self.orbit is None else hill_frame(self.orbit, t_s)[0]
         measurements = measurements_of(self.names, inp, self.control_period_s, frame_to_inertial)
         command = self.core.step(t_s, measurements, frame_to_inertial)[self.index]
-        return command_outputs(k, command, f'{self.vehicle}/{self.node}')
+        return command_outputs(k, command, self.instance)
 
 
 def measurements_of(names: list[str], inp: dict[str, Any], dt_s: float,
@@ -139,4 +139,4 @@ class ArrayMemberStep(Stepper):
     def control(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Stage ``control``: every vehicle's command from every vehicle's measurements; this vehicle's part."""
         commands = self.core.step(t_s, measurements_of(self.names, inp, self.control_period_s))
-        return command_outputs(k, commands[self.index], f'{self.vehicle}/{self.node}')
+        return command_outputs(k, commands[self.index], self.instance)

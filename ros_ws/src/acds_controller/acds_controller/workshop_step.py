@@ -62,7 +62,7 @@ class WorkshopComputerStep(Stepper):
             result: dict[str, Any] = {'moment': vector3(out.moment_am2), 'cmg_torque': vector3(out.cmg_rate_nm),
                                       'sampled_momentum': self._h_s}
             if k % self.telemetry_period == 0:
-                result['diagnostics'] = diagnostic(self.node, out.telemetry)
+                result['diagnostics'] = diagnostic(self.instance, out.telemetry)
         except ControllerError as exc:
             warnings.append((f'input rejected, zero commands this step: {exc}', {}))
             result = {'moment': ZERO, 'cmg_torque': ZERO, 'sampled_momentum': self._h_s}

@@ -79,6 +79,6 @@ class ColdGasStep(Stepper):
                                'state': (Status(OK, _NODE, '; '.join(notes) or 'ok', _NODE, tuple(values)),)}
         if notes or k % self.telemetry_period == 0:
             alarm = rcs.fault_active or rcs.switch_actuated
-            out['diagnostics'] = diagnostic(self.node, rcs.telemetry(), '; '.join(notes) or
+            out['diagnostics'] = diagnostic(self.instance, rcs.telemetry(), '; '.join(notes) or
                                             ('fault or pressure switch active' if alarm else 'ok'), WARN if alarm else OK)
         return out

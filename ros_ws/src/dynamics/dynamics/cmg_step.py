@@ -59,6 +59,6 @@ class CmgStep(Stepper):
                       'cmg_capacity_fraction': f'{np.linalg.norm(h_end) / self.cmgs.cfg.capacity_nms:.4f}',
                       'cmg_saturated': 'true' if saturated else 'false',
                       **{f'torque_command_{a}_nm': f'{v:.4g}' for a, v in zip('xyz', hdot, strict=True)}}
-            out['diagnostics'] = (diagnostic(self.node, values) if warning is None
-                                  else diagnostic(self.node, values, warning, WARN))
+            out['diagnostics'] = (diagnostic(self.instance, values) if warning is None
+                                  else diagnostic(self.instance, values, warning, WARN))
         return out

@@ -49,6 +49,6 @@ class ReactionWheelsStep(Stepper):
         if warning is not None or (self.telemetry_wanted and k % TELEMETRY_EVERY == 0):
             values = {**{f'wheel_{i}_momentum_nms': f'{h:.6g}' for i, h in enumerate(self.wheels.wheel_momenta_nms())},
                       **{f'drive_{a}_volts': f'{v:.4g}' for a, v in zip('xyz', volts, strict=True)}}
-            out['diagnostics'] = (diagnostic(self.node, values) if warning is None
-                                  else diagnostic(self.node, values, warning, WARN))
+            out['diagnostics'] = (diagnostic(self.instance, values) if warning is None
+                                  else diagnostic(self.instance, values, warning, WARN))
         return out

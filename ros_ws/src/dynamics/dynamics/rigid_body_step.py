@@ -151,7 +151,7 @@ class RigidBodyStep(Stepper):
         values[f'{WALL_CLOCK_PREFIX}step_ms'] = f'{wall_step_s * 1e3:.3f}'
         values[f'{WALL_CLOCK_PREFIX}mean_step_ms'] = f'{self._wall_s / max(self._wall_steps, 1) * 1e3:.3f}'
         self._wall_s, self._wall_steps = 0.0, 0
-        return diagnostic(self.node, values, '; '.join(problems) or 'integration healthy', WARN if problems else OK)
+        return diagnostic(self.instance, values, '; '.join(problems) or 'integration healthy', WARN if problems else OK)
 
     def integrate(self, k: int, _t: float, inp: dict[str, Any]) -> dict[str, Any]:
         """All actuator outputs of step k are in: integrate to t_k+1 and return its truth."""

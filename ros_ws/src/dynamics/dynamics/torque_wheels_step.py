@@ -41,7 +41,7 @@ class TorqueWheelsStep(Stepper):
             per_wheel = self.wheels.axes_body.T @ self.wheels.momentum_body_nms()
             values = {**{f'wheel_{i}_momentum_nms': f'{h:.6g}' for i, h in enumerate(per_wheel)},
                       **{f'wheel_{i}_current_a': f'{c:.4g}' for i, c in enumerate(self.wheels.current_a)}}
-            out['diagnostics'] = (diagnostic(self.node, values) if warning is None
-                                  else diagnostic(self.node, values, warning, WARN))
+            out['diagnostics'] = (diagnostic(self.instance, values) if warning is None
+                                  else diagnostic(self.instance, values, warning, WARN))
         return out
 

@@ -116,4 +116,4 @@ class EmDriverStep(Stepper):
             })
         values.update({f'event_{i}': e for i, e in enumerate(events)})
         values.update({f'rejected_{i}': e for i, e in enumerate(rejected)})
-        return diagnostic(self.node, values, message, level)
+        return diagnostic(self.instance, values, message, level)

@@ -99,4 +99,4 @@ class MagnetometerStep(Stepper):
         values.update({f'volts_{a}': f'{v:.4f}' for a, v in zip('xyz', reading.volts_xyz, strict=True)})
         values.update({f'event_{i}': e for i, e in enumerate(events)})
         values.update({f'error_{i}': e for i, e in enumerate(errors)})
-        return diagnostic(self.node, values, message, level)
+        return diagnostic(self.instance, values, message, level)

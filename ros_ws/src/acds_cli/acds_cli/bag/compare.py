@@ -220,25 +220,26 @@ def run_compare(bag_path: Path | str, node: str, *, tolerance: float = 0.0, scen
     dt_ns = bag.control_period_ns
     if not dt_ns or not bag.has(topics.CLOCK):
         raise BagError(f'bag {bag.path}: no /clock messages: nothing to step the node with')
+    name = node.rpartition('/')[2]  # a formation vehicle's node is VEHICLE/NODE, its topics under /acds/VEHICLE
     try:  # the time owner is refused by its declaration, before its parameters (it has no replayable inputs)
-        if declared_node(node)[1].time_owner:
+        if declared_node(name)[1].time_owner:
             raise BagError(f'{node} is the time owner: compare replays the truth into a non-owner node')
-        params = normalize(node, node_parameters(bag, node, scenario, sets))
-        spec = node_spec(node, params)
+        params = normalize(name, node_parameters(bag, node, scenario, sets))
+        spec = node_spec(name, params)
         stepper = load_stepper(spec.stepper)(params, log=lambda level, text: log(f'[{node}] [{level}] {text}'))
     except (ConfigError, KeyError, ValueError) as exc:
         raise BagError(f'node {node}: {exc}') from None
-    ports = {topics.resolve(o.topic): o for o in spec.outputs}
+    ports = {spec.topic(o.topic): o for o in spec.outputs}
     outputs = sorted(t for t in ports if bag.has(t))
     if not [t for t in outputs if t != DIAGNOSTICS]:
         raise BagError(f'bag {bag.path}: no recorded outputs of node {node}')
     present = set(params['graph_nodes'])
-    inputs = {topics.resolve(i.topic): Codec(topics.type_of(i.topic)) for st in spec.stages for i in st.inputs
+    inputs = {spec.topic(i.topic): Codec(topics.type_of(i.topic)) for st in spec.stages for i in st.inputs
               if i.source in present}
     lacking = sorted(t for t in inputs if not bag.has(t))
     if lacking:
         raise BagError(f'bag {bag.path}: it has no {", ".join(lacking)}, which {node} reads')
-    commands = topics.resolve(topics.GROUND_COMMAND)
+    commands = spec.topic(topics.GROUND_COMMAND)
     text = Codec(topics.TYPES[topics.GROUND_COMMAND])
     tol_text = f'tolerance {tolerance:g}' if tolerance > 0 else 'bit-identical'
     log(f'[compare] {node} alone against {bag.path}: {bag.count(topics.CLOCK)} steps; replaying '
@@ -253,7 +254,7 @@ def run_compare(bag_path: Path | str, node: str, *, tolerance: float = 0.0, scen
         for st in spec.stages:
             values = {}
             for i in st.inputs:
-                back, topic = k - i.lag, topics.resolve(i.topic)
+                back, topic = k - i.lag, spec.topic(i.topic)
                 if i.source not in present or back < 0:
                     values[i.key] = None
                 elif back in buffers[topic]:
@@ -262,7 +263,7 @@ def run_compare(bag_path: Path | str, node: str, *, tolerance: float = 0.0, scen
                     raise BagError(f'bag {bag.path}: no {topic} for step {back} ({node}.{st.name} of step {k} '
                                    'needs it)')
             for key, value in getattr(stepper, st.name)(k, k * dt_ns / 1e9, values).items():
-                topic = topics.resolve(spec.output(key).topic)
+                topic = spec.topic(spec.output(key).topic)
                 if topic not in new:
                     continue
                 out = ports[topic]
