@@ -53,6 +53,11 @@ def test_a_sample_failing_mid_run_fails_alone(tmp_path, jobs):
         assert 'rigid_body failed at step 20' in line and 'the run stops' in line, line
     assert len((out / 'samples.csv').read_text().strip().splitlines()) == 5  # every sample, failed ones listed
     assert 'time on magnetics only' in proc.stdout
+    # a free tumble has no HEAO mode manager: said once, before the samples run, not left to a table of dashes
+    assert [line for line in proc.stderr.splitlines() if 'does not run the HEAO mode manager' in line] == [
+        "[montecarlo] note: free_tumble_heao_b does not run the HEAO mode manager, so the acquisition quantities "
+        "(times to Mode 1B and to capture, wheel momentum at capture) stay empty; samples.json keeps each run's "
+        'whole summary'], proc.stderr
 
 
 def test_run_direct_on_a_scenario_failing_mid_run_is_one_line(tmp_path):

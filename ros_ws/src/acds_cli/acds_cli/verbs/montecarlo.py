@@ -265,6 +265,7 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     """Draw, run (appending each sample to the journal), summarise (module doc)."""
     from acds_common.scenario import load_scenario
     from acds_runtime import dispersion_report as dr
+    from acds_runtime.summaries import heao as heao_summary
 
     base = load_scenario(args.scenario)
     out = study_folder('montecarlo', base.name, args)
@@ -280,6 +281,10 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
                            {('', s.index): s for s in samples}, bool(args.resume))
     print(f'[montecarlo] {base.name}: {args.runs} samples of seed {args.seed} ({"; ".join(variables)}), '
           f'{run_length}, engine {args.engine}; output {out}', file=sys.stderr, flush=True)
+    if not heao_summary.applies(base):
+        print(f'[montecarlo] note: {base.name} does not run the HEAO mode manager, so the acquisition quantities (times '
+              'to Mode 1B and to capture, wheel momentum at capture) stay empty; samples.json keeps each run\'s whole '
+              'summary', file=sys.stderr, flush=True)
     t0 = time.monotonic()
     kept = len(journal.done)
     execution = run_journaled(journal, {('', s.index): s for s in samples}, args, lambda _key: steps, 'montecarlo')
