@@ -236,7 +236,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    'when identical (or within --tolerance), 1 naming the first differing topic, '
                                    'step and field, 2 on a set-up error.')
     p.add_argument('bag')
-    p.add_argument('--node', required=True, help='node to re-run (e.g. reaction_wheels, acds_controller; a formation vehicle\'s: VEHICLE/NODE, e.g. a/em_driver)')
+    p.add_argument('--node', required=True, help='node to re-run (e.g. reaction_wheels, acds_controller; a formation '
+                   "vehicle's: VEHICLE/NODE, e.g. a/em_driver)")
     p.add_argument('--tolerance', type=float, default=0.0, help='absolute float tolerance (default 0: identical)')
     p.add_argument('--scenario', help="take the node's parameters from this scenario instead of the bag's")
     p.add_argument('--set', nargs='+', metavar='PARAM:=VALUE', help='override node parameters (YAML values)')

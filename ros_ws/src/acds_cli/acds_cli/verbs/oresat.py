@@ -66,9 +66,8 @@ def _report(d: dict) -> list[str]:
 def cmd_design(args: argparse.Namespace) -> int:
     """Design the rod, print it, optionally write the JSON record."""
     from em_driver.bridge_switch import EmDriverError
-    from em_driver.torque_rod_design import DesignRequest, InfeasibleDesignError, design_torque_rod
-
     from em_driver.torque_rod import HEAVY_BUILD_INCREMENT_MIL
+    from em_driver.torque_rod_design import DesignRequest, InfeasibleDesignError, design_torque_rod
 
     from ..arguments import UsageError, check_output_file
     if args.insulation_mm is None and args.awg not in HEAVY_BUILD_INCREMENT_MIL:
@@ -119,7 +118,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--awg', type=_gauge, default=36, help='wire gauge, AWG (default 36; the heavy-build enamel is '
                    'tabulated for 30–40, give --insulation-mm for another)')
     p.add_argument('--windings', type=int, choices=(1, 2), default=2, help='redundant windings (default 2)')
-    p.add_argument('--bridge-ohm', type=non_negative_number, default=0.36, help='H-bridge resistance in the loop, Ω (default 0.36)')
+    p.add_argument('--bridge-ohm', type=non_negative_number, default=0.36,
+                   help='H-bridge resistance in the loop, Ω (default 0.36)')
     p.add_argument('--insulation-mm', type=positive_number, help='enamel build on the diameter, mm (default: heavy build)')
     p.add_argument('--min-core-radius-mm', type=positive_number, default=0.5, help='smallest core radius, mm (default 0.5)')
     p.add_argument('--allow-saturation', action='store_true',
