@@ -59,6 +59,7 @@ def test_params_verb_prints_a_formation_vehicles_node_with_its_namespace():
     head = [line for line in text.splitlines() if line.startswith('#')]
     assert head[1] == '# Start it by hand: .venv/bin/em_driver --ros-args -r __ns:=/acds/a --params-file THIS_FILE'
     assert head[3] == '#   a publisher on /acds/a/controller/moment_command (from a/formation_controller)', head
+    assert head[-1].startswith('#   (no step after the one formation_dynamics names on /acds/lockstep/run_end'), head
     sc = load_scenario('emff_testbed_hold')
     assert yaml.safe_load(text) == {'/acds/a/em_driver': {'ros__parameters': node_parameters(sc, 40)['a/em_driver']}}
 

@@ -38,8 +38,12 @@ def waits_for(node: str, params: dict[str, Any]) -> list[str]:
         if MONITOR_NAME in present:
             lines.append(f'then, every step, {topics.resolve(topics.MONITOR_ACK)} from {MONITOR_NAME} '
                          f'(the recorder; remove it from graph_nodes to run without one)')
-    elif any(not any(i.lag == 0 and i.source in present for i in st.inputs) for st in spec.stages):
-        lines.append(f'then {topics.CLOCK} from {owner}, step by step')
+    else:
+        if any(not any(i.lag == 0 and i.source in present for i in st.inputs) for st in spec.stages):
+            lines.append(f'then {topics.CLOCK} from {owner}, step by step')
+        if owner:
+            lines.append(f'(no step after the one {owner} names on {topics.RUN_END} as the run ends: it then waits '
+                         'for nothing and stays until stopped)')
     return lines
 
 
