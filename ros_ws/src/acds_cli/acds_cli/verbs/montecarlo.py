@@ -333,8 +333,8 @@ def cmd_pick_sample(args: argparse.Namespace) -> int:
     from acds_runtime.sampling import h_parallel_b_attitude
 
     folder = Path(args.folder)
-    journaled = journaled_study(folder)
-    if not (folder / 'montecarlo.json').exists() and journaled and journaled[0].get('verb') == 'montecarlo':
+    journaled = None if (folder / 'montecarlo.json').exists() else journaled_study(folder)
+    if journaled and journaled[0].get('verb') == 'montecarlo':  # the journal read only when there is no report
         study, kept = journaled
         raise UsageError(f'{folder}: the study was interrupted with {kept} of {study.get("runs")} samples finished '
                          f'(no report yet); finish it with {study.get("command")} --resume {folder}')
