@@ -50,3 +50,14 @@ def ieee_bits():
             return [b for v in value for b in bits(v)]
         return [struct.pack('<d', value) if isinstance(value, float) else value]
     return bits
+
+
+@pytest.fixture
+def play_domain():
+    """A ROS domain for ``acds play`` outside the launcher's DOMAIN_RANGE: no run ever lands on it, so playback
+    never reaches another test's graph (play leases it while it plays; one per pytest worker)."""
+    from acds_runtime.launcher import DOMAIN_RANGE
+
+    domain = 150 + os.getpid() % 80
+    assert domain not in DOMAIN_RANGE
+    return domain

@@ -82,13 +82,13 @@ def test_info_into_a_closed_pipe_has_no_traceback(bag):
     assert proc.returncode == 128 + signal.SIGPIPE
 
 
-def test_ctrl_c_ends_plays_wait_for_a_client_at_once(bag):
-    """``play --foxglove --wait 60``: Ctrl-C while waiting stops it then (before: only when the wait ran out)."""
+def test_ctrl_c_ends_plays_wait_for_a_client_at_once(bag, play_domain):
+    """``play --foxglove --wait 60``: Ctrl-C while waiting stops it then (before: only when the wait ran out).
+    While it plays it holds its domain: a run asking for that domain is refused (before: a run that landed there
+    met the player's publishers as an intruder and failed); once it has ended, the domain is free again."""
     from acds_runtime.launcher import DomainLease
 
-    lease = DomainLease()  # a domain no run holds (play refuses a held one)
-    lease.close()
-    play = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'play', str(bag), '--domain', str(lease.domain_id),
+    play = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'play', str(bag), '--domain', str(play_domain),
                              '--foxglove', '0', '--wait', '60'], stderr=subprocess.PIPE, text=True, cwd=ROOT)
     try:
         for line in play.stderr:
@@ -96,6 +96,9 @@ def test_ctrl_c_ends_plays_wait_for_a_client_at_once(bag):
                 break
         else:
             pytest.fail('acds play did not announce its wait')
+        assert DomainLease.held(play_domain), 'acds play publishes into a domain it does not hold'
+        again = run_acds('play', str(bag), '--domain', str(play_domain), '--wait', '0')
+        one_line_exit_2(again, f'domain {play_domain} belongs to a running graph (acds run) or another acds play')
         asked = time.monotonic()
         play.send_signal(signal.SIGINT)
         rest = play.communicate(timeout=50)[1]
@@ -106,6 +109,7 @@ def test_ctrl_c_ends_plays_wait_for_a_client_at_once(bag):
             play.wait()
     assert 'published 0 messages (stopped)' in rest, rest
     assert 'no Foxglove client' not in rest and 'Traceback' not in rest, rest
+    assert not DomainLease.held(play_domain), 'acds play ended and still holds its domain'
 
 
 def test_record_refuses_the_folder_of_a_run_that_has_ended(tmp_path):

@@ -255,21 +255,17 @@ def test_layout_file_is_generated_and_names_served_topics() -> None:
             assert field in views[topic], f'layout path {path}: the view has no field {field}'
 
 
-def test_play_serves_a_bag_the_same_way(tmp_path: Path) -> None:
+def test_play_serves_a_bag_the_same_way(tmp_path: Path, play_domain: int) -> None:
     """``acds play BAG --foxglove 0``: waits for the client, then serves the bag's truth and its frames."""
     import os
     import re
     import subprocess
     import sys
 
-    from acds_runtime.launcher import DomainLease
-
     bag = tmp_path / 'bag'
     DirectRun(load_scenario('heao_b_acquisition'), steps=30, record=bag).run()
-    lease = DomainLease()  # a domain no run holds (play refuses a held one)
-    lease.close()
     env = dict(os.environ)
-    play = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'play', str(bag), '--domain', str(lease.domain_id),
+    play = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'play', str(bag), '--domain', str(play_domain),
                              '--foxglove', '0', '--wait', '60'], stderr=subprocess.PIPE, text=True, env=env)
     try:
         port = None

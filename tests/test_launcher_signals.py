@@ -35,11 +35,13 @@ def test_signal_stops_every_node(tmp_path, sig, inherited):
                             env={'PATH': '/usr/bin:/bin',
                                  'ROS_LOG_DIR': str(tmp_path / 'log')}, preexec_fn=inherited)
     assert proc.stderr is not None
+    said = []
     for line in proc.stderr:  # wait on the run's own progress output, not on a timer
+        said.append(line)
         if '[progress]' in line and 'step 0/' not in line:
             break
     else:
-        pytest.fail(f'run ended before making progress: {proc.wait()}')
+        pytest.fail(f'run ended before making progress: exit {proc.wait()}; it said:\n{"".join(said)}')
     assert len(node_processes(run_dir)) == 2
     proc.send_signal(sig)
     rest, _ = proc.communicate(timeout=60)

@@ -103,12 +103,6 @@ def acds(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
                           text=True, timeout=timeout, check=False)
 
 
-@pytest.fixture
-def domain():
-    """A ROS domain of our own for ``play`` (so playback never reaches another run's graph)."""
-    yield 150 + os.getpid() % 80  # outside the launcher's DOMAIN_RANGE: no run ever holds it (play refuses those)
-
-
 def verb_args(verb: str, bag: Path, tmp_path: Path, domain: int) -> list[str]:
     """A minimal valid invocation of a bag verb on ``bag``."""
     return {'info': ['info', str(bag)],
@@ -167,7 +161,7 @@ BAD = {
 
 
 @pytest.mark.parametrize('case', sorted(BAD))
-def test_what_is_not_a_bag_is_one_line_and_nothing_changes(tmp_path, folder_state, domain, case):
+def test_what_is_not_a_bag_is_one_line_and_nothing_changes(tmp_path, folder_state, play_domain, case):
     make, reason = BAD[case]
     area = tmp_path / 'area'  # the bag's folder and its parent (where plot's default output would go)
     folder = area / 'd'
@@ -175,7 +169,7 @@ def test_what_is_not_a_bag_is_one_line_and_nothing_changes(tmp_path, folder_stat
     target = make(folder)
     before = folder_state(area)
     for verb in BAG_VERBS:
-        args = verb_args(verb, target, tmp_path, domain)
+        args = verb_args(verb, target, tmp_path, play_domain)
         if verb == 'plot':
             args = args[:2]  # default output beside the bag: must not be created either
         proc = acds(*args)
@@ -202,7 +196,7 @@ def test_truncated_metadata_says_what_is_wrong(tmp_path):
 # ---- 1. unclosed bags are read as they are, never rewritten -------------------------------------------------
 
 @pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
-def test_every_verb_reads_an_unclosed_bag_without_changing_it(tmp_path, folder_state, domain, storage):
+def test_every_verb_reads_an_unclosed_bag_without_changing_it(tmp_path, folder_state, play_domain, storage):
     bag = tmp_path / 'area' / 'killed'
     got = make_bag(bag, storage, steps=120, spill=30, close=False)
     assert got['flushed'] == {topics.CLOCK: 120, WHEELS: 120}
@@ -210,7 +204,7 @@ def test_every_verb_reads_an_unclosed_bag_without_changing_it(tmp_path, folder_s
         'a killed writer leaves its (released) lock file behind'
     before = folder_state(tmp_path / 'area')
     for verb in BAG_VERBS:
-        proc = acds(*verb_args(verb, bag, tmp_path, domain))
+        proc = acds(*verb_args(verb, bag, tmp_path, play_domain))
         notes = [line for line in proc.stderr.splitlines() if 'was not closed' in line]
         assert len(notes) == 1, f'{verb}: one line says the bag is unclosed:\n{proc.stderr}'
         last = 'its last complete chunk' if storage == 'mcap' else 'its last committed transaction'
@@ -326,7 +320,7 @@ def test_recover_refuses_what_would_touch_the_source(tmp_path, folder_state):
 
 # ---- 3. a bag being recorded is recognised, and not disturbed -------------------------------------------------
 
-def test_a_bag_being_recorded_is_refused_in_one_line(tmp_path, folder_state, domain):
+def test_a_bag_being_recorded_is_refused_in_one_line(tmp_path, folder_state, play_domain):
     from acds_runtime.bag.writer import BagWriter
 
     bag = tmp_path / 'live'
@@ -336,7 +330,7 @@ def test_a_bag_being_recorded_is_refused_in_one_line(tmp_path, folder_state, dom
         before = folder_state(bag)
         for verb in (*BAG_VERBS, 'recover'):
             args = (['recover', str(bag), str(tmp_path / 'copy')] if verb == 'recover'
-                    else verb_args(verb, bag, tmp_path, domain))
+                    else verb_args(verb, bag, tmp_path, play_domain))
             proc = acds(*args)
             line = one_line(proc)
             assert proc.returncode == 2 and f'bag {bag}: is being recorded' in line, f'{verb}: {line}'

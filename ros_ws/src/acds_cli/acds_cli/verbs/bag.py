@@ -44,12 +44,16 @@ def _record(args: argparse.Namespace) -> int:
     return main_record(args)
 
 
-def check_domain_free(domain: int | None) -> None:
-    """``play`` never publishes into a domain a running graph holds (it would inject data into that run)."""
+def lease_play_domain(domain: int | None) -> Any:
+    """The domain ``play`` publishes into, leased for as long as it plays (a :class:`DomainLease`).
+
+    ``play`` never publishes into a domain a running graph (or another play) holds: it would inject data into that
+    run. Holding the lease, no run started while it plays lands on its domain either: that run would meet the
+    player's publishers as an intruder and fail."""
     import os
 
     from acds_runtime.bag.writer import BagError
-    from acds_runtime.launcher import DomainLease
+    from acds_runtime.launcher import DomainLease, LaunchError
 
     if domain is not None:
         target = domain
@@ -59,9 +63,11 @@ def check_domain_free(domain: int | None) -> None:
             target = domain_in(text)
         except argparse.ArgumentTypeError as exc:
             raise BagError(f'ROS_DOMAIN_ID {text!r}: {exc} (or give --domain)') from None
-    if DomainLease.held(target):
-        raise BagError(f'domain {target} belongs to a running graph (acds run): playing into it would inject data '
-                       'into that run; choose a free --domain')
+    try:
+        return DomainLease(target)
+    except LaunchError:
+        raise BagError(f'domain {target} belongs to a running graph (acds run) or another acds play: playing into it '
+                       'would inject data into that one; choose a free --domain') from None
 
 
 def _play(args: argparse.Namespace) -> int:
@@ -72,11 +78,11 @@ def _play(args: argparse.Namespace) -> int:
     from ..bag.player import Player, check_rate, parse_remaps
 
     stop = stop_on_signals()
-    live = None
+    live = lease = None
     try:
         check_rate(args.rate)
         remap = parse_remaps(args.remap)
-        check_domain_free(args.domain)
+        lease = lease_play_domain(args.domain)
         bag = open_bag(args.bag)
         if args.foxglove is not None:
             live = _live_view(bag, args.foxglove, args.foxglove_host)
@@ -84,6 +90,8 @@ def _play(args: argparse.Namespace) -> int:
     except BagError as exc:
         if live is not None:
             live.close()
+        if lease is not None:
+            lease.close()
         print(f'acds play: {exc}', file=sys.stderr)
         return 2
     try:
@@ -104,6 +112,7 @@ def _play(args: argparse.Namespace) -> int:
         player.close()
         if live is not None:
             live.close()
+        lease.close()
     return 0
 
 
