@@ -102,6 +102,6 @@ def test_a_domain_another_run_holds_is_one_line_before_the_run_folder(tmp_path):
     finally:
         lease.close()
     assert proc.returncode == 2, proc.stderr
-    assert f'--domain {lease.domain_id}: another run holds this ROS domain now' in proc.stderr, proc.stderr
+    assert f'--domain {lease.domain_id}: another run (or acds play) holds this ROS domain now' in proc.stderr, proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
     assert not (tmp_path / 'run').exists()

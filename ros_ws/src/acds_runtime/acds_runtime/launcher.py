@@ -131,7 +131,7 @@ class DomainLease:
             os.set_inheritable(fh.fileno(), True)
             return
         if len(choices) == 1:
-            raise LaunchError(f'ROS domain {choices[0]} is in use by another run (lock {DOMAIN_LOCK_DIR})')
+            raise LaunchError(f'ROS domain {choices[0]} is in use by another run or acds play (lock {DOMAIN_LOCK_DIR})')
         raise LaunchError(f'no free ROS domain in {DOMAIN_RANGE.start}..{DOMAIN_RANGE.stop - 1}: '
                           f'too many runs at once (locks in {DOMAIN_LOCK_DIR})')
 

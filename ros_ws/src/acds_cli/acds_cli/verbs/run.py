@@ -91,8 +91,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.domain is not None and not direct:
         from acds_runtime.launcher import DomainLease
         if DomainLease.held(args.domain):  # (the launcher's lease still decides: this only spares a run folder)
-            raise UsageError(f'--domain {args.domain}: another run holds this ROS domain now; choose another or '
-                             'leave --domain out')
+            raise UsageError(f'--domain {args.domain}: another run (or acds play) holds this ROS domain now; '
+                             'choose another or leave --domain out')
     if args.record is not None and not args.record.strip():
         raise UsageError('--record: an empty path (give the bag folder to create, or leave --record out for '
                          'RUN_DIR/bag)')
