@@ -42,7 +42,7 @@ def _clock_messages(bag: Path) -> int:
 
 
 @pytest.mark.slow
-@pytest.mark.timeout(900)
+@pytest.mark.timeout(1000)
 def test_starved_launcher_never_exits_zero_short(tmp_path):
     """The launcher reniced to 19 beside a busy loop for the run's last tenth (the monitor, starved, falls behind
     the graph it paces, up to MONITOR_LAG steps): exit 0 means all 600 steps, the direct engine's truth digest
@@ -60,8 +60,8 @@ def test_starved_launcher_never_exits_zero_short(tmp_path):
     for line in run.stderr:  # starve it for its last tenth (the run's own progress output, not a timer)
         if '[progress]' in line and float(line.split('(')[1].split('%')[0]) >= 90:
             break
-    with starved(run.pid, loops=1):
-        _, err = run.communicate(timeout=600)
+    with starved(run.pid, loops=1):  # at nice 19 its pace is the machine's: 17 s quiet, 400-610 s beside 2 busy loops
+        _, err = run.communicate(timeout=800)
     assert run.returncode == 0, f'starved run failed (allowed only with a reason, never short): {err[-2000:]}'
     got = json.loads((tmp_path / 'graph.json').read_text())
     assert got['steps'] == STEPS
