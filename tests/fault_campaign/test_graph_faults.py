@@ -12,6 +12,7 @@ import re
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -47,6 +48,42 @@ def test_a_hung_controller_is_named_as_the_node_whose_outputs_stopped(launch_gra
         finally:
             os.kill(pid, signal.SIGCONT)
     assert str(err.value).startswith('acds_controller stopped at step'), str(err.value)
+
+
+class _StuckLiveView:
+    """A live-view sink that stops in its 21st /clock message until released: the run monitor, which calls its sinks
+    before it acknowledges a step, stops taking in messages as a monitor stalled for any reason would."""
+
+    def __init__(self) -> None:
+        self.clocks = 0
+        self.release = threading.Event()
+
+    def __call__(self, topic: str, _data: bytes) -> None:
+        if topic == topics.CLOCK:
+            self.clocks += 1
+            if self.clocks == 21:
+                self.release.wait(timeout=120.0)  # the test's own stall, not a synchronisation
+
+    def close(self) -> None:
+        self.release.set()
+
+
+def test_a_stalled_run_monitor_is_named_with_where_its_thread_is(launch_graph):
+    """The time owner waits on the run monitor's acknowledgements (MONITOR_LAG): when the monitor stops, the nodes
+    fail on its acknowledgement, and the report names the monitor, how far it got and its thread's stack (it
+    blamed a node, "reaction_wheels stopped at step 20 ... its outputs did not [arrive]", that had gone on)."""
+    view = _StuckLiveView()
+    with launch_graph(_short_timeout('free_tumble_heao_b', 4.0), steps=100000, live=lambda _params: view) as graph:
+        try:
+            with pytest.raises(LaunchError) as err:
+                graph.wait()
+        finally:
+            view.release.set()
+    text = str(err.value)
+    assert text.startswith('the run monitor (in this launcher) stopped acknowledging /clock: it had taken in /clock '
+                           'up to step 19'), text  # its 21st, step 20, is in the sink
+    assert 'stopped at step' not in text, text
+    assert "the run monitor's thread now:" in text and 'in __call__' in text and 'self.release.wait' in text, text
 
 
 #: A plain ROS 2 reader of /clock (``ros2 topic echo /clock`` with the lockstep QoS): one line per message.

@@ -139,7 +139,7 @@ class DomainLease:
     def held(domain: int) -> bool:
         """Whether a run (or a child of one) holds ``domain`` now."""
         path = DOMAIN_LOCK_DIR / f'domain_{domain}.lock'
-        return path.exists() and shm.lock_held(path)
+        return path.exists() and shm.lock_held(path, probe=True)
 
     @property
     def fd(self) -> int:
@@ -430,8 +430,19 @@ class GraphRun:
         if failure:
             head += f': {failure[-1]}'
         over_deadline = any(DEADLINE_FAILURE in line for line in failure)
-        blame = self.monitor.blame() if self.monitor is not None and code == 3 and not over_deadline else None
         report = f'\n  last lines of {proc.name}:\n' + '\n'.join(f'    {line}' for line in proc.tail)
+        ack = topics.resolve(topics.MONITOR_ACK)
+        on_monitor = [p for p in self.processes.values() if any(ack in line for line in p.tail if 'FAILURE' in line)]
+        if on_monitor and self.monitor is not None:
+            # a node waited on the launcher's own run monitor (it paces the time owner): no node is to blame
+            head = (f'the run monitor (in this launcher) stopped acknowledging /clock: it had taken in /clock up to '
+                    f'step {self.monitor.clock_step}, {self.monitor.received()} messages in all; ' + head)
+            for waiting in on_monitor:
+                if waiting is not proc:
+                    report += f'\n  last lines of {waiting.name}:\n' + '\n'.join(f'    {line}' for line in waiting.tail)
+            return head + report + "\n  the run monitor's thread now:\n" + '\n'.join(
+                f'    {line}' for line in self.monitor.spin_stack())
+        blame = self.monitor.blame() if self.monitor is not None and code == 3 and not over_deadline else None
         if blame:
             culprit, text = blame
             head = f'{text} (the graph stopped waiting for it); ' + head

@@ -18,8 +18,10 @@ from outside the graph: :attr:`RunMonitor.intrusion` names it and the launcher f
 
 from __future__ import annotations
 
+import sys
 import threading
 import time
+import traceback
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -321,6 +323,14 @@ class RunMonitor:
             f'{name} (external, ROS node {self.external.publisher(name)})'
         return name, (f'{who} stopped at step {k}: its inputs for that step had arrived, its outputs did not '
                       f'({", ".join(missing)} of step {k}, t = {k * self.dt_ns / 1e9:g} s)')
+
+    def spin_stack(self) -> list[str]:
+        """The Python stack of the monitor's spinning thread now: where it is when it stopped taking in messages
+        (in the middleware's wait, or in a callback of its own, the recorder's or a live view's)."""
+        frame = sys._current_frames().get(self._thread.ident) if self._thread.ident is not None else None
+        if frame is None:
+            return [f"(its thread has ended{': ' + self.failure if self.failure else ''})"]
+        return [line for entry in traceback.format_stack(frame) for line in entry.rstrip().splitlines()]
 
     def close(self) -> None:
         """Stop spinning and release the ROS context (closes the bag, if recording)."""

@@ -91,7 +91,7 @@ def clean_zombies(before: set[str] | None = None) -> tuple[list[str], list[Path]
             young = time.time() - (lock if lock.exists() else folder).stat().st_mtime < shm.MIN_AGE_S
         except OSError:
             continue
-        if folder.is_dir() and not young and not (lock.exists() and shm.lock_held(lock)):
+        if folder.is_dir() and not young and not (lock.exists() and shm.lock_held(lock, probe=True)):
             shutil.rmtree(folder, ignore_errors=True)
             folders.append(folder)
     return removed, folders

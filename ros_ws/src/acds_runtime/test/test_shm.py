@@ -36,3 +36,32 @@ def test_entries_present_before_the_run_are_never_touched(tmp_path):
     before = shm.snapshot(tmp_path)
     assert shm.clean_run(before, tmp_path) == []
     assert old in os.listdir(tmp_path)
+
+
+def test_cleaning_never_takes_a_lock_it_looks_at(tmp_path, monkeypatch):
+    """Whether a lock is held is read from /proc/locks: a probe that took the lock for a moment made a Fast DDS
+    participant opening that port then fail (exclusive, then shared, both refused) and lose the port."""
+    before = shm.snapshot(tmp_path)
+    dead = _port(tmp_path, 7005)
+    live = _port(tmp_path, 7006)
+    with open(tmp_path / f'{live}_el', 'ab') as held:
+        fcntl.flock(held, fcntl.LOCK_EX)
+
+        def refuse(*_args):
+            raise AssertionError('the cleaning took a lock on a file it looked at')
+        monkeypatch.setattr(shm.fcntl, 'flock', refuse)
+        assert shm.lock_held(tmp_path / f'{live}_el') and not shm.lock_held(tmp_path / f'{dead}_el')
+        removed = shm.clean_run(before, tmp_path)
+    assert dead in removed and live not in removed
+
+
+def test_a_lease_file_not_listed_in_proc_locks_is_probed(tmp_path, monkeypatch):
+    """``probe``: a file only this project locks is also tried, in case /proc/locks names it otherwise."""
+    lease = tmp_path / 'domain_42.lock'
+    lease.write_bytes(b'')
+    with open(lease, 'ab') as held:
+        fcntl.flock(held, fcntl.LOCK_EX)
+        monkeypatch.setattr(shm, '_locked_inodes', set)  # /proc/locks lists nothing
+        assert not shm.lock_held(lease)
+        assert shm.lock_held(lease, probe=True)
+    assert not shm.lock_held(lease, probe=True)
