@@ -137,7 +137,7 @@ class DomainLease:
 
     @staticmethod
     def held(domain: int) -> bool:
-        """Whether a run (or a child of one) holds ``domain`` now."""
+        """Whether a run (or a child of one), or an ``acds play``, holds ``domain`` now."""
         path = DOMAIN_LOCK_DIR / f'domain_{domain}.lock'
         return path.exists() and shm.lock_held(path, probe=True)
 
