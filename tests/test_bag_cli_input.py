@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 from acds_common.scenario import load_scenario
 from acds_runtime.direct import DirectRun
+from acds_runtime.testing import read_until
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -91,11 +92,7 @@ def test_ctrl_c_ends_plays_wait_for_a_client_at_once(bag, play_domain):
     play = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'play', str(bag), '--domain', str(play_domain),
                              '--foxglove', '0', '--wait', '60'], stderr=subprocess.PIPE, text=True, cwd=ROOT)
     try:
-        for line in play.stderr:
-            if 'waiting up to 60 s for a Foxglove client' in line:
-                break
-        else:
-            pytest.fail('acds play did not announce its wait')
+        read_until(play, lambda line: 'waiting up to 60 s for a Foxglove client' in line)
         assert DomainLease.held(play_domain), 'acds play publishes into a domain it does not hold'
         again = run_acds('play', str(bag), '--domain', str(play_domain), '--wait', '0')
         one_line_exit_2(again, f'domain {play_domain} belongs to a running graph (acds run) or another acds play')

@@ -26,6 +26,7 @@ from acds_runtime.bag.writer import typestore
 from acds_runtime.direct import DirectRun
 from acds_runtime.foxglove_bridge import TF_TOPIC, VIEW_MODE, VIEW_RATES, FoxgloveBridge, Frames, frames_of, live_view
 from acds_runtime.foxglove_layout import layout_json
+from acds_runtime.testing import read_until
 from websockets.sync.client import connect
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -268,13 +269,8 @@ def test_play_serves_a_bag_the_same_way(tmp_path: Path, play_domain: int) -> Non
     play = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'play', str(bag), '--domain', str(play_domain),
                              '--foxglove', '0', '--wait', '60'], stderr=subprocess.PIPE, text=True, env=env)
     try:
-        port = None
-        for line in play.stderr:
-            found = re.search(r'Foxglove live view on ws://127\.0\.0\.1:(\d+)', line)
-            if found:
-                port = int(found.group(1))
-                break
-        assert port is not None, 'acds play did not announce its Foxglove server'
+        said = read_until(play, lambda line: 'Foxglove live view on ws://' in line)
+        port = int(re.findall(r'Foxglove live view on ws://127\.0\.0\.1:(\d+)', said)[-1])
         with foxglove_client(port) as client:
             wanted = {ODOMETRY, TF_TOPIC}
             client.advertised(wanted)

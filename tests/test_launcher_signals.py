@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 import pytest
+from acds_runtime.testing import read_until
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -34,14 +35,7 @@ def test_signal_stops_every_node(tmp_path, sig, inherited):
                             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={'PATH': '/usr/bin:/bin',
                                  'ROS_LOG_DIR': str(tmp_path / 'log')}, preexec_fn=inherited)
-    assert proc.stderr is not None
-    said = []
-    for line in proc.stderr:  # wait on the run's own progress output, not on a timer
-        said.append(line)
-        if '[progress]' in line and 'step 0/' not in line:
-            break
-    else:
-        pytest.fail(f'run ended before making progress: exit {proc.wait()}; it said:\n{"".join(said)}')
+    read_until(proc, lambda line: '[progress]' in line and 'step 0/' not in line)  # the run's own progress
     assert len(node_processes(run_dir)) == 2
     proc.send_signal(sig)
     rest, _ = proc.communicate(timeout=60)

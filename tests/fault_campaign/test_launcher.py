@@ -13,8 +13,8 @@ import sys
 import time
 from pathlib import Path
 
-import pytest
 import yaml
+from acds_runtime.testing import read_until
 
 ROOT = Path(__file__).resolve().parents[2]
 VENV_BIN = Path(sys.executable).parent
@@ -36,11 +36,8 @@ def _start_run(tmp_path: Path, scenario: str = 'free_tumble_heao_b') -> tuple[su
                              '--run-dir', str(run_dir), '--quiet', '--no-record'],
                             cwd=ROOT, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                             text=True, env=_env(tmp_path))
-    assert proc.stderr is not None
-    for line in proc.stderr:  # wait on the run's own progress output, not on a timer
-        if '[progress]' in line and 'step 0/' not in line:
-            return proc, run_dir
-    pytest.fail(f'run ended before making progress: exit {proc.wait()}')
+    read_until(proc, lambda line: '[progress]' in line and 'step 0/' not in line)  # the run's own progress output
+    return proc, run_dir
 
 
 def _domain_locked(run_dir: Path) -> bool:

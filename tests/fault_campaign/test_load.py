@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from acds_runtime.testing import read_until
 
 from .load import starved
 
@@ -56,10 +57,8 @@ def test_starved_launcher_never_exits_zero_short(tmp_path):
     bag = tmp_path / 'bag'
     run = _acds(tmp_path, 'run', 'heao_b_acquisition', '--steps', str(STEPS), '--record', str(bag), '--quiet',
                 '--summary-json', str(tmp_path / 'graph.json'), '--run-dir', str(tmp_path / 'g'))
-    assert run.stderr is not None
-    for line in run.stderr:  # starve it for its last tenth (the run's own progress output, not a timer)
-        if '[progress]' in line and float(line.split('(')[1].split('%')[0]) >= 90:
-            break
+    # starve it for its last tenth (from the run's own progress output; a run that ends before fails with its words)
+    read_until(run, lambda line: '[progress]' in line and float(line.split('(')[1].split('%')[0]) >= 90)
     with starved(run.pid, loops=1):  # at nice 19 its pace is the machine's: 17 s quiet, 400-610 s beside 2 busy loops
         _, err = run.communicate(timeout=800)
     assert run.returncode == 0, f'starved run failed (allowed only with a reason, never short): {err[-2000:]}'

@@ -18,6 +18,7 @@ import time
 from pathlib import Path
 
 import pytest
+from acds_runtime.testing import read_until
 
 ROOT = Path(__file__).resolve().parents[2]
 VENV_BIN = Path(sys.executable).parent
@@ -42,11 +43,7 @@ def _run(tmp_path: Path, *args: str) -> subprocess.Popen[str]:
 
 
 def _after_progress(run: subprocess.Popen[str]) -> None:
-    assert run.stderr is not None
-    for line in run.stderr:  # the run's own progress output, not a timer
-        if '[progress]' in line and 'step 0/' not in line:
-            return
-    pytest.fail(f'run ended before making progress: exit {run.wait()}')
+    read_until(run, lambda line: '[progress]' in line and 'step 0/' not in line)  # the run's own progress output
 
 
 def _node_pids(launcher: int) -> list[int]:

@@ -182,3 +182,16 @@ def external_node(graph: GraphRun, argv: Sequence[str], env: dict[str, str] | No
                 except subprocess.TimeoutExpired:
                     os.killpg(proc.pid, signal.SIGKILL)
                     proc.wait()
+
+
+def read_until(proc: subprocess.Popen[str], wanted: Callable[[str], bool]) -> str:
+    """Read ``proc``'s stderr line by line until a line ``wanted`` accepts (a wait on the process's own output, not
+    on a timer) and return what it said so far; fail the test with all it said when it ended first (why a run
+    ended early is in those lines)."""
+    assert proc.stderr is not None, 'start the process with stderr=subprocess.PIPE'
+    said = []
+    for line in proc.stderr:
+        said.append(line)
+        if wanted(line):
+            return ''.join(said)
+    pytest.fail(f'the process ended (exit {proc.wait()}) before the line waited for; it said:\n{"".join(said)}')
