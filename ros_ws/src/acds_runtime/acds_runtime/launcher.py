@@ -151,6 +151,11 @@ class DomainLease:
         self._fh.close()
 
 
+def _last_lines(proc: NodeProcess) -> str:
+    """A node's last output lines, indented under its name, for a failure report."""
+    return f'\n  last lines of {proc.name}:\n' + '\n'.join(f'    {line}' for line in proc.tail)
+
+
 class GraphRun:
     """Run a scenario's node graph to completion (use as a context manager)."""
 
@@ -430,7 +435,7 @@ class GraphRun:
         if failure:
             head += f': {failure[-1]}'
         over_deadline = any(DEADLINE_FAILURE in line for line in failure)
-        report = f'\n  last lines of {proc.name}:\n' + '\n'.join(f'    {line}' for line in proc.tail)
+        report = _last_lines(proc)
         ack = topics.resolve(topics.MONITOR_ACK)
         on_monitor = [p for p in self.processes.values() if any(ack in line for line in p.tail if 'FAILURE' in line)]
         if on_monitor and self.monitor is not None:
@@ -439,7 +444,7 @@ class GraphRun:
                     f'step {self.monitor.clock_step}, {self.monitor.received()} messages in all; ' + head)
             for waiting in on_monitor:
                 if waiting is not proc:
-                    report += f'\n  last lines of {waiting.name}:\n' + '\n'.join(f'    {line}' for line in waiting.tail)
+                    report += _last_lines(waiting)
             return head + report + "\n  the run monitor's thread now:\n" + '\n'.join(
                 f'    {line}' for line in self.monitor.spin_stack())
         blame = self.monitor.blame() if self.monitor is not None and code == 3 and not over_deadline else None
@@ -453,7 +458,7 @@ class GraphRun:
     def _stack_of(self, proc: NodeProcess) -> str:
         """The last lines of a node the graph waited on, with its Python stack (:meth:`_ask_stack`)."""
         self._ask_stack(proc)
-        return f'\n  last lines of {proc.name}:\n' + '\n'.join(f'    {line}' for line in proc.tail)
+        return _last_lines(proc)
 
     def _ask_stack(self, proc: NodeProcess) -> None:
         """Add a running node's Python stack to its tail (:data:`~acds_common.lockstep.STACK_SIGNAL`, a faulthandler
