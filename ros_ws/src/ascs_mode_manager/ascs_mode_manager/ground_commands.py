@@ -95,6 +95,8 @@ def parse_schedule(entries: list[str]) -> list[tuple[float, str]]:
 
 #: Live commands that may wait for the next step; more are refused at once (never dropped silently).
 MAX_PENDING = 5000
+#: A scheduled command is due at the first step with T_S ≤ t_k + DUE_SLACK_S (s): a step clock's rounding.
+DUE_SLACK_S = 1e-9
 
 
 class GroundCommandQueue:
@@ -104,6 +106,13 @@ class GroundCommandQueue:
         self._parse = parser
         self._scheduled = [(t_s, text, parser(text)) for t_s, text in parse_schedule(schedule)]
         self._live: list[tuple[str, Parsed]] = []
+        #: Sim time (s) of the first waiting command: the next scheduled one's T_S, -inf while live ones wait, inf
+        #: when none waits. Commands are due at the step at t_s when ``next_s <= t_s + DUE_SLACK_S`` (the
+        #: per-step test that spares most steps the call of :meth:`due`).
+        self.next_s = self._next_s()
+
+    def _next_s(self) -> float:
+        return -math.inf if self._live else self._scheduled[0][0] if self._scheduled else math.inf
 
     def receive(self, text: str) -> bool:
         """A live command: parsed and queued for the next step; False when the queue is full (the caller
@@ -111,15 +120,17 @@ class GroundCommandQueue:
         if len(self._live) >= MAX_PENDING:
             return False
         self._live.append((text, self._parse(text)))
+        self.next_s = -math.inf
         return True
 
     def due(self, t_s: float) -> list[tuple[str, Parsed, str]]:
         """Commands to apply at the step at ``t_s``: (text, parsed, 'scheduled'|'live'), scheduled first."""
         out = []
-        while self._scheduled and self._scheduled[0][0] <= t_s + 1e-9:
+        while self._scheduled and self._scheduled[0][0] <= t_s + DUE_SLACK_S:
             _, text, parsed = self._scheduled.pop(0)
             out.append((text, parsed, 'scheduled'))
         if self._live:
             out.extend((text, parsed, 'live') for text, parsed in self._live)
             self._live = []
+        self.next_s = self._next_s()
         return out

@@ -174,20 +174,24 @@ class HeaoModeManager:
         present = sun_present and sun_norm > 0.0
 
         out: list[Transition] = []
-        for to_mode, t_accepted, text in self._pending:
-            out.append(self._enter(t, to_mode, f"ground command '{text}' accepted at t={t_accepted:.3f} s"))
-        self._pending.clear()
+        if self._pending:
+            for to_mode, t_accepted, text in self._pending:
+                out.append(self._enter(t, to_mode, f"ground command '{text}' accepted at t={t_accepted:.3f} s"))
+            self._pending.clear()
 
-        if self.mode == 'mode_1a':
+        mode = self.mode
+        if mode == 'mode_1a':
             thr = self.config.rate_thresholds_rad_s
             if present and abs(omega[0]) <= thr[0] and abs(omega[1]) <= thr[1] and abs(omega[2]) <= thr[2]:
                 rates = ', '.join(f'|ω{a}|={deg(abs(omega[i])):.4f}≤{deg(thr[i]):.4f}'
                                   for i, a in enumerate(AXES))
                 out.append(self._enter(t, 'mode_1b', f'rates below thresholds ({rates} deg/s) and sun present'))
-        if self.mode == 'mode_1b' and self.mode_1b_entry_t_s is None:
-            self.mode_1b_entry_t_s = t  # started in Mode 1B (wheels on from separation)
-        if self.mode == 'mode_1b' and not self.captured:
-            out.extend(self._check_capture(t, omega, sun[2] / sun_norm if present else None))
+                mode = self.mode
+        if mode == 'mode_1b':
+            if self.mode_1b_entry_t_s is None:
+                self.mode_1b_entry_t_s = t  # started in Mode 1B (wheels on from separation)
+            if not self.captured:
+                out.extend(self._check_capture(t, omega, sun[2] / sun_norm if present else None))
         return out
 
     def _check_capture(self, t: float, omega: tuple[float, float, float], sun_z: float | None) -> list[Transition]:

@@ -25,17 +25,22 @@ deterministic way to command a run.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from acds_common.cdr import Status
 from acds_common.dpa_commands import GAIN_LIMITS, LAW_CHOICES
-from acds_common.messages import MODE_STATUS, WARN, diagnostic, xyz
+from acds_common.messages import MODE_STATUS, WARN, diagnostic
 from acds_common.mode_report import ModeReport
 from acds_common.modes import HEAO_CRUISE_MODES
 from acds_common.validation import all_finite, scenario_key
 
+from ascs_mode_manager.ground_commands import DUE_SLACK_S
 from ascs_mode_manager.heao_modes import HeaoModeConfig, HeaoModeManager, Transition
 from ascs_mode_manager.spin_mechanizations import AscsError
+
+#: An absent gyro or sun sensor input: the zero vector (the sun then reads as absent).
+_ABSENT = (0.0, 0.0, 0.0)
 
 
 def event_text(tr: Transition) -> str:
@@ -93,26 +98,31 @@ class HeaoPart:
     def step(self, k: int, t: float, inp: dict[str, Any]) -> dict[str, Any]:
         """One step of the mode logic: ``mode`` (always), ``events`` (on transitions), ``diagnostics``."""
         diagnostics: list[Status] = []
-        accepted = self.host.answer_due(t, diagnostics)
+        host = self.host
+        accepted = host.answer_due(t, diagnostics) if host.commands.next_s <= t + DUE_SLACK_S else ()
         forwarded = tuple((result.route, result.command or text)
                           for text, result in accepted if result.route is not None) if accepted else ()
-        transitions: list[Transition] = []
-        omega = xyz(None if inp['gyro'] is None else inp['gyro'][0])
-        sun = xyz(inp['sun'])
-        if all_finite((*omega, *sun)):
+        gyro, sun = inp['gyro'], inp['sun']
+        omega = _ABSENT if gyro is None else gyro[0]
+        if sun is None:
+            sun = _ABSENT
+        # all_finite's one sum, written out on the per-step path; all_finite decides when the sum is not finite.
+        if (math.isfinite(omega[0] + omega[1] + omega[2] + sun[0] + sun[1] + sun[2])
+                or all_finite((*omega, *sun))):
             # Checked here, t_k from the host's step clock: the core's unchecked path. The sun sensor sends a zero
             # vector when the sun is absent, which the core reads as absent.
             transitions = self.core.advance(t, omega, sun, True)
         else:
+            transitions = []
             message = f'non-finite gyro/sun input rejected at step {k}: mode logic held'
-            self.host.log('warn', message)
+            host.log('warn', message)
             diagnostics.extend(diagnostic(MODE_STATUS, {}, message, WARN))
         events = []
         for tr in transitions:
             if tr.kind == 'capture' and self.stop_at_capture:
                 self.run_complete = True
             text = event_text(tr)
-            self.host.log('info', text)
+            host.log('info', text)
             events.append(text)
         core = self.core
         cause = '; '.join(tr.cause for tr in transitions) if transitions else ''

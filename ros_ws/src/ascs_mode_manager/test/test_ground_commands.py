@@ -3,10 +3,18 @@
 from __future__ import annotations
 
 import collections
+import math
 
 import pytest
 from acds_common.commands import CommandError, ModeCommand
-from ascs_mode_manager.ground_commands import MAX_PENDING, GroundCommandQueue, answer, parse, parse_schedule
+from ascs_mode_manager.ground_commands import (
+    DUE_SLACK_S,
+    MAX_PENDING,
+    GroundCommandQueue,
+    answer,
+    parse,
+    parse_schedule,
+)
 from ascs_mode_manager.spin_mechanizations import AscsError
 from ascs_mode_manager.workshop_modes import WorkshopModeManager
 
@@ -31,6 +39,21 @@ def test_commands_are_due_at_the_first_step_at_or_after_their_time_live_ones_at_
     assert queue.due(0.5) == [('sss despin', 'SSS DESPIN', 'live')]
     assert queue.due(1.0) == [('sss enable', 'SSS ENABLE', 'scheduled')]
     assert queue.due(1.5) == []
+
+
+def test_next_s_says_when_due_has_commands_as_due_hands_them_out():
+    """The steppers' per-step test (``next_s <= t_s + DUE_SLACK_S``) skips exactly the steps where due() is empty."""
+    queue = GroundCommandQueue(['1.0: b', '0.5: a', '1.0: c'], str.upper)
+    assert queue.next_s == 0.5
+    steps = [0.0, 0.5 - 2 * DUE_SLACK_S, 0.5 - DUE_SLACK_S / 2, 0.75, 1.0, 1.25]
+    for i, t_s in enumerate(steps):
+        if i == 3:
+            queue.receive('live')
+            assert queue.next_s == -math.inf
+        waiting = queue.next_s <= t_s + DUE_SLACK_S
+        assert waiting == bool(queue.due(t_s)), t_s
+    assert queue.next_s == math.inf and queue.due(1e9) == []
+    assert GroundCommandQueue([], str.upper).next_s == math.inf
 
 
 def test_text_is_parsed_on_entry_and_a_text_that_does_not_parse_is_refused_with_the_parsers_reason():
