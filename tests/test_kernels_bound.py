@@ -167,11 +167,10 @@ def test_checked_drive_kernel_refuses_another_array():
     """An int64 state table has float64's item size, so the bare entry point would read its bits as floats: the
     checked form refuses it."""
     assembly = _bound(DriveAssembly)
-    args = [assembly._state, assembly._params, assembly._limits, assembly._axis_state, (1.0, 2.0, 3.0), 0.5]
+    args = [assembly._state, assembly._params, assembly._monitor, (1.0, 2.0, 3.0), 0.5]
     assembly._step(*args)
-    held, times, alarms, _ = assembly._axis_state
     for index, value in [(0, assembly._state.astype(np.int64)), (1, np.asfortranarray(assembly._params)),
-                         (1, _readonly(assembly._params)), (3, (held, times, alarms, (0.0, 0.0, 0.0)))]:
+                         (1, _readonly(assembly._params)), (3, (0, 0, 0))]:
         wrong = list(args)
         wrong[index] = value
         with pytest.raises(TypeError, match=f'argument {index}:'):

@@ -4,8 +4,9 @@ The direct engine drives the whole electromagnet assembly (spec §6; seed 002 §
 and windings per axis, e_ft against the command) with one compiled call a step
 (:func:`em_driver.drive_assembly.drive_step`); a node process runs the same source as plain Python. Here two
 assemblies, one built before and one after :func:`acds_common.kernels.enable`, are driven through the same
-random commands (reversals, zero, saturation, NaN/inf components), EEA switches, failures of every kind and both
-drive types, and every reported float and the units' state is compared bit for bit; so is a lone
+random commands (reversals, zero, saturation, NaN/inf components), EEA switches, failures of every kind, all
+drive types and the monitor's settle times and automatic switch, and every reported float, the units' state and
+the axes' monitor rows are compared bit for bit; so is a lone
 :class:`~em_driver.bridge_switch.BridgeSwitchCoil`.
 """
 
@@ -27,6 +28,11 @@ PER_AXIS = ('avg_dipole_am2', 'end_dipole_am2', 'coil_current_a', 'commanded_cur
 
 def _units(assembly: DriveAssembly) -> list:
     return [(u.current_a, u.bridge_on, u.fault, u.powered) for ax in assembly._axes for u in ax.units.values()]
+
+
+def _monitor(assembly: DriveAssembly) -> list:
+    """The axes' monitor rows (held command, mismatch time, alarm, active unit, measured and expected currents)."""
+    return [[float(v) for v in row] for row in assembly._monitor]
 
 
 def _command(rng: random.Random) -> list[float]:
@@ -84,6 +90,7 @@ def test_drive_assembly_compiled_gives_the_same_bits(ieee_bits):
             assert (got.active_units, got.events, got.diagnostics) == (want.active_units, want.events,
                                                                        want.diagnostics), where
             assert ieee_bits(_units(quick)) == ieee_bits(_units(slow)), where
+            assert ieee_bits(_monitor(quick)) == ieee_bits(_monitor(slow)), where
 
 
 def test_bridge_switch_coil_compiled_gives_the_same_bits(ieee_bits):

@@ -235,10 +235,10 @@ def axis_period(state, k: int, p, command: float, active: int, duration_s: float
     """Axis ``k`` over one period (spec §6; seed 002 §4.2.5: the TA powers the ``active`` unit, 0 = A, 1 = B):
     the held moment command (A·m²) saturated at the coil's maximum and turned into a current command
     (bridge switch), or its sign switching the supply (constant level). Parameter row ``p``: drive type, τ, E,
-    I_on, I_off, ε, band floor, moment per amp, sense gain, max moment, the monitor's full-scale current.
-    Returns the axis's average and end dipole (A·m², both windings), and the commanded current (A) and the
-    active unit's end current (A), e_ft (V), duty, both units' power (W) and the active unit's switch count, in
-    :data:`FIGURES` order."""
+    I_on, I_off, ε, band floor, moment per amp, sense gain, max moment, then :func:`axis_monitor`'s tolerance
+    (A), settle time (s) and automatic switch (1.0 on). Returns the axis's average and end dipole (A·m², both
+    windings), and the commanded current (A) and the active unit's end current (A), e_ft (V), duty, both units'
+    power (W) and the active unit's switch count, in :data:`FIGURES` order."""
     drive_type = p[0]
     if drive_type == _NO_COIL:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
@@ -256,80 +256,87 @@ def axis_period(state, k: int, p, command: float, active: int, duration_s: float
     return a[0] + b[0], a[1] + b[1], on[2], command_a, on[3], on[4], a[5] + b[5], on[6]
 
 
+#: An axis's row of the monitor table (:func:`drive_step`; a drive assembly keeps its three axes' rows in one
+#: table, updated in place like its units' :func:`~em_driver.bridge_switch.state_table`): the held moment command
+#: (A·m²), the mismatch time (s), the alarm (1.0 on), the active unit (0.0 = A, 1.0 = B), and the last period's
+#: measured and expected currents (A).
+HELD, MISMATCH, ALARM, ACTIVE, MEASURED, EXPECTED = range(6)
+
+
 @kernels.helper
-def axis_monitor(figures, p, limits: tuple[float, float, bool], mismatch_s: float, alarm: bool, active: int,
-                 duration_s: float) -> tuple[float, bool, int, float, float]:
+def axis_monitor(axis, figures, p, duration_s: float) -> bool:
     """The mismatch / excess-coil-current alarm of one axis after its period (spec §6 failure detection; seed
-    002 §4.2.5: e_ft compared with the command): the active unit's measured current (its e_ft over the sense
-    gain) against the current a healthy driver holds (the commanded current limited to ±I_on), apart by more
-    than the tolerance × the full-scale current for longer than the settle time (``limits``: tolerance fraction,
-    settle time (s), auto switch). ``figures``: the axis's :func:`axis_period` figures; ``p`` its parameter row.
-    Returns the mismatch time (s), the alarm and the active unit after it (the standby unit when the alarm
-    switches automatically, its mismatch time then 0), and the measured and expected currents (A)."""
+    002 §4.2.5: e_ft compared with the command), its monitor row ``axis`` (see :data:`HELD`) updated in place: the
+    active unit's measured current (its e_ft over the sense gain) against the current a healthy driver holds (the
+    commanded current limited to ±I_on), apart by more than the tolerance (A) for longer than the settle time
+    raises the alarm, and with the automatic switch makes the standby unit active (its mismatch time then 0).
+    ``figures``: the axis's :func:`axis_period` figures; ``p`` its parameter row. Returns whether the alarm
+    changed or switched the unit."""
     if p[0] == _NO_COIL:
-        return mismatch_s, alarm, active, 0.0, 0.0
-    tolerance_frac, settle_s, auto_switch = limits
+        return False
     measured_a = figures[4] / p[8]
     command_a = figures[3]
     on_a = p[3]
     expected_a = -on_a if command_a < -on_a else on_a if command_a > on_a else command_a  # min(max(…))
-    if abs(measured_a - expected_a) > tolerance_frac * p[10]:
-        mismatch_s += duration_s
-    else:
-        mismatch_s = 0.0
-    alarm = mismatch_s > settle_s
-    if alarm and auto_switch:
-        return 0.0, alarm, 1 - active, measured_a, expected_a
-    return mismatch_s, alarm, active, measured_a, expected_a
+    axis[MEASURED] = measured_a
+    axis[EXPECTED] = expected_a
+    mismatch_s = axis[MISMATCH] + duration_s if abs(measured_a - expected_a) > p[10] else 0.0
+    alarm = mismatch_s > p[11]
+    was = axis[ALARM] != 0.0
+    axis[ALARM] = 1.0 if alarm else 0.0
+    if alarm and p[12] != 0.0:
+        axis[ACTIVE] = 1.0 - axis[ACTIVE]
+        axis[MISMATCH] = 0.0
+        return True
+    axis[MISMATCH] = mismatch_s
+    return alarm != was
 
 
-def drive_step(units, params, limits: tuple[float, float, bool], state, command: tuple[float, float, float],
-               duration_s: float) -> tuple:
-    """One control period of the assembly (spec §6): a non-finite moment command component (A·m²) is rejected
-    (that axis holds its last valid command), the three axes are driven (:func:`axis_period`) and monitored
-    (:func:`axis_monitor`). ``units`` the six units' rows (axis k's units A and B at 2k, 2k + 1; updated in
-    place), ``params`` the axes' parameter rows, ``limits`` the monitor's; ``state`` per axis (each a triple):
-    (held commands, mismatch times, alarms, active units 0/1). Returns the new state, the figures (one triple
-    per name of :data:`FIGURES`) and each axis's (measured, expected) currents (A).
+@kernels.helper
+def axis_step(units, k: int, p, axis, command: float, duration_s: float
+              ) -> tuple[tuple[float, float, float, float, float, float, float, int], bool]:
+    """Axis ``k`` over one period: its moment command (A·m²) held unless non-finite (then the last valid one
+    stays), :func:`axis_period` on the active unit, :func:`axis_monitor`; returns both's results."""
+    if math.isfinite(command):
+        axis[HELD] = command
+    figures = axis_period(units, k, p, axis[HELD], int(axis[ACTIVE]), duration_s)
+    return figures, axis_monitor(axis, figures, p, duration_s)
+
+
+def drive_step(units, params, axes, command: tuple[float, float, float], duration_s: float) -> tuple:
+    """One control period of the assembly (spec §6): each axis's :func:`axis_step`. ``units`` the six units'
+    rows (axis k's units A and B at 2k, 2k + 1), ``axes`` the three axes' monitor rows (both tables updated in
+    place), ``params`` the axes' parameter rows. Returns whether an alarm changed or switched a unit, and the
+    figures, one (x, y, z) triple per name of :data:`FIGURES`.
 
     A kernel (:mod:`acds_common.kernels`): one call a step drives the assembly.
     """
-    held, times, alarms, actives = state
     x, y, z = command
-    held = (x if math.isfinite(x) else held[0], y if math.isfinite(y) else held[1],
-            z if math.isfinite(z) else held[2])
-    a = axis_period(units, 0, params[0], held[0], actives[0], duration_s)
-    b = axis_period(units, 1, params[1], held[1], actives[1], duration_s)
-    c = axis_period(units, 2, params[2], held[2], actives[2], duration_s)
-    ma = axis_monitor(a, params[0], limits, times[0], alarms[0], actives[0], duration_s)
-    mb = axis_monitor(b, params[1], limits, times[1], alarms[1], actives[1], duration_s)
-    mc = axis_monitor(c, params[2], limits, times[2], alarms[2], actives[2], duration_s)
-    state = (held, (ma[0], mb[0], mc[0]), (ma[1], mb[1], mc[1]), (ma[2], mb[2], mc[2]))
-    figures = ((a[0], b[0], c[0]), (a[1], b[1], c[1]), (a[2], b[2], c[2]), (a[3], b[3], c[3]),
-               (a[4], b[4], c[4]), (a[5], b[5], c[5]), (a[6], b[6], c[6]), (a[7], b[7], c[7]))
-    return state, figures, ((ma[3], ma[4]), (mb[3], mb[4]), (mc[3], mc[4]))
-
-
-def _replaced(items: tuple, i: int, value: Any) -> tuple:
-    """``items`` with item ``i`` replaced by ``value``."""
-    return (*items[:i], value, *items[i + 1:])
+    a, changed_x = axis_step(units, 0, params[0], axes[0], x, duration_s)
+    b, changed_y = axis_step(units, 1, params[1], axes[1], y, duration_s)
+    c, changed_z = axis_step(units, 2, params[2], axes[2], z, duration_s)
+    return changed_x or changed_y or changed_z, (
+        (a[0], b[0], c[0]), (a[1], b[1], c[1]), (a[2], b[2], c[2]), (a[3], b[3], c[3]), (a[4], b[4], c[4]),
+        (a[5], b[5], c[5]), (a[6], b[6], c[6]), (a[7], b[7], c[7]))
 
 
 class _Axis:
     """One axis: two units (driver + winding; their state ``rows``) and its parameter row."""
 
-    def __init__(self, config: AxisConfig, rows: Sequence[Any]) -> None:
+    def __init__(self, config: AxisConfig, rows: Sequence[Any], monitor: tuple[float, float, bool]) -> None:
         self.config = config
         self.units = {name: BridgeSwitchCoil(config.coil, config.driver, state=row) for name, row in zip(UNITS, rows,
                                                                                                         strict=True)}
         unit = self.units[UNITS[0]]  # both units: the same coil and driver
         self.coil = config.drive_type != 'none'
-        #: The mismatch monitor's full-scale current, A.
+        tolerance_frac, settle_s, auto_switch = monitor
         full_scale_a = unit.on_current_a if config.drive_type == 'constant_level' else config.coil.max_current_a
-        #: The axis's parameter row (:func:`axis_period`).
+        #: The axis's parameter row (:func:`axis_period`, :func:`axis_monitor`): the mismatch monitor's tolerance
+        #: (A: the fraction of the full-scale current), settle time (s) and automatic switch (1.0) last.
         self.params = (float(DRIVE_TYPES.index(config.drive_type)), *unit.circuit, config.driver.epsilon,
                        config.driver.band_floor_a, config.coil.moment_per_amp_am2,
-                       config.driver.current_sense_gain_v_per_a, config.coil.max_moment_am2, full_scale_a)
+                       config.driver.current_sense_gain_v_per_a, config.coil.max_moment_am2,
+                       tolerance_frac * full_scale_a, float(settle_s), 1.0 if auto_switch else 0.0)
 
 
 class DriveAssembly:
@@ -353,42 +360,42 @@ class DriveAssembly:
             raise EmDriverError(f'mismatch_tolerance_frac must be > 0, got {mismatch_tolerance_frac!r}')
         if not (math.isfinite(mismatch_settle_s) and mismatch_settle_s >= 0.0):
             raise EmDriverError(f'mismatch_settle_s must be >= 0 s, got {mismatch_settle_s!r}')
+        self._monitor_config = (mismatch_tolerance_frac, mismatch_settle_s, auto_switch_to_standby)
         compiled = kernels.compiled(drive_step) is not drive_step
-        #: The six units' state rows (axis k's A and B at 2k, 2k + 1) and the axes' parameter rows.
+        #: The six units' state rows (axis k's A and B at 2k, 2k + 1), the axes' monitor rows (:data:`HELD`; a
+        #: numpy table for the compiled kernel, lists for the plain one, as :func:`state_table`) and parameter rows.
         self._state = state_table(6, compiled)
-        self._axes = [_Axis(c, self._state[2 * k:2 * k + 2]) for k, c in enumerate(configs)]
+        monitor = [[0.0] * 6 for _ in range(3)]
+        self._monitor = np.array(monitor) if compiled else monitor
+        self._axes = [_Axis(c, self._state[2 * k:2 * k + 2], self._monitor_config) for k, c in enumerate(configs)]
         #: The axes with a coil: the ones whose commands are checked and alarms reported.
         self._coiled = tuple(k for k, ax in enumerate(self._axes) if ax.coil)
         params = [ax.params for ax in self._axes]
         self._params = np.array(params) if compiled else params
-        #: The mismatch monitor's constants (:func:`axis_monitor`).
-        self._limits = (float(mismatch_tolerance_frac), float(mismatch_settle_s), bool(auto_switch_to_standby))
-        #: Per axis (each a triple): held moment command (A·m²), mismatch time (s), alarm, active unit (0 = A).
-        self._axis_state = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (False, False, False), (0, 0, 0))
+        #: The alarms and active units as the last step left them (read back from the monitor rows when the kernel
+        #: says they changed, or set by :meth:`select_eea`).
+        self._alarms = (False, False, False)
         self._active_units = (UNITS[0], UNITS[0], UNITS[0])
         #: The step kernel bound to the one signature :meth:`step_xyz` calls it with (:func:`kernels.bound`): the
-        #: types are fixed by construction there: the state and parameter tables are this object's float64 C
-        #: arrays (never replaced), the limits the tuple above (never replaced), the axis state the tuple above,
-        #: replaced only by the kernel's own (of its types) and by :meth:`select_eea` (0.0 and an ``int``), the
-        #: commands and period made floats by :meth:`step_xyz`.
-        self._step = kernels.bound(drive_step, self._state, self._params, self._limits, self._axis_state,
-                                   (0.0, 0.0, 0.0), 1.0)
+        #: types are fixed by construction there: the unit, monitor and parameter tables are this object's float64
+        #: C arrays (never replaced), the commands and period made floats by :meth:`step_xyz`.
+        self._step = kernels.bound(drive_step, self._state, self._params, self._monitor, (0.0, 0.0, 0.0), 1.0)
         self._pending_events: list[str] = []
 
     @property
     def mismatch_tolerance_frac(self) -> float:
         """Alarm tolerance, fraction of the axis full-scale current."""
-        return self._limits[0]
+        return self._monitor_config[0]
 
     @property
     def mismatch_settle_s(self) -> float:
         """How long (s) the mismatch persists before the alarm."""
-        return self._limits[1]
+        return self._monitor_config[1]
 
     @property
     def auto_switch_to_standby(self) -> bool:
         """Whether an alarmed axis switches to its standby unit by itself."""
-        return self._limits[2]
+        return self._monitor_config[2]
 
     @property
     def active_units(self) -> tuple[str, str, str]:
@@ -400,9 +407,13 @@ class DriveAssembly:
         self._axis(axis)
         self._check_unit(unit)
         if unit != self._active_units[axis]:
-            held, times, alarms, actives = self._axis_state
-            self._axis_state = (held, _replaced(times, axis, 0.0), alarms, _replaced(actives, axis, UNITS.index(unit)))
-            self._active_units = _replaced(self._active_units, axis, unit)
+            row = self._monitor[axis]
+            row[ACTIVE] = float(UNITS.index(unit))
+            row[MISMATCH] = 0.0
+            units = list(self._active_units)
+            units[axis] = unit
+            x, y, z = units
+            self._active_units = x, y, z
             self._pending_events.append(f'axis {axis}: EEA select -> unit {unit}')
 
     def inject_failure(self, axis: int, unit: str, kind: str | None) -> None:
@@ -437,34 +448,36 @@ class DriveAssembly:
         (spec §6), one :func:`drive_step` call. A non-finite component is still rejected per axis, as
         :meth:`step` does."""
         x, y, z = command
-        before = self._axis_state
-        after, figures, readings = self._step(self._state, self._params, self._limits, before,
-                                              (float(x), float(y), float(z)), float(dt_s))
-        self._axis_state = after
+        diagnostics = () if math.isfinite(x + y + z) else self._rejected(command)
+        changed, figures = self._step(self._state, self._params, self._monitor, (float(x), float(y), float(z)),
+                                      float(dt_s))
         events, self._pending_events = self._pending_events, []
-        diagnostics = () if math.isfinite(x + y + z) else self._rejected(command, before[0])
-        if after[2] != before[2] or after[3] != before[3]:  # an alarm edge or an automatic switch
-            events.extend(self._alarm_events(before, after, readings))
-        return AssemblyResult(figures, after[2], self._active_units, tuple(events), diagnostics)
+        if changed:
+            events.extend(self._alarm_events())
+        return AssemblyResult(figures, self._alarms, self._active_units, tuple(events), diagnostics)
 
-    def _rejected(self, command: Sequence[float], held: tuple[float, float, float]) -> tuple[str, ...]:
-        """The diagnostics of the non-finite command components :func:`drive_step` rejected (on the axes with a
-        coil; an axis without one ignores its command), each with the command its axis holds."""
+    def _rejected(self, command: Sequence[float]) -> tuple[str, ...]:
+        """The diagnostics of the non-finite command components :func:`drive_step` is about to reject (on the axes
+        with a coil; an axis without one ignores its command), each with the command its axis holds."""
         return tuple(f'axis {k}: rejected non-finite moment command {command[k]!r}; '
-                     f'holding last valid command {held[k]:g}' for k in self._coiled if not math.isfinite(command[k]))
+                     f'holding last valid command {float(self._monitor[k][HELD]):g}'
+                     for k in self._coiled if not math.isfinite(command[k]))
 
-    def _alarm_events(self, before: tuple, after: tuple, readings: tuple) -> list[str]:
-        """The events of the alarm edges and automatic switches :func:`drive_step` made (axis state ``before``
-        → ``after``; ``readings`` its measured and expected currents); keeps the active units' names."""
+    def _alarm_events(self) -> list[str]:
+        """The events of the alarm edges and automatic switches :func:`drive_step` made (its monitor rows against
+        the alarms and active units the last step left); keeps the new ones."""
         events: list[str] = []
+        alarms, units = list(self._alarms), list(self._active_units)
         for k in self._coiled:
-            unit = before[3][k]
-            measured_a, expected_a = readings[k]
-            events.extend(alarm_events(k, UNITS[unit], before[2][k], after[2][k],
+            row = self._monitor[k]
+            alarm, unit = bool(row[ALARM]), UNITS[int(row[ACTIVE])]
+            measured_a, expected_a = float(row[MEASURED]), float(row[EXPECTED])
+            events.extend(alarm_events(k, units[k], alarms[k], alarm,
                                        lambda m=measured_a, e=expected_a: (f'{m:.4f} A', f'{e:.4f} A'),
-                                       after[3][k] != unit))
-        x, y, z = after[3]
-        self._active_units = (UNITS[x], UNITS[y], UNITS[z])
+                                       unit != units[k]))
+            alarms[k], units[k] = alarm, unit
+        self._alarms = alarms[0], alarms[1], alarms[2]
+        self._active_units = units[0], units[1], units[2]
         return events
 
     def _axis(self, axis: int) -> _Axis:
