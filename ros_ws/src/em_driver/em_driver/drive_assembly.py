@@ -140,13 +140,16 @@ class AssemblyResult:
     diagnostics: rejected commands (NaN/inf) this period.
 
     ``figures``: one (x, y, z) triple per name of :data:`FIGURES`, in that order, floats (ints for
-    ``switch_count``), kept as given (what :func:`drive_step` returns): :meth:`xyz` and :meth:`per_axis` read
-    them; the attributes are the figures as numpy arrays, built when read. ``alarms``: a triple of bools.
+    ``switch_count``), kept as given (what :func:`drive_step` returns; the stepper unpacks them): :meth:`xyz` and
+    :meth:`per_axis` read them; the attributes are the figures as numpy arrays, built when read. ``alarms``: a
+    triple of bools.
     """
+
+    __slots__ = ('figures', 'alarm_flags', 'active_units', 'events', 'diagnostics')
 
     def __init__(self, figures: Sequence[tuple[Any, Any, Any]], alarms: tuple[bool, bool, bool],
                  active_units: tuple[str, str, str], events: tuple[str, ...], diagnostics: tuple[str, ...]) -> None:
-        self._figures = figures
+        self.figures = figures
         #: The alarms as a tuple of bools (what the stepper compares step to step).
         self.alarm_flags = alarms
         self.active_units = active_units
@@ -156,12 +159,12 @@ class AssemblyResult:
     def xyz(self, name: str) -> tuple[float, float, float]:
         """One figure (by its name in :data:`FIGURES`) per axis (x, y, z): a float triple (ints for
         ``switch_count``)."""
-        return self._figures[_COLUMN[name]]
+        return self.figures[_COLUMN[name]]
 
     def per_axis(self, name: str) -> Sequence[Any]:
         """One figure (by its name in :data:`FIGURES`) or ``alarms``, per axis (the telemetry's path: no array
         built)."""
-        return self.alarm_flags if name == 'alarms' else self._figures[_COLUMN[name]]
+        return self.alarm_flags if name == 'alarms' else self.figures[_COLUMN[name]]
 
     @property
     def avg_dipole_am2(self) -> np.ndarray:
