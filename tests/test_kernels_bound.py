@@ -20,7 +20,7 @@ from acds_common import kernels
 from acds_common.environment import EarthFieldConfig, Orbit, OrbitConfig, Sun, SunConfig, TiltedDipoleField
 from acds_controller.transfer_assembly import TransferAssembly, field_xyz
 from dynamics.rigid_body_model import RigidBodyModel, attitude_rk4, attitude_rk4_circular_dipole
-from em_driver.drive_assembly import DriveAssembly, drive_period
+from em_driver.drive_assembly import DriveAssembly, drive_step
 from magnetometer_sim.fluxgate import FluxgateAxisParams, Magnetometer
 
 INERTIA = np.array([[2000.0, -30.0, 120.0], [-30.0, 9000.0, 8.0], [120.0, 8.0, 9500.0]])
@@ -96,7 +96,7 @@ def test_drive_assembly_bound_takes_any_number_for_the_commands_and_period(ieee_
     """:meth:`DriveAssembly.step_xyz` makes its commands and period floats before the bound kernel: integer
     commands and an integer period give the plain function's bits, not a refusal."""
     plain, fast = _plain(DriveAssembly), _bound(DriveAssembly)
-    assert plain._period is drive_period and fast._period is not drive_period
+    assert plain._step is drive_step and fast._step is not drive_step
     for command, dt in [((1000, -3, 0), 1), ((2000.5, 1, -1), 0.5), ((0, 0, 0), 2)]:
         a, b = plain.step_xyz(command, dt), fast.step_xyz(command, dt)
         assert ieee_bits(list(a.avg_dipole_am2) + list(a.coil_current_a)) == \
@@ -167,14 +167,14 @@ def test_checked_drive_kernel_refuses_another_array():
     """An int64 state table has float64's item size, so the bare entry point would read its bits as floats: the
     checked form refuses it."""
     assembly = _bound(DriveAssembly)
-    args = [assembly._state, assembly._params, (1.0, 2.0, 3.0), (0, 0, 0), 0.5]
-    assembly._period(*args)
+    args = [assembly._state, assembly._params, assembly._monitor, (1.0, 2.0, 3.0), 0.5]
+    assembly._step(*args)
     for index, value in [(0, assembly._state.astype(np.int64)), (1, np.asfortranarray(assembly._params)),
-                         (1, _readonly(assembly._params)), (3, (0.0, 0.0, 0.0))]:
+                         (1, _readonly(assembly._params)), (3, (0, 0, 0))]:
         wrong = list(args)
         wrong[index] = value
         with pytest.raises(TypeError, match=f'argument {index}:'):
-            assembly._period(*wrong)
+            assembly._step(*wrong)
 
 
 def _readonly(a):
@@ -228,11 +228,11 @@ def test_plain_process_binds_the_plain_functions_and_imports_no_numba():
         'import sys\n'
         'from acds_common import kernels\n'
         'from acds_controller.transfer_assembly import TransferAssembly, field_xyz\n'
-        'from em_driver.drive_assembly import DriveAssembly, drive_period\n'
+        'from em_driver.drive_assembly import DriveAssembly, drive_step\n'
         'from magnetometer_sim.fluxgate import Magnetometer, pair_volts\n'
         'assert kernels.bound(field_xyz, (0.0,) * 3) is field_xyz\n'
         'assert TransferAssembly()._field_floats is field_xyz\n'
-        'assert DriveAssembly()._period is drive_period\n'
+        'assert DriveAssembly()._step is drive_step\n'
         'assert Magnetometer()._pair_volts is pair_volts\n'
         'assert "numba" not in sys.modules, "numba imported"\n'
     )

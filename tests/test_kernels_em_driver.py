@@ -2,10 +2,11 @@
 
 The direct engine drives the whole electromagnet assembly (spec §6; seed 002 §4.2.5: two bridge-switch drivers
 and windings per axis, e_ft against the command) with one compiled call a step
-(:func:`em_driver.drive_assembly.drive_period`); a node process runs the same source as plain Python. Here two
+(:func:`em_driver.drive_assembly.drive_step`); a node process runs the same source as plain Python. Here two
 assemblies, one built before and one after :func:`acds_common.kernels.enable`, are driven through the same
-random commands (reversals, zero, saturation, NaN/inf components), EEA switches, failures of every kind and both
-drive types, and every reported float and the units' state is compared bit for bit; so is a lone
+random commands (reversals, zero, saturation, NaN/inf components), EEA switches, failures of every kind, all
+drive types and the monitor's settle times and automatic switch, and every reported float, the units' state and
+the axes' monitor rows are compared bit for bit; so is a lone
 :class:`~em_driver.bridge_switch.BridgeSwitchCoil`.
 """
 
@@ -18,7 +19,7 @@ import numpy as np
 import pytest
 from acds_common import kernels
 from em_driver.bridge_switch import BridgeSwitchCoil, CoilParams, DriverParams
-from em_driver.drive_assembly import AxisConfig, DriveAssembly, drive_period
+from em_driver.drive_assembly import AxisConfig, DriveAssembly, drive_step
 
 FAULTS = (None, 'open_winding', 'stuck_on_bridge', 'dead_driver')
 PER_AXIS = ('avg_dipole_am2', 'end_dipole_am2', 'coil_current_a', 'commanded_current_a', 'e_ft_v', 'duty',
@@ -27,6 +28,11 @@ PER_AXIS = ('avg_dipole_am2', 'end_dipole_am2', 'coil_current_a', 'commanded_cur
 
 def _units(assembly: DriveAssembly) -> list:
     return [(u.current_a, u.bridge_on, u.fault, u.powered) for ax in assembly._axes for u in ax.units.values()]
+
+
+def _monitor(assembly: DriveAssembly) -> list:
+    """The axes' monitor rows (held command, mismatch time, alarm, active unit, measured and expected currents)."""
+    return [[float(v) for v in row] for row in assembly._monitor]
 
 
 def _command(rng: random.Random) -> list[float]:
@@ -58,9 +64,9 @@ def test_drive_assembly_compiled_gives_the_same_bits(ieee_bits):
         plans.append((variant, _configs(rng, variant), rng))
     plain = _plain(lambda: [DriveAssembly(c, auto_switch_to_standby=v % 2 == 0,
                                           mismatch_settle_s=(0.0, 1.0, 3.0)[v % 3]) for v, c, _ in plans])
-    assert all(a._period is drive_period for a in plain)  # noqa: SLF001 - the plain path really is plain
+    assert all(a._step is drive_step for a in plain)  # noqa: SLF001 - the plain path really is plain
     kernels.enable()
-    assert kernels.compiled(drive_period) is not drive_period
+    assert kernels.compiled(drive_step) is not drive_step
     fast = [DriveAssembly(c, auto_switch_to_standby=v % 2 == 0, mismatch_settle_s=(0.0, 1.0, 3.0)[v % 3])
             for v, c, _ in plans]
     for (variant, _, rng), slow, quick in zip(plans, plain, fast, strict=True):
@@ -84,6 +90,7 @@ def test_drive_assembly_compiled_gives_the_same_bits(ieee_bits):
             assert (got.active_units, got.events, got.diagnostics) == (want.active_units, want.events,
                                                                        want.diagnostics), where
             assert ieee_bits(_units(quick)) == ieee_bits(_units(slow)), where
+            assert ieee_bits(_monitor(quick)) == ieee_bits(_monitor(slow)), where
 
 
 def test_bridge_switch_coil_compiled_gives_the_same_bits(ieee_bits):

@@ -67,24 +67,26 @@ def axis_of(axes: Sequence[Any], axis: int) -> Any:
     return axes[axis]
 
 
-def alarm_events(k: int, ax: Any, alarm: bool, readings: Callable[[], tuple[str, str]], switch: bool) -> list[str]:
-    """The mismatch alarm's edges on axis ``k`` (spec §6 failure detection; ``ax`` has ``alarm`` and ``active``),
-    and, when it trips with ``switch``, the automatic switch to the standby unit; returns the events.
-    ``readings()`` gives the (measured, expected) texts of an event: formatted only when there is one."""
-    if alarm == ax.alarm and not switch:  # no edge, no switch: the common case
-        return []
+def standby_unit(unit: str) -> str:
+    """The other unit of an axis ('A' <-> 'B')."""
+    return UNITS[1] if unit == UNITS[0] else UNITS[0]
+
+
+def alarm_events(k: int, unit: str, was: bool, alarm: bool, readings: Callable[[], tuple[str, str]],
+                 switch: bool) -> list[str]:
+    """The mismatch alarm's edges on axis ``k`` (spec §6 failure detection: ``was`` before, ``alarm`` now, on
+    the active ``unit``) and, with ``switch``, the automatic switch from ``unit`` to the standby unit; returns
+    the events (the caller keeps the alarm and the active unit). ``readings()`` gives the (measured, expected)
+    texts of an alarm that trips: formatted only then."""
     events: list[str] = []
-    if alarm and not ax.alarm:
+    if alarm and not was:
         measured, expected = readings()
-        events.append(f'axis {k}: excess coil current / mismatch alarm on unit {ax.active} '
+        events.append(f'axis {k}: excess coil current / mismatch alarm on unit {unit} '
                       f'(measured {measured}, expected {expected})')
-    elif ax.alarm and not alarm:
+    elif was and not alarm:
         events.append(f'axis {k}: mismatch alarm cleared')
-    ax.alarm = alarm
-    if alarm and switch:
-        standby = UNITS[1] if ax.active == UNITS[0] else UNITS[0]
-        events.append(f'axis {k}: auto switch from unit {ax.active} to standby unit {standby}')
-        ax.active = standby
+    if switch:
+        events.append(f'axis {k}: auto switch from unit {unit} to standby unit {standby_unit(unit)}')
     return events
 
 
@@ -137,36 +139,32 @@ class AssemblyResult:
     events: unit switch-overs and alarm transitions this period.
     diagnostics: rejected commands (NaN/inf) this period.
 
-    ``rows``: one per axis (x, y, z), its :data:`FIGURES` in that order (what :func:`drive_period` returns, kept as
-    it is: a figure's three values are gathered only when read, by :meth:`xyz` or :meth:`per_axis`); the attributes
-    are the figures as numpy arrays, built when read.
+    ``figures``: one (x, y, z) triple per name of :data:`FIGURES`, in that order, floats (ints for
+    ``switch_count``), kept as given (what :func:`drive_step` returns; the stepper unpacks them): :meth:`xyz` and
+    :meth:`per_axis` read them; the attributes are the figures as numpy arrays, built when read. ``alarms``: a
+    triple of bools.
     """
 
-    def __init__(self, rows: Sequence[Sequence[Any]], alarms: Sequence[bool], active_units: tuple[str, str, str],
-                 events: tuple[str, ...], diagnostics: tuple[str, ...]) -> None:
-        self._rows = rows
-        self._alarms = alarms
+    __slots__ = ('figures', 'alarm_flags', 'active_units', 'events', 'diagnostics')
+
+    def __init__(self, figures: Sequence[tuple[Any, Any, Any]], alarms: tuple[bool, bool, bool],
+                 active_units: tuple[str, str, str], events: tuple[str, ...], diagnostics: tuple[str, ...]) -> None:
+        self.figures = figures
+        #: The alarms as a tuple of bools (what the stepper compares step to step).
+        self.alarm_flags = alarms
         self.active_units = active_units
         self.events = events
         self.diagnostics = diagnostics
-        x, y, z = alarms
-        #: The alarms as a tuple of bools (what the stepper compares step to step).
-        self.alarm_flags = (bool(x), bool(y), bool(z))
 
     def xyz(self, name: str) -> tuple[float, float, float]:
-        """One figure (by its name in :data:`FIGURES`) as a float triple."""
-        i = _COLUMN[name]
-        x, y, z = self._rows
-        return float(x[i]), float(y[i]), float(z[i])
+        """One figure (by its name in :data:`FIGURES`) per axis (x, y, z): a float triple (ints for
+        ``switch_count``)."""
+        return self.figures[_COLUMN[name]]
 
     def per_axis(self, name: str) -> Sequence[Any]:
-        """One figure (by its name in :data:`FIGURES`) or ``alarms``, per axis as given (the telemetry's path: no
-        array built)."""
-        if name == 'alarms':
-            return self._alarms
-        i = _COLUMN[name]
-        x, y, z = self._rows
-        return x[i], y[i], z[i]
+        """One figure (by its name in :data:`FIGURES`) or ``alarms``, per axis (the telemetry's path: no array
+        built)."""
+        return self.alarm_flags if name == 'alarms' else self.figures[_COLUMN[name]]
 
     @property
     def avg_dipole_am2(self) -> np.ndarray:
@@ -211,7 +209,7 @@ class AssemblyResult:
     @property
     def alarms(self) -> np.ndarray:
         """Excess-coil-current / mismatch alarm."""
-        return np.asarray(self._alarms)
+        return np.asarray(self.alarm_flags)
 
 
 #: An axis's drive type as the kernels read it (its index in DRIVE_TYPES).
@@ -240,9 +238,10 @@ def axis_period(state, k: int, p, command: float, active: int, duration_s: float
     """Axis ``k`` over one period (spec §6; seed 002 §4.2.5: the TA powers the ``active`` unit, 0 = A, 1 = B):
     the held moment command (A·m²) saturated at the coil's maximum and turned into a current command
     (bridge switch), or its sign switching the supply (constant level). Parameter row ``p``: drive type, τ, E,
-    I_on, I_off, ε, band floor, moment per amp, sense gain, max moment. Returns the axis's average and end
-    dipole (A·m², both windings), and the commanded current (A) and the active unit's end current (A), e_ft
-    (V), duty, both units' power (W) and the active unit's switch count, in :class:`AssemblyResult` order."""
+    I_on, I_off, ε, band floor, moment per amp, sense gain, max moment, then :func:`axis_monitor`'s tolerance
+    (A), settle time (s) and automatic switch (1.0 on). Returns the axis's average and end dipole (A·m², both
+    windings), and the commanded current (A) and the active unit's end current (A), e_ft (V), duty, both units'
+    power (W) and the active unit's switch count, in :data:`FIGURES` order."""
     drive_type = p[0]
     if drive_type == _NO_COIL:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
@@ -260,40 +259,87 @@ def axis_period(state, k: int, p, command: float, active: int, duration_s: float
     return a[0] + b[0], a[1] + b[1], on[2], command_a, on[3], on[4], a[5] + b[5], on[6]
 
 
-def drive_period(state, params, commands: tuple[float, float, float], actives: tuple[int, int, int],
-                 duration_s: float) -> tuple:
-    """The three axes over one period (:func:`axis_period`): ``state`` the six units' rows (axis k's units A and
-    B at 2k, 2k + 1), ``params`` the axes' parameter rows, the held moment commands (A·m²) and active units.
+#: An axis's row of the monitor table (:func:`drive_step`; a drive assembly keeps its three axes' rows in one
+#: table, updated in place like its units' :func:`~em_driver.bridge_switch.state_table`): the held moment command
+#: (A·m²), the mismatch time (s), the alarm (1.0 on), the active unit (0.0 = A, 1.0 = B), and the last period's
+#: measured and expected currents (A).
+HELD, MISMATCH, ALARM, ACTIVE, MEASURED, EXPECTED = range(6)
+
+
+@kernels.helper
+def axis_monitor(axis, figures, p, duration_s: float) -> bool:
+    """The mismatch / excess-coil-current alarm of one axis after its period (spec §6 failure detection; seed
+    002 §4.2.5: e_ft compared with the command), its monitor row ``axis`` (see :data:`HELD`) updated in place: the
+    active unit's measured current (its e_ft over the sense gain) against the current a healthy driver holds (the
+    commanded current limited to ±I_on), apart by more than the tolerance (A) for longer than the settle time
+    raises the alarm, and with the automatic switch makes the standby unit active (its mismatch time then 0).
+    ``figures``: the axis's :func:`axis_period` figures; ``p`` its parameter row. Returns whether the alarm
+    changed or switched the unit."""
+    if p[0] == _NO_COIL:
+        return False
+    measured_a = figures[4] / p[8]
+    command_a = figures[3]
+    on_a = p[3]
+    expected_a = -on_a if command_a < -on_a else on_a if command_a > on_a else command_a  # min(max(…))
+    axis[MEASURED] = measured_a
+    axis[EXPECTED] = expected_a
+    mismatch_s = axis[MISMATCH] + duration_s if abs(measured_a - expected_a) > p[10] else 0.0
+    alarm = mismatch_s > p[11]
+    was = axis[ALARM] != 0.0
+    axis[ALARM] = 1.0 if alarm else 0.0
+    if alarm and p[12] != 0.0:
+        axis[ACTIVE] = 1.0 - axis[ACTIVE]
+        axis[MISMATCH] = 0.0
+        return True
+    axis[MISMATCH] = mismatch_s
+    return alarm != was
+
+
+@kernels.helper
+def axis_step(units, k: int, p, axis, command: float, duration_s: float
+              ) -> tuple[tuple[float, float, float, float, float, float, float, int], bool]:
+    """Axis ``k`` over one period: its moment command (A·m²) held unless non-finite (then the last valid one
+    stays), :func:`axis_period` on the active unit, :func:`axis_monitor`; returns both's results."""
+    if math.isfinite(command):
+        axis[HELD] = command
+    figures = axis_period(units, k, p, axis[HELD], int(axis[ACTIVE]), duration_s)
+    return figures, axis_monitor(axis, figures, p, duration_s)
+
+
+def drive_step(units, params, axes, command: tuple[float, float, float], duration_s: float) -> tuple:
+    """One control period of the assembly (spec §6): each axis's :func:`axis_step`. ``units`` the six units'
+    rows (axis k's units A and B at 2k, 2k + 1), ``axes`` the three axes' monitor rows (both tables updated in
+    place), ``params`` the axes' parameter rows. Returns whether an alarm changed or switched a unit, and the
+    figures, one (x, y, z) triple per name of :data:`FIGURES`.
 
     A kernel (:mod:`acds_common.kernels`): one call a step drives the assembly.
     """
-    return (axis_period(state, 0, params[0], commands[0], actives[0], duration_s),
-            axis_period(state, 1, params[1], commands[1], actives[1], duration_s),
-            axis_period(state, 2, params[2], commands[2], actives[2], duration_s))
+    x, y, z = command
+    a, changed_x = axis_step(units, 0, params[0], axes[0], x, duration_s)
+    b, changed_y = axis_step(units, 1, params[1], axes[1], y, duration_s)
+    c, changed_z = axis_step(units, 2, params[2], axes[2], z, duration_s)
+    return changed_x or changed_y or changed_z, (
+        (a[0], b[0], c[0]), (a[1], b[1], c[1]), (a[2], b[2], c[2]), (a[3], b[3], c[3]), (a[4], b[4], c[4]),
+        (a[5], b[5], c[5]), (a[6], b[6], c[6]), (a[7], b[7], c[7]))
 
 
 class _Axis:
-    """One axis: two units (driver + winding; their state ``rows``) and the mismatch monitor."""
+    """One axis: two units (driver + winding; their state ``rows``) and its parameter row."""
 
-    def __init__(self, config: AxisConfig, rows: Sequence[Any]) -> None:
+    def __init__(self, config: AxisConfig, rows: Sequence[Any], monitor: tuple[float, float, bool]) -> None:
         self.config = config
         self.units = {name: BridgeSwitchCoil(config.coil, config.driver, state=row) for name, row in zip(UNITS, rows,
                                                                                                         strict=True)}
-        self.active = UNITS[0]
-        self.command = 0.0
-        self.mismatch_time_s = 0.0
-        self.alarm = False
         unit = self.units[UNITS[0]]  # both units: the same coil and driver
-        on_current_a = unit.on_current_a
-        #: Mismatch monitor: the current the bridge can hold and the axis full-scale current, A.
-        self.on_current_a = on_current_a
-        self.full_scale_a = on_current_a if config.drive_type == 'constant_level' else config.coil.max_current_a
-        self.sense_gain_v_per_a = config.driver.current_sense_gain_v_per_a
         self.coil = config.drive_type != 'none'
-        #: The axis's parameter row (:func:`axis_period`).
+        tolerance_frac, settle_s, auto_switch = monitor
+        full_scale_a = unit.on_current_a if config.drive_type == 'constant_level' else config.coil.max_current_a
+        #: The axis's parameter row (:func:`axis_period`, :func:`axis_monitor`): the mismatch monitor's tolerance
+        #: (A: the fraction of the full-scale current), settle time (s) and automatic switch (1.0) last.
         self.params = (float(DRIVE_TYPES.index(config.drive_type)), *unit.circuit, config.driver.epsilon,
-                       config.driver.band_floor_a, config.coil.moment_per_amp_am2, self.sense_gain_v_per_a,
-                       config.coil.max_moment_am2)
+                       config.driver.band_floor_a, config.coil.moment_per_amp_am2,
+                       config.driver.current_sense_gain_v_per_a, config.coil.max_moment_am2,
+                       tolerance_frac * full_scale_a, float(settle_s), 1.0 if auto_switch else 0.0)
 
 
 class DriveAssembly:
@@ -305,6 +351,7 @@ class DriveAssembly:
     mismatch_tolerance_frac: alarm tolerance as a fraction of the axis full-scale
         current (max_current_a for bridge-switch axes, I_on for constant-level).
     mismatch_settle_s: how long, s, the mismatch must persist before the alarm.
+    The three are fixed when the assembly is built (read-only).
     """
 
     def __init__(self, axes: Sequence[AxisConfig] | None = None, auto_switch_to_standby: bool = False,
@@ -316,37 +363,60 @@ class DriveAssembly:
             raise EmDriverError(f'mismatch_tolerance_frac must be > 0, got {mismatch_tolerance_frac!r}')
         if not (math.isfinite(mismatch_settle_s) and mismatch_settle_s >= 0.0):
             raise EmDriverError(f'mismatch_settle_s must be >= 0 s, got {mismatch_settle_s!r}')
-        compiled = kernels.compiled(drive_period) is not drive_period
-        #: The six units' state rows (axis k's A and B at 2k, 2k + 1) and the axes' parameter rows.
+        self._monitor_config = (mismatch_tolerance_frac, mismatch_settle_s, auto_switch_to_standby)
+        compiled = kernels.compiled(drive_step) is not drive_step
+        #: The six units' state rows (axis k's A and B at 2k, 2k + 1), the axes' monitor rows (:data:`HELD`; a
+        #: numpy table for the compiled kernel, lists for the plain one, as :func:`state_table`) and parameter rows.
         self._state = state_table(6, compiled)
-        self._axes = [_Axis(c, self._state[2 * k:2 * k + 2]) for k, c in enumerate(configs)]
-        #: (index, axis) of the axes with a coil: the ones driven and monitored.
-        self._coiled = tuple((k, ax) for k, ax in enumerate(self._axes) if ax.coil)
+        monitor = [[0.0] * 6 for _ in range(3)]
+        self._monitor = np.array(monitor) if compiled else monitor
+        self._axes = [_Axis(c, self._state[2 * k:2 * k + 2], self._monitor_config) for k, c in enumerate(configs)]
+        #: The axes with a coil: the ones whose commands are checked and alarms reported.
+        self._coiled = tuple(k for k, ax in enumerate(self._axes) if ax.coil)
         params = [ax.params for ax in self._axes]
         self._params = np.array(params) if compiled else params
-        #: The drive kernel bound to the one signature :meth:`step_xyz` calls it with (:func:`kernels.bound`): the
-        #: types are fixed by construction there: the state and parameter tables are this object's float64 C
-        #: arrays (never replaced), the held commands floats (0.0 here, then :meth:`step_xyz` stores only
-        #: ``float`` values), the active units ``int``, the period a ``float`` (:meth:`step_xyz` converts it).
-        self._period = kernels.bound(drive_period, self._state, self._params, (0.0, 0.0, 0.0), (0, 0, 0), 1.0)
-        self.auto_switch_to_standby = auto_switch_to_standby
-        self.mismatch_tolerance_frac = mismatch_tolerance_frac
-        self.mismatch_settle_s = mismatch_settle_s
+        #: The alarms and active units as the last step left them (read back from the monitor rows when the kernel
+        #: says they changed, or set by :meth:`select_eea`).
+        self._alarms = (False, False, False)
+        self._active_units = (UNITS[0], UNITS[0], UNITS[0])
+        #: The step kernel bound to the one signature :meth:`step_xyz` calls it with (:func:`kernels.bound`): the
+        #: types are fixed by construction there: the unit, monitor and parameter tables are this object's float64
+        #: C arrays (never replaced), the commands and period made floats by :meth:`step_xyz`.
+        self._step = kernels.bound(drive_step, self._state, self._params, self._monitor, (0.0, 0.0, 0.0), 1.0)
         self._pending_events: list[str] = []
+
+    @property
+    def mismatch_tolerance_frac(self) -> float:
+        """Alarm tolerance, fraction of the axis full-scale current."""
+        return self._monitor_config[0]
+
+    @property
+    def mismatch_settle_s(self) -> float:
+        """How long (s) the mismatch persists before the alarm."""
+        return self._monitor_config[1]
+
+    @property
+    def auto_switch_to_standby(self) -> bool:
+        """Whether an alarmed axis switches to its standby unit by itself."""
+        return self._monitor_config[2]
 
     @property
     def active_units(self) -> tuple[str, str, str]:
         """Active unit per axis."""
-        x, y, z = self._axes
-        return x.active, y.active, z.active
+        return self._active_units
 
     def select_eea(self, axis: int, unit: str) -> None:
         """EEA SELECT (Table 4-11): make ``unit`` ('A'/'B') the active driver + winding of ``axis`` (0…2)."""
-        ax = self._axis(axis)
+        self._axis(axis)
         self._check_unit(unit)
-        if unit != ax.active:
-            ax.active = unit
-            ax.mismatch_time_s = 0.0
+        if unit != self._active_units[axis]:
+            row = self._monitor[axis]
+            row[ACTIVE] = float(UNITS.index(unit))
+            row[MISMATCH] = 0.0
+            units = list(self._active_units)
+            units[axis] = unit
+            x, y, z = units
+            self._active_units = x, y, z
             self._pending_events.append(f'axis {axis}: EEA select -> unit {unit}')
 
     def inject_failure(self, axis: int, unit: str, kind: str | None) -> None:
@@ -378,48 +448,40 @@ class DriveAssembly:
     def step_xyz(self, command: Sequence[float], dt_s: float) -> AssemblyResult:
         """:meth:`step` on a moment command that is already a float triple (a Vector3Stamped value) and a
         ``dt_s`` already checked (the scenario bounds the control period): the stepper's per-step path
-        (spec §6). A non-finite component is still rejected per axis, as :meth:`step` does."""
-        diagnostics: list[str] = []
+        (spec §6), one :func:`drive_step` call. A non-finite component is still rejected per axis, as
+        :meth:`step` does."""
+        x, y, z = command
+        diagnostics = () if math.isfinite(x + y + z) else self._rejected(command)
+        changed, figures = self._step(self._state, self._params, self._monitor, (float(x), float(y), float(z)),
+                                      float(dt_s))
         events, self._pending_events = self._pending_events, []
-        finite = math.isfinite(command[0] + command[1] + command[2])  # a finite sum: three finite components
-        for k, ax in self._coiled:  # an axis without a coil ignores its command
-            c = command[k]
-            if finite or math.isfinite(c):
-                ax.command = float(c)  # a float for the bound kernel, whatever number the caller gave
-            else:
-                diagnostics.append(f'axis {k}: rejected non-finite moment command {c!r}; '
-                                   f'holding last valid command {ax.command:g}')
-        x, y, z = self._axes
-        unit_a = UNITS[0]
-        rows = self._period(self._state, self._params, (x.command, y.command, z.command),
-                            (int(x.active != unit_a), int(y.active != unit_a), int(z.active != unit_a)), float(dt_s))
-        self._monitor(rows, dt_s, events)
-        return AssemblyResult(rows, (x.alarm, y.alarm, z.alarm), (x.active, y.active, z.active), tuple(events),
-                              tuple(diagnostics))
+        if changed:
+            events.extend(self._alarm_events())
+        return AssemblyResult(figures, self._alarms, self._active_units, tuple(events), diagnostics)
 
-    def _monitor(self, rows: Sequence[Sequence[float]], dt_s: float, events: list[str]) -> None:
-        """Mismatch alarm of each axis with a coil (its kernel row: e_ft against the expected current, the
-        commanded current limited to what the supply reaches); optional auto switch to standby. Appends the
-        events to ``events``."""
-        tolerance_frac, settle_s, auto_switch = (self.mismatch_tolerance_frac, self.mismatch_settle_s,
-                                                 self.auto_switch_to_standby)
-        for k, ax in self._coiled:
-            row = rows[k]
-            measured_a = row[4] / ax.sense_gain_v_per_a
-            command_a = row[3]
-            on_a = ax.on_current_a
-            expected_a = -on_a if command_a < -on_a else on_a if command_a > on_a else command_a  # min(max(…))
-            if abs(measured_a - expected_a) > tolerance_frac * ax.full_scale_a:
-                ax.mismatch_time_s += dt_s
-            else:
-                ax.mismatch_time_s = 0.0
-            alarm = ax.mismatch_time_s > settle_s
-            switch = alarm and auto_switch
-            if alarm != ax.alarm or switch:  # an edge or a switch (alarm_events' own test, without its call)
-                events.extend(alarm_events(k, ax, alarm, lambda m=measured_a, e=expected_a: (f'{m:.4f} A', f'{e:.4f} A'),
-                                           switch))
-                if switch:
-                    ax.mismatch_time_s = 0.0
+    def _rejected(self, command: Sequence[float]) -> tuple[str, ...]:
+        """The diagnostics of the non-finite command components :func:`drive_step` is about to reject (on the axes
+        with a coil; an axis without one ignores its command), each with the command its axis holds."""
+        return tuple(f'axis {k}: rejected non-finite moment command {command[k]!r}; '
+                     f'holding last valid command {float(self._monitor[k][HELD]):g}'
+                     for k in self._coiled if not math.isfinite(command[k]))
+
+    def _alarm_events(self) -> list[str]:
+        """The events of the alarm edges and automatic switches :func:`drive_step` made (its monitor rows against
+        the alarms and active units the last step left); keeps the new ones."""
+        events: list[str] = []
+        alarms, units = list(self._alarms), list(self._active_units)
+        for k in self._coiled:
+            row = self._monitor[k]
+            alarm, unit = bool(row[ALARM]), UNITS[int(row[ACTIVE])]
+            measured_a, expected_a = float(row[MEASURED]), float(row[EXPECTED])
+            events.extend(alarm_events(k, units[k], alarms[k], alarm,
+                                       lambda m=measured_a, e=expected_a: (f'{m:.4f} A', f'{e:.4f} A'),
+                                       unit != units[k]))
+            alarms[k], units[k] = alarm, unit
+        self._alarms = alarms[0], alarms[1], alarms[2]
+        self._active_units = units[0], units[1], units[2]
+        return events
 
     def _axis(self, axis: int) -> _Axis:
         return axis_of(self._axes, axis)

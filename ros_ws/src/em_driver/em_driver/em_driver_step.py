@@ -45,6 +45,8 @@ class EmDriverStep(Stepper):
         self.source = self.cfg['command_source']
         self._electrical = self.cfg['driver_kind'] == 'torque_rod'
         self._failure_pending = self.cfg['failure'] != 'none'
+        self._failure_time_s = self.cfg['failure_time']
+        self._telemetry_every = self.cfg['telemetry_every']
         self._bench_command = vector3(self.cfg['bench_command'])
         self._commanded = self.present(self.source)
         self._alarms = (False, False, False)
@@ -52,44 +54,49 @@ class EmDriverStep(Stepper):
 
     def drive(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Apply commands and failures due at step k, drive the coils for one control period."""
+        commands = self._mode_status(inp['mode'])[1]
         events: list[str] = []
         rejected: list[str] = []
-        for text in self._mode_status(inp['mode'])[1]:
-            try:
-                events.append(apply_command(parse_command(text), self.assembly))
-            except EmDriverError as exc:
-                rejected.append(f'rejected command {text!r}: {exc}')
-        if self._failure_pending and t_s >= self.cfg['failure_time']:
-            self._failure_pending = False
-            axis, unit, kind = self.cfg['failure_axis'], self.cfg['failure_unit'], self.cfg['failure']
-            self.assembly.inject_failure(axis, unit, kind)
-            events.append(f'scenario failure at t={t_s:g} s: axis {"xyz"[axis]} unit {unit} {kind}')
+        if commands or (self._failure_pending and t_s >= self._failure_time_s):
+            self._apply(commands, t_s, events, rejected)
         if not self._commanded:
             command = self._bench_command
         else:
             command = (0.0, 0.0, 0.0) if inp['command'] is None else inp['command']
         # A float triple (Vector3Stamped value) and the scenario's checked control period: the unchecked path.
         result = self.assembly.step_xyz(command, self.control_period_s)
-        events.extend(result.events)
-        rejected.extend(result.diagnostics)
-        out: dict[str, Any] = {
-            'dipole_avg': result.xyz('avg_dipole_am2'),
-            'dipole_end': result.xyz('end_dipole_am2'),
-            'coil_current': result.xyz('coil_current_a'),
-            'e_ft': result.xyz('e_ft_v'),
-        }
+        avg_dipole, end_dipole, coil_current, _, e_ft, duty, power, _ = result.figures
+        out: dict[str, Any] = {'dipole_avg': avg_dipole, 'dipole_end': end_dipole, 'coil_current': coil_current,
+                               'e_ft': e_ft}
         if self._electrical:
-            out['power'] = result.xyz('power_w')
-            out['duty'] = result.xyz('duty')
-        alarm_changed = result.alarm_flags != self._alarms
-        self._alarms = result.alarm_flags
-        if events or rejected or alarm_changed or (self.telemetry_wanted and k % self.cfg['telemetry_every'] == 0):
+            out['power'] = power
+            out['duty'] = duty
+        alarms = result.alarm_flags
+        if (events or rejected or result.events or result.diagnostics or alarms != self._alarms
+                or (self.telemetry_wanted and k % self._telemetry_every == 0)):
+            events.extend(result.events)
+            rejected.extend(result.diagnostics)
             out['diagnostics'] = self.telemetry(result, command, events, rejected)
-        for line in rejected:
-            self.log('warn', f't={t_s:g} s: {line}')
-        for line in events:
-            self.log('info', f't={t_s:g} s: {line}')
+            for line in rejected:
+                self.log('warn', f't={t_s:g} s: {line}')
+            for line in events:
+                self.log('info', f't={t_s:g} s: {line}')
+        self._alarms = alarms
         return out
+
+    def _apply(self, commands: list[str], t_s: float, events: list[str], rejected: list[str]) -> None:
+        """The ``command/em_driver`` entries of the step's mode report, then the scenario failure once its time
+        has come; appends what happened to ``events`` and the refused commands to ``rejected``."""
+        for text in commands:
+            try:
+                events.append(apply_command(parse_command(text), self.assembly))
+            except EmDriverError as exc:
+                rejected.append(f'rejected command {text!r}: {exc}')
+        if self._failure_pending and t_s >= self._failure_time_s:
+            self._failure_pending = False
+            axis, unit, kind = self.cfg['failure_axis'], self.cfg['failure_unit'], self.cfg['failure']
+            self.assembly.inject_failure(axis, unit, kind)
+            events.append(f'scenario failure at t={t_s:g} s: axis {"xyz"[axis]} unit {unit} {kind}')
 
     def telemetry(self, r: AssemblyResult, command: tuple[float, ...], events: list[str], rejected: list[str]) -> Any:
         """Table 4-11 driver telemetry: coil current, current command, alarms, active units; plus duty/power."""

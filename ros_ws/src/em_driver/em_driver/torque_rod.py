@@ -73,7 +73,7 @@ from acds_common.units import MU0
 
 from em_driver import rl_circuit
 from em_driver.bridge_switch import CoilFault, EmDriverError
-from em_driver.drive_assembly import UNITS, AssemblyResult, alarm_events, axis_of
+from em_driver.drive_assembly import UNITS, AssemblyResult, alarm_events, axis_of, standby_unit
 
 __all__ = [
     'CoreMaterial',
@@ -608,10 +608,11 @@ class TorqueRodAssembly:
             switches[k] = runs[ax.active].switches
             healthy = pwm_response(start_a, duty, dt_s, active.full_current_a, active.tau_s, self.driver)
             events.extend(self._monitor(k, ax, active.current_a, healthy.end_current_a))
-        rows = tuple(zip(*(out[k] for k in ('avg', 'end', 'cur', 'cmd', 'eft', 'duty', 'power')), switches,
-                         strict=True))  # per axis, its figures in drive_assembly.FIGURES order
-        return AssemblyResult(rows, alarms=np.array([a.alarm for a in self._axes]), active_units=self.active_units,
-                              events=tuple(events), diagnostics=tuple(diagnostics))
+        figures = (*(tuple(map(float, out[k])) for k in ('avg', 'end', 'cur', 'cmd', 'eft', 'duty', 'power')),
+                   tuple(map(int, switches)))  # in drive_assembly.FIGURES order
+        x, y, z = (a.alarm for a in self._axes)
+        return AssemblyResult(figures, alarms=(x, y, z), active_units=self.active_units, events=tuple(events),
+                              diagnostics=tuple(diagnostics))
 
     #: The stepper's per-step entry (:meth:`DriveAssembly.step_xyz`'s counterpart): the rods' own checked step.
     step_xyz = step
@@ -635,9 +636,14 @@ class TorqueRodAssembly:
 
     def _monitor(self, k: int, ax: _Axis, measured_a: float, expected_a: float) -> list[str]:
         """Mismatch alarm on the active winding; optional switch to the standby winding."""
-        alarm = abs(measured_a - expected_a) > self.mismatch_tolerance_frac * ax.full_current_a
-        return alarm_events(k, ax, alarm, lambda: (f'{measured_a * 1e3:.3f} mA', f'{expected_a * 1e3:.3f} mA'),
-                            alarm and self.auto_switch_to_standby and len(ax.units) == 2)
+        alarm = bool(abs(measured_a - expected_a) > self.mismatch_tolerance_frac * ax.full_current_a)
+        switch = alarm and self.auto_switch_to_standby and len(ax.units) == 2
+        events = alarm_events(k, ax.active, ax.alarm, alarm,
+                              lambda: (f'{measured_a * 1e3:.3f} mA', f'{expected_a * 1e3:.3f} mA'), switch)
+        ax.alarm = alarm
+        if switch:
+            ax.active = standby_unit(ax.active)
+        return events
 
     def _axis(self, axis: int) -> _Axis:
         return axis_of(self._axes, axis)
