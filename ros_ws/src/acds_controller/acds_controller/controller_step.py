@@ -104,7 +104,8 @@ class DpaStep(Stepper):
         mode, commands = self._mode_status(inp['mode'])
         if commands:
             self.apply_commands(k, commands, warnings)
-        mode = resolve_mode(mode, 'mode_1a', HEAO_MODES, warnings, 'unknown mode {!r} from the mode manager')
+        if mode not in _MODE_INDEX:  # before the mode manager speaks, or a mode the DPA does not know
+            mode = resolve_mode(mode, 'mode_1a', HEAO_MODES, warnings, 'unknown mode {!r} from the mode manager')
         try:
             result = self._dpa_step(k, mode, inp)
         except ControllerError as exc:
@@ -112,7 +113,7 @@ class DpaStep(Stepper):
             result = {'moment': ZERO, 'volts': ZERO}
         if not self.drives_wheels:
             del result['volts']
-        return warned(self, k, result, warnings)
+        return warned(self, k, result, warnings) if warnings else result
 
     def apply_commands(self, k: int, commands: list[str], warnings: list[tuple[str, dict[str, str]]]) -> None:
         """Apply the forwarded law/gain commands to the DPA; a refusal becomes a warning."""
@@ -123,27 +124,30 @@ class DpaStep(Stepper):
                 warnings.append((f'command refused: {text!r}: {exc}', {'command': text, 'reason': str(exc)}))
 
     def _dpa_step(self, k: int, mode: str, inp: dict[str, Any]) -> dict[str, Any]:
-        volts = xyz(inp['mag_volts'], MID_SCALE_V)
-        bias = xyz(inp['mag_bias'], MID_SCALE_V)
-        omega = ZERO if inp['gyro'] is None else inp['gyro'][0]
-        sun = xyz(inp['sun'])
-        dt = self.control_period_s
-        wheel_h, wheel_hdot = xyz(inp['wheel_h']), xyz(inp['wheel_hdot'])
-        q = None if inp['odometry'] is None else inp['odometry'].orientation
-        coil = xyz(inp['coil_current'])
+        # An absent input is its default (acds_common.messages.xyz's, written out: this runs every step).
+        volts, bias, gyro, sun = inp['mag_volts'], inp['mag_bias'], inp['gyro'], inp['sun']
+        wheel_h, wheel_hdot, odometry, coil = inp['wheel_h'], inp['wheel_hdot'], inp['odometry'], inp['coil_current']
+        volts = MID_SCALE_V if volts is None else volts
+        bias = MID_SCALE_V if bias is None else bias
+        omega = ZERO if gyro is None else gyro[0]
+        sun = ZERO if sun is None else sun
+        wheel_h = ZERO if wheel_h is None else wheel_h
+        wheel_hdot = ZERO if wheel_hdot is None else wheel_hdot
+        coil = ZERO if coil is None else coil
+        q = None if odometry is None else odometry.orientation
         dpa = self.dpa
         status, state, figures = self._control(self.ta.params, dpa.params, dpa.state, _MODE_INDEX[mode], volts, bias,
                                                omega, sun, wheel_h, wheel_hdot, NO_Q if q is None else q,
-                                               q is not None, coil, dt)
+                                               q is not None, coil, self.control_period_s)
         if status != DONE:
             if status == NOT_FINITE:
                 check_finite((('magnetometer volts', volts), ('bias volts', bias), ('gyro', omega), ('sun sensor', sun),
-                              ('wheel momentum', store_momentum(inp, dt)), ('coil current', coil)))
+                              ('wheel momentum', store_momentum(inp, self.control_period_s)), ('coil current', coil)))
             raise dpa.refusal(status, mode, omega, q)
         dpa.state = state
-        out = dpa.output(mode, figures)
-        result: dict[str, Any] = {'moment': out.moment_xyz, 'volts': out.volts_xyz}
+        result: dict[str, Any] = {'moment': figures[0], 'volts': figures[1]}
         if self.telemetry_wanted and k % self.telemetry_period == 0:
+            out = dpa.output(mode, figures)
             alarms = [abs(i) > self.excess_current_a for i in coil]
             telemetry = {**out.telemetry, **self.ta.telemetry(figures[2], out.moment_xyz, bias, coil, alarms)}
             result['diagnostics'] = diagnostic(self.instance, telemetry)
