@@ -16,6 +16,11 @@ mode manager → ``mode_1a`` (magnetics-only rate reduction); no wheels → zero
 A non-finite input is rejected with a diagnostic and the step commands zero moment and zero
 wheel volts.
 
+The stage's arithmetic and per-step decisions (the wheel momentum at t_k, the input checks, the TA's A/D
+conversion and the DPA's period in the mode) are one kernel call a step, :func:`dpa_control`
+(:mod:`acds_common.kernels`: compiled in the direct engine); the stepper keeps the mode and commands, the
+messages of a refused step and the telemetry.
+
 The node's other variants, chosen by the scenario (``acds_controller.nodes``): the AAP Workshop's
 computer (``wheels.kind`` cmg, :mod:`acds_controller.workshop_step`), which uses :func:`warned` and
 :func:`store_momentum`, and this DPA with the cold-gas acquisition law (node ``cold_gas`` in the graph,

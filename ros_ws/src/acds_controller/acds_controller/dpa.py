@@ -19,6 +19,10 @@ Unloading law ``b_cross_h`` is seed 003's momentum-dumping form M = −(k_h/|B|)
 gain k_h (s⁻¹) in every unloading mode. With no sensed field (zero vector: no magnetometer) the
 two seed-003 laws command nothing, as B×H and B-dot do.
 
+One period is one kernel, :func:`dpa_step` (:mod:`acds_common.kernels`), on the DPA's parameters
+(:attr:`Dpa.params`, built when the configuration is set) and state (previous field and command): what
+:meth:`Dpa.step` runs and what the stepper's compiled step calls.
+
 Mode 1B unloading gain: the study does not quote a separate value; its acquisition runs carry
 one gain label (K = .05) through the whole run, so 0.05 (s·G²)⁻¹ is the default
 (``unloading_gain_mode_1b_study``).
