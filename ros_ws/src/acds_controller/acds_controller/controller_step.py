@@ -99,9 +99,10 @@ class DpaStep(Stepper):
         #: floats; a gain or law command rebuilds them alike), the DPA's state (a bool and float triples: its
         #: initial state, then this kernel's), the mode's index an ``int``, the inputs' Vector3Stamped values and
         #: the odometry's orientation (plain floats from :func:`acds_common.messages.vector3` or a kernel, the
-        #: direct engine running only the built-in steppers) or the float defaults here, Δt the scenario's float.
+        #: direct engine running only the built-in steppers) or the float defaults here, Δt ``_dt``.
+        self._dt = float(self.control_period_s)
         self._control = kernels.bound(dpa_control, self.ta.params, self.dpa.params, self.dpa.state, 0, ZERO, ZERO,
-                                      ZERO, ZERO, ZERO, ZERO, NO_Q, False, ZERO, float(self.control_period_s))
+                                      ZERO, ZERO, ZERO, ZERO, NO_Q, False, ZERO, self._dt)
 
     def control(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Stage ``control``: one DPA control period (commands applied first, inputs checked)."""
@@ -143,7 +144,7 @@ class DpaStep(Stepper):
         dpa = self.dpa
         status, state, figures = self._control(self.ta.params, dpa.params, dpa.state, _MODE_INDEX[mode], volts, bias,
                                                omega, sun, wheel_h, wheel_hdot, NO_Q if q is None else q,
-                                               q is not None, coil, self.control_period_s)
+                                               q is not None, coil, self._dt)
         if status != DONE:
             if status == NOT_FINITE:
                 check_finite((('magnetometer volts', volts), ('bias volts', bias), ('gyro', omega), ('sun sensor', sun),
