@@ -18,6 +18,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from acds_common import kernels
 from acds_common.dipole_field import cross3
 from acds_common.vec3 import Mat3, Vec3
 
@@ -41,6 +42,7 @@ def quat_to_dcm(q: Sequence[float]) -> np.ndarray:
     return np.array(dcm(tuple(float(c) for c in q)))
 
 
+@kernels.helper
 def quat_mul(q1: Sequence[float], q2: Sequence[float]) -> Quat:
     """Hamilton product q1 ⊗ q2 of (x, y, z, w) quaternions, so that R(q1 ⊗ q2) = R(q1) R(q2)."""
     x1, y1, z1, w1 = q1
@@ -51,11 +53,13 @@ def quat_mul(q1: Sequence[float], q2: Sequence[float]) -> Quat:
             w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2)
 
 
+@kernels.helper
 def conj(q: Sequence[float]) -> Quat:
     """q* (the inverse of a unit quaternion)."""
     return (-q[0], -q[1], -q[2], q[3])
 
 
+@kernels.helper
 def to_body(q: Sequence[float], v: Sequence[float]) -> Vec3:
     """R(q)ᵀ v: a reference-frame vector in body axes, as q* ⊗ (v, 0) ⊗ q (q a unit quaternion)."""
     r = quat_mul(quat_mul(conj(q), (v[0], v[1], v[2], 0.0)), q)

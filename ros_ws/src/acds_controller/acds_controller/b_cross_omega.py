@@ -43,7 +43,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from acds_common import kernels
 from acds_common.units import G_MM2_KG_M2
+from acds_common.vec3 import Vec3, cross
 
 from acds_controller.magnetic_laws import ControllerError, as_vector3, check_gain
 
@@ -63,6 +65,8 @@ __all__ = [
 #: Samples per orbit for the orbit average (uniform in argument of latitude; the integrand is smooth
 #: and periodic, so the trapezoid rule converges geometrically: 360 points give ~1e-15).
 _ORBIT_SAMPLES = 360
+#: Why the two laws refuse a zero field.
+B_ZERO_MESSAGE = 'b_t is zero: the field direction B̂ is undefined'
 
 
 def detumble_gain(orbit_period_s: float, xi_rad: float, j_min_kg_m2: float) -> float:
@@ -87,14 +91,26 @@ J_MIN_SEED_KG_M2 = 5_094_047.43 * G_MM2_KG_M2
 K_OMEGA_SEED = detumble_gain(T_ORB_SEED_S, XI_SEED_RAD, J_MIN_SEED_KG_M2)
 
 
+@kernels.helper
+def cross_law_xyz(b_t: Vec3, x: Vec3, gain: float) -> tuple[bool, Vec3]:
+    """Kernel of the two laws: (True, −(gain/|B|²)(B × x)) on float triples, (False, 0) when |B|² is not > 0
+    (B̂ undefined; a field small enough that |B|² underflows too). The DPA's compiled step calls it."""
+    b2 = b_t[0] * b_t[0] + b_t[1] * b_t[1] + b_t[2] * b_t[2]
+    if not b2 > 0.0:
+        return False, (0.0, 0.0, 0.0)
+    c = -(gain / b2)
+    v = cross(b_t, x)
+    return True, (c * v[0], c * v[1], c * v[2])
+
+
 def _cross_law(b_t: np.ndarray, x: np.ndarray, gain: float, name: str) -> np.ndarray:
     """−(gain/|B|)(B̂ × x) = −(gain/|B|²)(B × x), A·m² when gain·x/|B| is N·m/T."""
-    b = as_vector3(b_t, 'b_t')
-    v = as_vector3(x, name)
-    b2 = float(b @ b)
-    if not b2 > 0.0:
-        raise ControllerError('b_t is zero: the field direction B̂ is undefined')
-    return -(gain / b2) * np.cross(b, v)
+    bx, by, bz = as_vector3(b_t, 'b_t').tolist()
+    vx, vy, vz = as_vector3(x, name).tolist()
+    defined, m = cross_law_xyz((bx, by, bz), (vx, vy, vz), gain)
+    if not defined:
+        raise ControllerError(B_ZERO_MESSAGE)
+    return np.array(m)
 
 
 def detumble_moment(b_body_t: np.ndarray, omega_body_rad_s: np.ndarray, k_omega: float) -> np.ndarray:

@@ -16,6 +16,11 @@ mode manager → ``mode_1a`` (magnetics-only rate reduction); no wheels → zero
 A non-finite input is rejected with a diagnostic and the step commands zero moment and zero
 wheel volts.
 
+The stage's arithmetic and per-step decisions (the wheel momentum at t_k, the input checks, the TA's A/D
+conversion and the DPA's period in the mode) are one kernel call a step, :func:`dpa_control`
+(:mod:`acds_common.kernels`: compiled in the direct engine); the stepper keeps the mode and commands, the
+messages of a refused step and the telemetry.
+
 The node's other variants, chosen by the scenario (``acds_controller.nodes``): the AAP Workshop's
 computer (``wheels.kind`` cmg, :mod:`acds_controller.workshop_step`), which uses :func:`warned` and
 :func:`store_momentum`, and this DPA with the cold-gas acquisition law (node ``cold_gas`` in the graph,
@@ -24,9 +29,11 @@ computer (``wheels.kind`` cmg, :mod:`acds_controller.workshop_step`), which uses
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
+from acds_common import kernels
 from acds_common.commands import GainCommand, LawCommand, decode
 from acds_common.messages import WARN, diagnostic, xyz
 from acds_common.mode_report import ModeStatusReader
@@ -35,13 +42,17 @@ from acds_common.stepper import Stepper
 from acds_common.validation import all_finite
 
 from acds_controller.configuration import build_dpa
-from acds_controller.dpa import Dpa
+from acds_controller.dpa import DONE, NO_FIGURES, NO_Q, Dpa, DpaFigures, DpaState, dpa_step
 from acds_controller.magnetic_laws import ControllerError
+from acds_controller.transfer_assembly import field_xyz
 
 #: Excess-coil-current alarm: |I| above this multiple of the current of the maximum moment.
 EXCESS_CURRENT_FACTOR = 1.1
 ZERO = (0.0, 0.0, 0.0)
 MID_SCALE_V = (2.5, 2.5, 2.5)
+#: :func:`dpa_control`'s status for a non-finite input (the DPA's own statuses: :data:`acds_controller.dpa.DONE`…).
+NOT_FINITE = -1
+_MODE_INDEX = {mode: i for i, mode in enumerate(HEAO_MODES)}
 
 
 #: The commands the DPA applies (forwarded in the ``mode`` report, key ``command/acds_controller``).
@@ -83,6 +94,15 @@ class DpaStep(Stepper):
         #: Whether wheels read the DPA's wheel volts (output ``volts`` is declared only then).
         self.drives_wheels = self.present('reaction_wheels')
         self._mode_status = ModeStatusReader(self.node)
+        #: The step kernel bound to the one signature :meth:`_dpa_step` calls it with (:func:`kernels.bound`), fixed
+        #: by construction: the converter's and the DPA's parameters built by them (floats, ints, a bool, tuples of
+        #: floats; a gain or law command rebuilds them alike), the DPA's state (a bool and float triples: its
+        #: initial state, then this kernel's), the mode's index an ``int``, the inputs' Vector3Stamped values and
+        #: the odometry's orientation (plain floats from :func:`acds_common.messages.vector3` or a kernel, the
+        #: direct engine running only the built-in steppers) or the float defaults here, Δt ``_dt``.
+        self._dt = float(self.control_period_s)
+        self._control = kernels.bound(dpa_control, self.ta.params, self.dpa.params, self.dpa.state, 0, ZERO, ZERO,
+                                      ZERO, ZERO, ZERO, ZERO, NO_Q, False, ZERO, self._dt)
 
     def control(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Stage ``control``: one DPA control period (commands applied first, inputs checked)."""
@@ -90,7 +110,8 @@ class DpaStep(Stepper):
         mode, commands = self._mode_status(inp['mode'])
         if commands:
             self.apply_commands(k, commands, warnings)
-        mode = resolve_mode(mode, 'mode_1a', HEAO_MODES, warnings, 'unknown mode {!r} from the mode manager')
+        if mode not in _MODE_INDEX:  # before the mode manager speaks, or a mode the DPA does not know
+            mode = resolve_mode(mode, 'mode_1a', HEAO_MODES, warnings, 'unknown mode {!r} from the mode manager')
         try:
             result = self._dpa_step(k, mode, inp)
         except ControllerError as exc:
@@ -98,7 +119,7 @@ class DpaStep(Stepper):
             result = {'moment': ZERO, 'volts': ZERO}
         if not self.drives_wheels:
             del result['volts']
-        return warned(self, k, result, warnings)
+        return warned(self, k, result, warnings) if warnings else result
 
     def apply_commands(self, k: int, commands: list[str], warnings: list[tuple[str, dict[str, str]]]) -> None:
         """Apply the forwarded law/gain commands to the DPA; a refusal becomes a warning."""
@@ -109,24 +130,32 @@ class DpaStep(Stepper):
                 warnings.append((f'command refused: {text!r}: {exc}', {'command': text, 'reason': str(exc)}))
 
     def _dpa_step(self, k: int, mode: str, inp: dict[str, Any]) -> dict[str, Any]:
-        volts = xyz(inp['mag_volts'], MID_SCALE_V)
-        bias = xyz(inp['mag_bias'], MID_SCALE_V)
-        omega = ZERO if inp['gyro'] is None else inp['gyro'][0]
-        sun = xyz(inp['sun'])
-        dt = self.control_period_s
-        h = store_momentum(inp, dt)
-        q = None if inp['odometry'] is None else inp['odometry'].orientation
-        coil = xyz(inp['coil_current'])
-        if not all_finite((*volts, *bias, *omega, *sun, *h, *coil)):
-            check_finite((('magnetometer volts', volts), ('bias volts', bias), ('gyro', omega), ('sun sensor', sun),
-                           ('wheel momentum', h), ('coil current', coil)))
-        b = self.ta.sense_xyz(volts, bias)
-        # Checked above (the mode resolved, Δt bounded by the scenario's 1e-3…60 s): the DPA's unchecked path.
-        out = self.dpa.step_xyz(mode, b, omega, sun, h, q, dt)
-        result: dict[str, Any] = {'moment': out.moment_xyz, 'volts': out.volts_xyz}
+        # An absent input is its default (acds_common.messages.xyz's, written out: this runs every step).
+        volts, bias, gyro, sun = inp['mag_volts'], inp['mag_bias'], inp['gyro'], inp['sun']
+        wheel_h, wheel_hdot, odometry, coil = inp['wheel_h'], inp['wheel_hdot'], inp['odometry'], inp['coil_current']
+        volts = MID_SCALE_V if volts is None else volts
+        bias = MID_SCALE_V if bias is None else bias
+        omega = ZERO if gyro is None else gyro[0]
+        sun = ZERO if sun is None else sun
+        wheel_h = ZERO if wheel_h is None else wheel_h
+        wheel_hdot = ZERO if wheel_hdot is None else wheel_hdot
+        coil = ZERO if coil is None else coil
+        q = None if odometry is None else odometry.orientation
+        dpa = self.dpa
+        status, state, figures = self._control(self.ta.params, dpa.params, dpa.state, _MODE_INDEX[mode], volts, bias,
+                                               omega, sun, wheel_h, wheel_hdot, NO_Q if q is None else q,
+                                               q is not None, coil, self._dt)
+        if status != DONE:
+            if status == NOT_FINITE:
+                check_finite((('magnetometer volts', volts), ('bias volts', bias), ('gyro', omega), ('sun sensor', sun),
+                              ('wheel momentum', store_momentum(inp, self.control_period_s)), ('coil current', coil)))
+            raise dpa.refusal(status, mode, omega, q)
+        dpa.state = state
+        result: dict[str, Any] = {'moment': figures[0], 'volts': figures[1]}
         if self.telemetry_wanted and k % self.telemetry_period == 0:
+            out = dpa.output(mode, figures)
             alarms = [abs(i) > self.excess_current_a for i in coil]
-            telemetry = {**out.telemetry, **self.ta.telemetry(b, out.moment_xyz, bias, coil, alarms)}
+            telemetry = {**out.telemetry, **self.ta.telemetry(figures[2], out.moment_xyz, bias, coil, alarms)}
             result['diagnostics'] = diagnostic(self.instance, telemetry)
         return result
 
@@ -157,6 +186,36 @@ def warned(stepper: Stepper, k: int, result: dict[str, Any], warnings: list[tupl
 
 
 def store_momentum(inp: dict[str, Any], dt: float) -> tuple[float, float, float]:
-    """h(t_k) of the wheels or CMGs from their step k−1 outputs (lag 1): h_{k−1} + ḣ_{k−1}·Δt, exactly."""
-    (hx, hy, hz), (dx, dy, dz) = xyz(inp['wheel_h']), xyz(inp['wheel_hdot'])
-    return hx + dx * dt, hy + dy * dt, hz + dz * dt
+    """h(t_k) of the wheels or CMGs from their step k−1 outputs (lag 1): :func:`momentum_xyz`."""
+    return momentum_xyz(xyz(inp['wheel_h']), xyz(inp['wheel_hdot']), dt)
+
+
+@kernels.helper
+def momentum_xyz(h: Sequence[float], hdot: Sequence[float], dt: float) -> tuple[float, float, float]:
+    """h_{k−1} + ḣ_{k−1}·Δt, exactly (the wheels' or CMGs' momentum at t_k from their step k−1 outputs)."""
+    return h[0] + hdot[0] * dt, h[1] + hdot[1] * dt, h[2] + hdot[2] * dt
+
+
+@kernels.helper
+def finite_xyz(v: Sequence[float]) -> bool:
+    """Whether the three components are finite."""
+    return math.isfinite(v[0]) and math.isfinite(v[1]) and math.isfinite(v[2])
+
+
+def dpa_control(ta: tuple[float, float, float], params: tuple, state: DpaState, mode: int, volts: Sequence[float],
+                bias: Sequence[float], omega: Sequence[float], sun: Sequence[float], wheel_h: Sequence[float],
+                wheel_hdot: Sequence[float], q: Sequence[float], q_given: bool, coil: Sequence[float], dt: float
+                ) -> tuple[int, DpaState, DpaFigures]:
+    """Stage ``control``'s arithmetic (spec §7): the wheel momentum at t_k (:func:`momentum_xyz`), every input
+    checked finite (else :data:`NOT_FINITE`), the TA's field (:func:`~acds_controller.transfer_assembly.field_xyz`,
+    ``ta`` its :attr:`~acds_controller.transfer_assembly.TransferAssembly.params`) and the DPA's period
+    (:func:`~acds_controller.dpa.dpa_step`, with ``params`` and ``state``). Returns its status, state and figures.
+
+    A kernel (:mod:`acds_common.kernels`): the stage's one compiled call a step in the direct engine.
+    """
+    h = momentum_xyz(wheel_h, wheel_hdot, dt)
+    if not (finite_xyz(volts) and finite_xyz(bias) and finite_xyz(omega) and finite_xyz(sun) and finite_xyz(h)
+            and finite_xyz(coil)):
+        return NOT_FINITE, state, NO_FIGURES
+    b = field_xyz(volts, bias, ta[0], ta[1], ta[2])
+    return dpa_step(params, state, mode, b, omega, sun, h, q, q_given, dt)

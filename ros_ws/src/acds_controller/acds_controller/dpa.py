@@ -19,6 +19,10 @@ Unloading law ``b_cross_h`` is seed 003's momentum-dumping form M = −(k_h/|B|)
 gain k_h (s⁻¹) in every unloading mode. With no sensed field (zero vector: no magnetometer) the
 two seed-003 laws command nothing, as B×H and B-dot do.
 
+One period is one kernel, :func:`dpa_step` (:mod:`acds_common.kernels`), on the DPA's parameters
+(:attr:`Dpa.params`, built when the configuration is set) and state (previous field and command): what
+:meth:`Dpa.step` runs and what the stepper's compiled step calls.
+
 Mode 1B unloading gain: the study does not quote a separate value; its acquisition runs carry
 one gain label (K = .05) through the whole run, so 0.05 (s·G²)⁻¹ is the default
 (``unloading_gain_mode_1b_study``).
@@ -33,13 +37,14 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from acds_common.attitude import conj, to_body
+from acds_common import kernels
+from acds_common.attitude import Quat, conj, to_body
 from acds_common.dpa_commands import AXES, GAIN_TABLE, LAW_CHOICES, SCALAR_GAINS
-from acds_common.modes import HEAO_MODES
+from acds_common.modes import HEAO_CRUISE_MODES, HEAO_MODES
 from acds_common.units import FT_LB_NM, deg, nms_to_ftlbs, rad_s_to_rpm, rpm_to_rad_s, tesla_to_gauss
 from acds_common.vec3 import ZERO, Vec3, clip, mat3, mv, norm
 
-from acds_controller.b_cross_omega import K_OMEGA_SEED, detumble_moment, dump_moment
+from acds_controller.b_cross_omega import B_ZERO_MESSAGE, K_OMEGA_SEED, cross_law_xyz
 from acds_controller.magnetic_laws import (
     G_ACQUISITION_STUDY,
     G_UNLOAD_POINT_STUDY,
@@ -61,6 +66,7 @@ from acds_controller.magnetic_laws import (
 from acds_controller.wheel_laws import (
     HEAO_B_ACQUISITION,
     NORMAL_MODE,
+    SCAN_OMEGA_LIMIT_RAD_S,
     SCAN_RATE_RAD_S,
     V_SAT_V,
     WheelLawGains,
@@ -68,6 +74,8 @@ from acds_controller.wheel_laws import (
     inertial_hold_error_xyz,
     pointing_error_xyz,
     scan_yaw_volts,
+    scan_yaw_volts_xyz,
+    unit_quaternion_checked,
     unit_quaternion_xyzw,
     wheel_volts_xyz,
 )
@@ -186,13 +194,113 @@ class DpaOutput:
         return dpa_telemetry(*self._telemetry_args)
 
 
+#: A mode as the kernel reads it: its index in HEAO_MODES.
+STANDBY, MODE_1A, MODE_1B, CELESTIAL_SCAN, CELESTIAL_POINT = (HEAO_MODES.index(m) for m in (
+    'standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point'))
+#: A law as the kernel reads it: its index in LAW_CHOICES[slot].
+BXH, BDOT, B_CROSS_OMEGA = (LAW_CHOICES['acquisition'].index(law) for law in ('bxh', 'bdot', 'b_cross_omega'))
+UNLOAD_BXH, LEAD, NO_UNLOADING, B_CROSS_H = (LAW_CHOICES['unloading'].index(law)
+                                             for law in ('bxh', 'lead', 'none', 'b_cross_h'))
+#: A kernel step's status: done, or why it refused the step (nothing changed; :meth:`Dpa.refusal` says it).
+DONE, FIELD_ZERO, NO_REFERENCE, BAD_REFERENCE, SCAN_RATE_RANGE = range(5)
+#: A DPA's state before its first step: no previous field (B-dot commands nothing), zero previous command.
+INITIAL_STATE = (False, ZERO, ZERO)
+#: The attitude reference the kernel is given when there is none (read only in the cruise modes).
+NO_Q: Quat = (0.0, 0.0, 0.0, 1.0)
+
+DpaState = tuple[bool, Vec3, Vec3]
+#: (m_cmd, volts, b, h_used, theta, m_raw): the step's command (A·m²), wheel volts (V) and telemetry figures.
+DpaFigures = tuple[Vec3, Vec3, Vec3, Vec3, Vec3, Vec3]
+NO_FIGURES: DpaFigures = (ZERO, ZERO, ZERO, ZERO, ZERO, ZERO)
+
+
+@kernels.helper
+def wheel_loop(p: tuple, mode: int, omega: Vec3, sun: Vec3, q: Quat, q_given: bool) -> tuple[int, Vec3, Vec3]:
+    """Status, attitude error (rad) and wheel volts for modes 1B, scan and point (seed 002 §4.2.2, §4.2.3).
+    ``p``: :attr:`Dpa.params`."""
+    v_sat, gains_acquisition, gains_normal = p[13], p[11], p[12]
+    if mode == MODE_1B:
+        theta = pointing_error_xyz(sun) if norm(sun) >= _SUN_PRESENT_MIN_NORM else ZERO
+        return DONE, theta, wheel_volts_xyz(theta, omega, gains_acquisition, v_sat)
+    if not q_given:
+        return NO_REFERENCE, ZERO, ZERO
+    status, _norm, qn = unit_quaternion_checked(q[0], q[1], q[2], q[3])
+    if status != 0:
+        return BAD_REFERENCE, ZERO, ZERO
+    if mode == CELESTIAL_POINT:
+        theta = inertial_hold_error_xyz(qn, p[17])
+        return DONE, theta, wheel_volts_xyz(theta, omega, gains_normal, v_sat)
+    theta = pointing_error_xyz(to_body(qn, p[18]))
+    vx, vy, _vz = wheel_volts_xyz(theta, omega, gains_normal, v_sat)
+    if not -SCAN_OMEGA_LIMIT_RAD_S <= omega[2] <= SCAN_OMEGA_LIMIT_RAD_S:
+        return SCAN_RATE_RANGE, ZERO, ZERO
+    kp, _limits, kr = gains_normal
+    return DONE, theta, (vx, vy, scan_yaw_volts_xyz(omega[2], p[16], kp[2], kr[2], v_sat))
+
+
+@kernels.helper
+def unloading_moment(p: tuple, mode: int, b: Vec3, h_wheel: Vec3, volts: Vec3) -> tuple[bool, Vec3]:
+    """Unloading moment on the wheel momentum with the mode's gain (seed 002 §4.2.3.2, eq. 4-37); False when
+    the ``b_cross_h`` law finds |B|² not > 0. ``p``: :attr:`Dpa.params`."""
+    law = p[1]
+    gain = p[7][mode - MODE_1B]
+    if law == NO_UNLOADING:
+        return True, ZERO
+    if law == B_CROSS_H:
+        if b[0] != 0.0 or b[1] != 0.0 or b[2] != 0.0:
+            return cross_law_xyz(b, h_wheel, p[10])
+        return True, ZERO
+    if law == LEAD:
+        eps = wheel_command_momentum_xyz(volts, p[14], p[15])
+        return True, lead_moment_xyz(b, h_wheel, eps, gain)
+    return True, bxh_moment_xyz(b, h_wheel, gain)
+
+
+@kernels.helper
+def dpa_step(p: tuple, state: DpaState, mode: int, b_sensed: Vec3, omega: Vec3, sun: Vec3, h_wheel: Vec3,
+             q: Quat, q_given: bool, dt: float) -> tuple[int, DpaState, DpaFigures]:
+    """One control period of the DPA (spec §7; seed 002 Figure 4-2): ``p`` its :attr:`Dpa.params`, ``state``
+    (a previous field held, B_prev, M_prev), the mode's index, the inputs of :meth:`Dpa.step_xyz` as float
+    triples, the attitude reference (read only in the cruise modes, when ``q_given``) and Δt. Returns the status,
+    the new state and the figures; a refused step (status not :data:`DONE`) keeps ``state``.
+
+    A kernel (:mod:`acds_common.kernels`): compiled in the direct engine, inside the stepper's one call a step.
+    """
+    has_prev, b_prev, m_prev = state
+    b = compensate_coupling_xyz(b_sensed, p[3], m_prev) if p[2] else b_sensed
+    theta = volts = h_used = m = ZERO
+    if mode == MODE_1A:
+        law = p[0]
+        if law == BXH:
+            h_used = mv(p[4], omega)
+            m = bxh_moment_xyz(b, h_used, p[5])
+        elif law == B_CROSS_OMEGA:
+            if b[0] != 0.0 or b[1] != 0.0 or b[2] != 0.0:
+                defined, m = cross_law_xyz(b, omega, p[9])
+                if not defined:
+                    return FIELD_ZERO, state, NO_FIGURES
+        elif has_prev:
+            m = bdot_moment_xyz(b, b_prev, dt, p[6])
+    elif mode != STANDBY:
+        status, theta, volts = wheel_loop(p, mode, omega, sun, q, q_given)
+        if status != DONE:
+            return status, state, NO_FIGURES
+        h_used = h_wheel
+        defined, m = unloading_moment(p, mode, b, h_wheel, volts)
+        if not defined:
+            return FIELD_ZERO, state, NO_FIGURES
+    m_cmd = clip(m, p[8])
+    return DONE, (True, b, m_cmd), (m_cmd, volts, b, h_used, theta, m)
+
+
 class Dpa:
     """The per-step digital processor (spec §7; seed 002 Figure 4-2). Holds the previous field and command."""
 
     def __init__(self, config: DpaConfig) -> None:
         self.config = config
-        self._b_prev_t: Vec3 | None = None
-        self._m_prev_am2: Vec3 = ZERO
+        #: (a previous field held, B_prev T, M_prev A·m²): :func:`dpa_step`'s state, float triples.
+        self.state: DpaState = INITIAL_STATE
+        self._step = kernels.compiled(dpa_step)
 
     @property
     def config(self) -> DpaConfig:
@@ -201,19 +309,28 @@ class Dpa:
 
     @config.setter
     def config(self, config: DpaConfig) -> None:
-        """Set the configuration and its float forms for the per-step path (SI gains, 3×3 rows)."""
+        """Set the configuration and :attr:`params`, its form for the per-step kernel (SI gains, 3×3 rows)."""
         self._config = config
-        self._inertia = mat3(config.inertia_kg_m2)
-        self._delta = mat3(config.coupling_delta_t_per_am2)
         qt = unit_quaternion_xyzw(config.target_q_body_to_eci, 'target_q_body_to_eci')
-        self._target_q = qt
-        self._scan_axis_eci = to_body(
-            unit_quaternion_xyzw(conj(qt), 'q_body_to_eci'), (0.0, 0.0, 1.0))
-        self._acquisition_gain_si = bxh_gain_to_si(config.acquisition_gain_study)
-        self._bdot_gain_si = bdot_gain_to_si(config.bdot_gain_study)
-        self._unloading_gain_si = {'mode_1b': bxh_gain_to_si(config.unloading_gain_mode_1b_study),
-                                   'celestial_scan': bxh_gain_to_si(config.unloading_gain_scan_study),
-                                   'celestial_point': bxh_gain_to_si(config.unloading_gain_point_study)}
+        scan_axis_eci = to_body(unit_quaternion_xyzw(conj(qt), 'q_body_to_eci'), (0.0, 0.0, 1.0))
+        #: :func:`dpa_step`'s parameters, fixed types (ints, a bool, floats, tuples of floats): acquisition and
+        #: unloading law indices, coupling compensation and Δ, inertia rows, the acquisition and B-dot gains, the
+        #: unloading gains of mode 1B, scan and point (SI), max moment, k_ω, k_h, the acquisition and normal
+        #: wheel gain rows, V_sat, the wheel torque gain, the lead time, the scan rate, the target attitude and
+        #: the scan axis (ECI).
+        self.params = (
+            LAW_CHOICES['acquisition'].index(config.acquisition_law),
+            LAW_CHOICES['unloading'].index(config.unloading_law),
+            bool(config.coupling_compensation), mat3(config.coupling_delta_t_per_am2), mat3(config.inertia_kg_m2),
+            bxh_gain_to_si(float(config.acquisition_gain_study)), bdot_gain_to_si(float(config.bdot_gain_study)),
+            (bxh_gain_to_si(float(config.unloading_gain_mode_1b_study)),
+             bxh_gain_to_si(float(config.unloading_gain_scan_study)),
+             bxh_gain_to_si(float(config.unloading_gain_point_study))),
+            float(config.max_moment_am2), float(config.detumble_gain_kg_m2_s), float(config.dump_gain_per_s),
+            config.wheel_gains_acquisition.row, config.wheel_gains_normal.row, float(config.v_sat_v),
+            float(config.wheel_torque_gain_nm_per_v2), float(config.lead_time_s), float(config.scan_rate_rad_s),
+            qt, scan_axis_eci)
+
 
     def set_gain(self, name: str, value: float) -> None:
         """Change a gain at run time; unknown name or out-of-range value raises :class:`ControllerError`.
@@ -271,67 +388,43 @@ class Dpa:
 
     def step_xyz(self, mode: str, b_sensed: Vec3, omega: Vec3, sun: Vec3, h_wheel: Vec3,
                  q_body_to_eci: Sequence[float] | None, dt: float) -> DpaOutput:
-        """:meth:`step` without its checks (the stepper's per-step path, spec §7): a mode of
-        :data:`HEAO_MODES`, finite float triples, Δt within 1e-6…1e4 s (the attitude reference is still checked)."""
-        c = self._config
-        b = (compensate_coupling_xyz(b_sensed, self._delta, self._m_prev_am2)
-             if c.coupling_compensation else b_sensed)
+        """:meth:`step` without its checks (spec §7): a mode of :data:`HEAO_MODES`, finite float triples, Δt
+        within 1e-6…1e4 s (the attitude reference is still checked). One :func:`dpa_step`."""
+        q, q_given = NO_Q, False
+        if q_body_to_eci is not None:
+            try:
+                x, y, z, w = (float(c) for c in q_body_to_eci)
+                q, q_given = (x, y, z, w), True
+            except (TypeError, ValueError):  # refused in the modes that read it, ignored in the others
+                if mode in HEAO_CRUISE_MODES:
+                    unit_quaternion_xyzw(q_body_to_eci, 'q_body_to_eci')
+        status, state, figures = self._step(self.params, self.state, HEAO_MODES.index(mode), b_sensed, omega, sun,
+                                            h_wheel, q, q_given, float(dt))
+        if status != DONE:
+            raise self.refusal(status, mode, omega, q_body_to_eci)
+        self.state = state
+        return self.output(mode, figures)
 
-        theta = volts = h_used = m = ZERO
-        if mode == 'mode_1a':
-            if c.acquisition_law == 'bxh':
-                h_used = mv(self._inertia, omega)
-                m = bxh_moment_xyz(b, h_used, self._acquisition_gain_si)
-            elif c.acquisition_law == 'b_cross_omega':
-                if any(b):
-                    m = _xyz(detumble_moment(b, omega, c.detumble_gain_kg_m2_s))
-            elif self._b_prev_t is not None:
-                m = bdot_moment_xyz(b, self._b_prev_t, dt, self._bdot_gain_si)
-        elif mode != 'standby':
-            theta, volts = self._wheel_loop(mode, omega, sun, q_body_to_eci)
-            h_used = h_wheel
-            m = self._unloading_moment(mode, b, h_wheel, volts)
-        m_cmd = clip(m, c.max_moment_am2)
-        self._b_prev_t = b
-        self._m_prev_am2 = m_cmd
-        return DpaOutput(m_cmd, volts, (c, mode, b, h_used, theta, m, m_cmd, volts))
+    def output(self, mode: str, figures: DpaFigures) -> DpaOutput:
+        """A :func:`dpa_step`'s figures as the step's :class:`DpaOutput`."""
+        m_cmd, volts, b, h_used, theta, m = figures
+        return DpaOutput(m_cmd, volts, (self._config, mode, b, h_used, theta, m, m_cmd, volts))
 
-    def _wheel_loop(self, mode: str, omega: Vec3, sun: Vec3, q_body_to_eci: Sequence[float] | None) -> tuple[Vec3, Vec3]:
-        """Attitude error (rad) and wheel volts for modes 1B, scan and point (seed 002 §4.2.2, §4.2.3)."""
-        c = self._config
-        if mode == 'mode_1b':
-            theta = pointing_error_xyz(sun) if norm(sun) >= _SUN_PRESENT_MIN_NORM else ZERO
-            return theta, wheel_volts_xyz(theta, omega, c.wheel_gains_acquisition, c.v_sat_v)
-        if q_body_to_eci is None:
-            raise ControllerError(f'mode {mode} needs the attitude reference q_body_to_eci')
-        q = unit_quaternion_xyzw(q_body_to_eci, 'q_body_to_eci')
-        gains = c.wheel_gains_normal
-        if mode == 'celestial_point':
-            theta = inertial_hold_error_xyz(q, self._target_q)
-            return theta, wheel_volts_xyz(theta, omega, gains, c.v_sat_v)
-        theta = pointing_error_xyz(to_body(q, self._scan_axis_eci))
-        vx, vy, _vz = wheel_volts_xyz(theta, omega, gains, c.v_sat_v)
-        return theta, (vx, vy, scan_yaw_volts(omega[2], c.scan_rate_rad_s, gains.k_p_v_per_rad[2], gains.k_r_s[2],
-                                              c.v_sat_v))
-
-    def _unloading_moment(self, mode: str, b: Vec3, h_wheel: Vec3, volts: Vec3) -> Vec3:
-        """Unloading moment on the wheel momentum with the mode's gain (seed 002 §4.2.3.2, eq. 4-37)."""
-        c = self._config
-        gain = self._unloading_gain_si[mode]
-        if c.unloading_law == 'none':
-            return ZERO
-        if c.unloading_law == 'b_cross_h':
-            return _xyz(dump_moment(b, h_wheel, c.dump_gain_per_s)) if any(b) else ZERO
-        if c.unloading_law == 'lead':
-            eps = wheel_command_momentum_xyz(volts, c.wheel_torque_gain_nm_per_v2, c.lead_time_s)
-            return lead_moment_xyz(b, h_wheel, eps, gain)
-        return bxh_moment_xyz(b, h_wheel, gain)
-
-
-def _xyz(v: np.ndarray) -> Vec3:
-    """A law's numpy 3-vector as the DPA's float triple."""
-    x, y, z = v.tolist()
-    return x, y, z
+    def refusal(self, status: int, mode: str, omega: Sequence[float], q_body_to_eci: object) -> ControllerError:
+        """The error of a step :func:`dpa_step` refused with ``status``, with the message the check gives."""
+        if status == FIELD_ZERO:
+            return ControllerError(B_ZERO_MESSAGE)
+        if status == NO_REFERENCE or q_body_to_eci is None:
+            return ControllerError(f'mode {mode} needs the attitude reference q_body_to_eci')
+        try:
+            if status == BAD_REFERENCE:
+                unit_quaternion_xyzw(q_body_to_eci, 'q_body_to_eci')
+            c = self._config
+            scan_yaw_volts(omega[2], c.scan_rate_rad_s, c.wheel_gains_normal.k_p_v_per_rad[2],
+                           c.wheel_gains_normal.k_r_s[2], c.v_sat_v)
+        except ControllerError as exc:
+            return exc
+        raise AssertionError(f'dpa_step refused a step with status {status} its checks pass')
 
 
 def dpa_telemetry(c: DpaConfig, mode: str, b: Vec3, h_used: Vec3, theta: Vec3, m_raw: Vec3, m_cmd: Vec3,

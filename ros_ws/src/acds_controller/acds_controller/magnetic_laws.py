@@ -17,7 +17,8 @@ Conventions
 This module also holds the package's exception :class:`ControllerError` and
 the input checks every acds_controller core uses. Each law has a float-triple kernel
 (``*_xyz``, SI gains, no checks: what the DPA runs every control period) behind its checked
-numpy function.
+numpy function; the DPA's compiled step (:func:`acds_controller.dpa.dpa_step`) calls the kernels
+(:func:`acds_common.kernels.helper`).
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from acds_common import validation
+from acds_common import kernels, validation
 from acds_common.units import FT_LB_S_NMS, FTLB_PER_GAUSS_AM2, GAUSS_T
 from acds_common.vec3 import Mat3, Vec3, clip, cross, mat3, mv
 
@@ -94,6 +95,7 @@ def bdot_gain_to_si(k_d_study: float) -> float:
     return k_d_study * FTLB_PER_GAUSS_AM2 / GAUSS_T
 
 
+@kernels.helper
 def bdot_moment_xyz(b_now_t: Sequence[float], b_prev_t: Sequence[float], dt_s: float, k_si: float) -> Vec3:
     """Kernel of :func:`bdot_moment`: −K·(B_now − B_prev)/Δt with K in SI (A·m²·s/T)."""
     c = -k_si
@@ -118,6 +120,7 @@ def bdot_moment(b_now_t: np.ndarray, b_prev_t: np.ndarray, dt_s: float, k_d: flo
     return np.array(bdot_moment_xyz(b_now, b_prev, dt, bdot_gain_to_si(k)))
 
 
+@kernels.helper
 def bxh_moment_xyz(b_t: Sequence[float], h_nms: Sequence[float], gain_si: float) -> Vec3:
     """Kernel of :func:`bxh_moment`: −G·(B × H) with G in SI ((s·T²)⁻¹)."""
     c = -gain_si
@@ -141,6 +144,7 @@ def bxh_moment(b_t: np.ndarray, h_nms: np.ndarray, gain_study: float) -> np.ndar
     return np.array(bxh_moment_xyz(b, h, bxh_gain_to_si(g)))
 
 
+@kernels.helper
 def wheel_command_momentum_xyz(wheel_volts_v: Sequence[float], wheel_torque_gain_nm_per_v2: float,
                                lead_time_s: float) -> Vec3:
     """Kernel of :func:`wheel_command_momentum_nms`: τ_lead·k·V|V| per axis."""
@@ -166,6 +170,7 @@ def wheel_command_momentum_nms(
     return np.array(wheel_command_momentum_xyz(v, k, tau))
 
 
+@kernels.helper
 def lead_moment_xyz(b_t: Sequence[float], h_nms: Sequence[float], eps_wheel_cmd: Sequence[float],
                     gain_si: float) -> Vec3:
     """Kernel of :func:`lead_moment`: the B×H kernel on H + ε."""
@@ -202,6 +207,7 @@ def saturate(m: np.ndarray, max_moment_am2: float = MAX_MOMENT_AM2) -> np.ndarra
     return np.array(clip(mv3, limit))
 
 
+@kernels.helper
 def compensate_coupling_xyz(b_sensed_t: Sequence[float], delta_t_per_am2: Mat3, m_prev_am2: Sequence[float]) -> Vec3:
     """Kernel of :func:`compensate_coupling`: B_sensed − Δ·M."""
     dm = mv(delta_t_per_am2, m_prev_am2)

@@ -41,10 +41,12 @@ def count_v(v: float, lsb_v: float, top_count: float) -> float:
     return (0.0 if x < 0.0 else top_count if x >= top_count + 1.0 else floor(x)) * lsb_v
 
 
+@kernels.helper
 def field_xyz(volts: Sequence[float], bias_volts: Sequence[float], lsb_v: float, top_count: float,
               scale_v_per_gauss: float) -> Vec3:
     """Sensed field, T: the A/D conversion of every axis's field and bias voltage and B = (V_field − V_bias)/scale
-    (seed 002 §4.2.7, Table 4-5). A kernel (:mod:`acds_common.kernels`): compiled in the direct engine."""
+    (seed 002 §4.2.7, Table 4-5). A kernel (:mod:`acds_common.kernels`): compiled in the direct engine, alone
+    (:meth:`TransferAssembly.sense_xyz`) or in the controller's step (:func:`acds_controller.controller_step.dpa_control`)."""
     return ((count_v(volts[0], lsb_v, top_count) - count_v(bias_volts[0], lsb_v, top_count)) / scale_v_per_gauss
             * GAUSS_T,
             (count_v(volts[1], lsb_v, top_count) - count_v(bias_volts[1], lsb_v, top_count)) / scale_v_per_gauss
@@ -85,6 +87,8 @@ class TransferAssembly:
             moment_per_amp_am2_per_a, 'moment_per_amp_am2_per_a', 1e-6, 1e9)
         self.lsb_v = self.full_scale_v / (1 << adc_bits)
         self._top_count = float((1 << adc_bits) - 1)
+        #: :func:`field_xyz`'s converter constants (LSB V, top count, scale V/G), floats.
+        self.params = (self.lsb_v, self._top_count, self.scale_v_per_gauss)
 
         #: The A/D kernel as the dispatcher (any argument types) and bound to float triples (:func:`kernels.bound`;
         #: the converter's constants are floats by construction above: ``check_gain``, a true division, ``float``).

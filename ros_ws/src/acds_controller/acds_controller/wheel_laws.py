@@ -1,7 +1,7 @@
 """Reaction wheel control laws and attitude errors of the DPA (spec §7; seed 002 §4.2.2, §4.2.3, Table 4-2).
 
 Each law has a float-triple kernel (``*_xyz``, no checks: what the DPA runs every control
-period) behind its checked numpy function.
+period, compiled in the direct engine: :func:`acds_common.kernels.helper`) behind its checked numpy function.
 
 Sign convention (explicit, used by every function here)
 -------------------------------------------------------
@@ -24,6 +24,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from acds_common import kernels
 from acds_common.attitude import Quat, conj, quat_mul, to_body
 from acds_common.units import rad, rpm_to_rad_s
 from acds_common.vec3 import Vec3
@@ -38,6 +39,8 @@ MANEUVER_RATE_LIMIT_RAD_S = rad(0.1)
 SCAN_RATE_RAD_S = rpm_to_rad_s(0.03)
 
 _TRIPLE = tuple[float, float, float]
+#: |ω_z| above which the scan yaw law refuses the gyro rate, rad/s.
+SCAN_OMEGA_LIMIT_RAD_S = 10.0
 
 
 @dataclass(frozen=True)
@@ -62,6 +65,14 @@ class WheelLawGains:
             limit = self.theta_limit_rad[i]
             if limit is not None:
                 check_gain(limit, f'theta_limit_rad[{i}] (rad)', 1e-9, math.pi)
+
+    @property
+    def row(self) -> tuple[_TRIPLE, _TRIPLE, _TRIPLE]:
+        """The gains as :func:`wheel_volts_xyz` reads them: K_p, θ_limit (no limiter: +∞, which limits nothing, a
+        NaN or −0 included) and K_r, float triples."""
+        kp, limits, kr = self.k_p_v_per_rad, self.theta_limit_rad, self.k_r_s
+        lx, ly, lz = (math.inf if v is None else float(v) for v in limits)
+        return (float(kp[0]), float(kp[1]), float(kp[2])), (lx, ly, lz), (float(kr[0]), float(kr[1]), float(kr[2]))
 
     def with_axis(self, param: str, axis: int, value: float | None) -> WheelLawGains:
         """Copy with one axis of ``param`` ('k_p_v_per_rad', 'theta_limit_rad' or 'k_r_s') replaced."""
@@ -95,17 +106,21 @@ def design_gains(
     return v_sat_v / theta, theta / rate
 
 
-def wheel_volts_xyz(theta_err_rad: Sequence[float], omega_rad_s: Sequence[float], gains: WheelLawGains,
-                    v_sat_v: float) -> Vec3:
-    """Kernel of :func:`wheel_volts`."""
-    kp, limits, kr = gains.k_p_v_per_rad, gains.theta_limit_rad, gains.k_r_s
-    out = []
-    for i in range(3):
-        theta, limit = theta_err_rad[i], limits[i]
-        if limit is not None:
-            theta = min(max(theta, -limit), limit)
-        out.append(min(max(kp[i] * (theta + kr[i] * omega_rad_s[i]), -v_sat_v), v_sat_v))
-    return out[0], out[1], out[2]
+@kernels.helper
+def axis_volts(theta: float, omega: float, kp: float, limit: float, kr: float, v_sat_v: float) -> float:
+    """One axis of :func:`wheel_volts_xyz`: K_p (θ^L + K_r ω), θ^L = θ limited to ±``limit``, clipped to ±V_sat."""
+    theta = min(max(theta, -limit), limit)
+    return min(max(kp * (theta + kr * omega), -v_sat_v), v_sat_v)
+
+
+@kernels.helper
+def wheel_volts_xyz(theta_err_rad: Sequence[float], omega_rad_s: Sequence[float],
+                    row: tuple[_TRIPLE, _TRIPLE, _TRIPLE], v_sat_v: float) -> Vec3:
+    """Kernel of :func:`wheel_volts` on the gains' :attr:`WheelLawGains.row`."""
+    kp, limits, kr = row
+    return (axis_volts(theta_err_rad[0], omega_rad_s[0], kp[0], limits[0], kr[0], v_sat_v),
+            axis_volts(theta_err_rad[1], omega_rad_s[1], kp[1], limits[1], kr[1], v_sat_v),
+            axis_volts(theta_err_rad[2], omega_rad_s[2], kp[2], limits[2], kr[2], v_sat_v))
 
 
 def wheel_volts(
@@ -120,7 +135,13 @@ def wheel_volts(
     theta = as_xyz(theta_err_rad, 'theta_err_rad')
     omega = as_xyz(omega_rad_s, 'omega_rad_s')
     v_sat = check_gain(v_sat_v, 'v_sat_v', 0.0, 1e3)
-    return np.array(wheel_volts_xyz(theta, omega, gains, v_sat))
+    return np.array(wheel_volts_xyz(theta, omega, gains.row, v_sat))
+
+
+@kernels.helper
+def scan_yaw_volts_xyz(omega_z: float, omega_z0: float, k_pz: float, k_rz: float, v_sat_v: float) -> float:
+    """Kernel of :func:`scan_yaw_volts` (no checks)."""
+    return min(max(k_pz * k_rz * (omega_z - omega_z0), -v_sat_v), v_sat_v)
 
 
 def scan_yaw_volts(
@@ -131,13 +152,14 @@ def scan_yaw_volts(
     ``omega_z``: gyro z rate, ``omega_z0``: desired scan rate (rad/s; 0.03 rpm baseline);
     ``k_pz`` V/rad, ``k_rz`` s. Spinning faster than ω_z0 gives V > 0, a negative body torque.
     """
-    wz = check_gain(omega_z, 'omega_z (rad/s)', -10.0, 10.0)
-    wz0 = check_gain(omega_z0, 'omega_z0 (rad/s)', -10.0, 10.0)
-    gain = check_gain(k_pz, 'k_pz (V/rad)', 0.0, 1e8) * check_gain(k_rz, 'k_rz (s)', 0.0, 1e5)
-    v_sat = check_gain(v_sat_v, 'v_sat_v', 0.0, 1e3)
-    return min(max(gain * (wz - wz0), -v_sat), v_sat)
+    lim = SCAN_OMEGA_LIMIT_RAD_S
+    wz = check_gain(omega_z, 'omega_z (rad/s)', -lim, lim)
+    wz0 = check_gain(omega_z0, 'omega_z0 (rad/s)', -lim, lim)
+    kp, kr = check_gain(k_pz, 'k_pz (V/rad)', 0.0, 1e8), check_gain(k_rz, 'k_rz (s)', 0.0, 1e5)
+    return scan_yaw_volts_xyz(wz, wz0, kp, kr, check_gain(v_sat_v, 'v_sat_v', 0.0, 1e3))
 
 
+@kernels.helper
 def pointing_error_xyz(target_body: Sequence[float]) -> Vec3:
     """Kernel of :func:`pointing_error` (raises :class:`ControllerError` for a zero vector)."""
     sx, sy, sz = target_body
@@ -165,18 +187,30 @@ def pointing_error(target_body_unit: np.ndarray) -> np.ndarray:
     return np.array(pointing_error_xyz(as_xyz(target_body_unit, 'target_body_unit')))
 
 
+@kernels.helper
+def unit_quaternion_checked(x: float, y: float, z: float, w: float) -> tuple[int, float, Quat]:
+    """Kernel of :func:`unit_quaternion_xyzw` on four floats: (0, |q|, q/|q|); status 1 when not finite, 2 when
+    |q| is more than 1e-3 from 1 (then the quaternion is (0, 0, 0, 1))."""
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z) and math.isfinite(w)):
+        return 1, 0.0, (0.0, 0.0, 0.0, 1.0)
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    if abs(norm - 1.0) > 1e-3:
+        return 2, norm, (0.0, 0.0, 0.0, 1.0)
+    return 0, norm, (x / norm, y / norm, z / norm, w / norm)
+
+
 def unit_quaternion_xyzw(q: object, name: str) -> Quat:
-    """Kernel of :func:`as_unit_quaternion`: the same checks, a float 4-tuple."""
+    """:func:`as_unit_quaternion` as a float 4-tuple: the same checks."""
     try:
         x, y, z, w = (float(c) for c in q)  # type: ignore[attr-defined]
     except (TypeError, ValueError):
         raise ControllerError(f'{name} must be a finite (x, y, z, w) quaternion, got {q!r}') from None
-    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z) and math.isfinite(w)):
+    status, norm, unit = unit_quaternion_checked(x, y, z, w)
+    if status == 1:
         raise ControllerError(f'{name} must be a finite (x, y, z, w) quaternion, got {q!r}')
-    norm = math.sqrt(x * x + y * y + z * z + w * w)
-    if abs(norm - 1.0) > 1e-3:
+    if status == 2:
         raise ControllerError(f'{name} must be a unit quaternion, |q| = {norm:.6g}')
-    return x / norm, y / norm, z / norm, w / norm
+    return unit
 
 
 def as_unit_quaternion(q: object, name: str) -> np.ndarray:
@@ -190,6 +224,7 @@ def rotate_to_body(q_body_to_eci: np.ndarray, v_eci: np.ndarray) -> np.ndarray:
     return np.array(to_body(q, as_xyz(v_eci, 'v_eci')))
 
 
+@kernels.helper
 def inertial_hold_error_xyz(q: Sequence[float], q_target: Sequence[float]) -> Vec3:
     """Kernel of :func:`inertial_hold_error` (unit quaternions)."""
     x, y, z, w = quat_mul(conj(q_target), q)
