@@ -17,7 +17,8 @@ Write a kernel on floats, tuples of floats, ints and bools only; a debugging hoo
 an argument that is ``None`` on the compiled path (numba prunes the ``is not None`` branches) and is
 set only when the caller runs the plain function.
 Compiled code is cached on disk next to the source (numba ``cache=True``), so a process pays the
-compiler once per machine, then a ~0.1 s load per kernel.
+compiler once per machine, then a ~0.1 s load per kernel; a kernel's cache entry is stamped with its own source
+and the sources of the helpers it calls (:mod:`acds_common.kernel_cache`), so editing a helper recompiles it.
 
 A model's per-step call resolves through :func:`bound`, not :func:`compiled`: numba's dispatcher types every
 argument on every call (``typeof``, nested tuples walked leaf by leaf) to pick a specialization, 0.4-1.5 µs a call
@@ -61,11 +62,24 @@ def _register(fn: Callable[..., Any]) -> None:
     register_jitable(fn)
 
 
+def registered_helpers() -> tuple[Callable[..., Any], ...]:
+    """The helpers marked so far (:func:`helper`)."""
+    return tuple(_HELPERS)
+
+
 def enable() -> None:
-    """Compile kernels in this process from now on (models built afterwards use the compiled forms)."""
+    """Compile kernels in this process from now on (models built afterwards use the compiled forms). The disk
+    cache is stamped with the files of the helpers each kernel calls too (:mod:`acds_common.kernel_cache`),
+    unless the user chose numba's cache locators (``NUMBA_CACHE_LOCATOR_CLASSES``)."""
     global _enabled
     if _enabled:
         return
+    if not os.environ.get('NUMBA_CACHE_LOCATOR_CLASSES'):
+        from numba.core import config
+
+        from .kernel_cache import LOCATORS
+        # The environment too: numba re-reads its configuration when its variables change.
+        config.CACHE_LOCATOR_CLASSES = os.environ['NUMBA_CACHE_LOCATOR_CLASSES'] = LOCATORS
     for fn in _HELPERS:
         _register(fn)
     _enabled = True
