@@ -13,6 +13,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from acds_common import kernels
+
 Vec3 = tuple[float, float, float]
 Mat3 = tuple[Vec3, Vec3, Vec3]
 #: The zero 3-vector.
@@ -34,6 +36,7 @@ def norm(a: Sequence[float]) -> float:
     return math.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
 
 
+@kernels.helper
 def mv(m: Mat3, v: Sequence[float]) -> Vec3:
     """M v."""
     return (m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2],

@@ -38,7 +38,7 @@ import numpy as np
 from acds_common import kernels, validation
 from acds_common.commands import UNITS  # assembly names: active/standby pair
 from acds_common.units import GAUSS_T
-from acds_common.vec3 import ZERO, Vec3, mat3
+from acds_common.vec3 import ZERO, Vec3, mat3, mv
 
 __all__ = [
     'MagnetometerError',
@@ -186,11 +186,7 @@ def magnetometer_sample(params: tuple, faults: tuple, last_v: tuple[Vec3, Vec3],
     (the units' numpy streams stay in Python).
     """
     residual, delta, curve, units = params
-    m0, m1, m2 = delta
-    d0, d1, d2 = dipole_am2
-    dx = m0[0] * d0 + m0[1] * d1 + m0[2] * d2  # Δ·M as acds_common.vec3.mv
-    dy = m1[0] * d0 + m1[1] * d1 + m1[2] * d2
-    dz = m2[0] * d0 + m2[1] * d1 + m2[2] * d2
+    dx, dy, dz = mv(delta, dipole_am2)
     b_sensed = (b_true_t[0] + residual[0] + dx, b_true_t[1] + residual[1] + dy, b_true_t[2] + residual[2] + dz)
     last_a, volts_a, bias_a = unit_sample(b_sensed, noise_g[0], units[0], faults[0], last_v[0], curve)
     last_b, volts_b, bias_b = unit_sample(b_sensed, noise_g[1], units[1], faults[1], last_v[1], curve)
@@ -373,13 +369,10 @@ class Magnetometer:
             raise MagnetometerError(f'coupling_t_per_am2 must be a finite 3x3 matrix, got shape {delta.shape}')
         self.coupling_t_per_am2 = delta
         self._residual = tuple(self.residual_field_t.tolist())
-        #: Each unit's reading covariance, row-major, T² (diagonal: resolution, accuracy, noise).
-        self._covariance9 = {}
-        for name, unit in self.units.items():
-            var = unit.params.variance_g2() * GAUSS_T**2
-            self._covariance9[name] = (var, 0.0, 0.0, 0.0, var, 0.0, 0.0, 0.0, var)
-        self.active_unit = UNITS[0]
-        self._active = 0  # index of active_unit in UNITS: what the kernel reads
+        #: Each unit's reading covariance in UNITS order, row-major, T² (diagonal: resolution, accuracy, noise).
+        self._covariance9 = tuple((var, 0.0, 0.0, 0.0, var, 0.0, 0.0, 0.0, var)
+                                  for var in (unit.params.variance_g2() * GAUSS_T**2 for unit in self.units.values()))
+        self._active = 0  # the active unit's index in UNITS: what the kernel reads
         #: The two assemblies in UNITS order.
         self._pair = (self.units[UNITS[0]], self.units[UNITS[1]])
         a, b = self._pair
@@ -399,8 +392,12 @@ class Magnetometer:
     def select_unit(self, unit: str) -> None:
         """Make ``unit`` ('A' or 'B') the active assembly."""
         self._check_unit(unit)
-        self.active_unit = unit
         self._active = UNITS.index(unit)
+
+    @property
+    def active_unit(self) -> str:
+        """The active assembly, 'A' or 'B'."""
+        return UNITS[self._active]
 
     def inject_fault(self, unit: str, kind: str, axis: int | None = None, value: float | None = None) -> None:
         """Fault one unit: 'bias_shift' (value in V), 'stuck_axis' (output frozen), 'dead_unit' (all 0 V)."""
@@ -427,7 +424,7 @@ class Magnetometer:
     def read_xyz(self, b_true_xyz: Sequence[float], dipole_xyz: Sequence[float]) -> MagnetometerReading:
         """:meth:`read` on float triples already checked finite (the stepper's per-step path, spec §5)."""
         volts, bias, field_t, b_sensed = self.sample_xyz(b_true_xyz, dipole_xyz)
-        return MagnetometerReading(volts, bias, field_t, b_sensed, self.active_unit, self._covariance9[self.active_unit])
+        return MagnetometerReading(volts, bias, field_t, b_sensed, self.active_unit, self.covariance9)
 
     def sample_xyz(self, b_true_xyz: Sequence[float], dipole_xyz: Sequence[float]) -> tuple[Vec3, Vec3, Vec3, Vec3]:
         """Both units sampled, the active one's (volts, bias volts, field to a naive reader T, field at the sensor T)
@@ -448,7 +445,7 @@ class Magnetometer:
     @property
     def covariance9(self) -> tuple[float, ...]:
         """The active unit's reading covariance, row-major, T²."""
-        return self._covariance9[self.active_unit]
+        return self._covariance9[self._active]
 
     @staticmethod
     def _check_unit(unit: str) -> None:
