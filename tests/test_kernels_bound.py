@@ -229,11 +229,11 @@ def test_plain_process_binds_the_plain_functions_and_imports_no_numba():
         'from acds_common import kernels\n'
         'from acds_controller.transfer_assembly import TransferAssembly, field_xyz\n'
         'from em_driver.drive_assembly import DriveAssembly, drive_step\n'
-        'from magnetometer_sim.fluxgate import Magnetometer, pair_volts\n'
+        'from magnetometer_sim.fluxgate import Magnetometer, magnetometer_sample\n'
         'assert kernels.bound(field_xyz, (0.0,) * 3) is field_xyz\n'
         'assert TransferAssembly()._field_floats is field_xyz\n'
         'assert DriveAssembly()._step is drive_step\n'
-        'assert Magnetometer()._pair_volts is pair_volts\n'
+        'assert Magnetometer()._sample is magnetometer_sample\n'
         'assert "numba" not in sys.modules, "numba imported"\n'
     )
     subprocess.run([sys.executable, '-c', code], check=True)

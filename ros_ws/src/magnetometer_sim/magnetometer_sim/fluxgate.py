@@ -137,10 +137,64 @@ def unit_volts(b_g: Vec3, bias_v: Vec3, curve: tuple[float, ...]) -> Vec3:
     return axis_volts(b_g[0], bias_v[0], curve), axis_volts(b_g[1], bias_v[1], curve), axis_volts(b_g[2], bias_v[2], curve)
 
 
-def pair_volts(b_a: Vec3, bias_a: Vec3, b_b: Vec3, bias_b: Vec3, curve: tuple[float, ...]) -> tuple[Vec3, Vec3]:
-    """Both assemblies' axis volts (:func:`unit_volts`) in one call: the kernel (:mod:`acds_common.kernels`)
-    :meth:`Magnetometer.read` runs every step, the noise already drawn (the units' numpy streams stay in Python)."""
-    return unit_volts(b_a, bias_a, curve), unit_volts(b_b, bias_b, curve)
+@kernels.helper
+def unit_field_g(b_sensed_t: Vec3, unit: tuple[Vec3, Vec3, bool], noise_g: Vec3) -> Vec3:
+    """The field each axis of one assembly measures, G: ``b_sensed_t`` (T) with the unit's scale and offset errors
+    and, when the unit is noisy, this sample's noise ``noise_g`` (drawn in Python from the unit's stream).
+    ``unit``: (scale errors, offsets in G, noisy) (:attr:`FluxgateAssembly.unit`)."""
+    (sx, sy, sz), (ox, oy, oz), noisy = unit
+    bx = b_sensed_t[0] / GAUSS_T * (1.0 + sx) + ox
+    by = b_sensed_t[1] / GAUSS_T * (1.0 + sy) + oy
+    bz = b_sensed_t[2] / GAUSS_T * (1.0 + sz) + oz
+    if noisy:
+        return bx + noise_g[0], by + noise_g[1], bz + noise_g[2]
+    return bx, by, bz
+
+
+@kernels.helper
+def unit_output(volts: Vec3, last_v: Vec3, faults: tuple[Vec3, Vec3, tuple[bool, bool, bool], bool]
+                ) -> tuple[Vec3, Vec3, Vec3]:
+    """(last volts, axis volts, bias volts) one assembly puts out for the axis volts of its field: a stuck axis
+    repeats its last output ``last_v``, a dead unit gives 0 V. ``faults``: (axis biases, bias outputs, stuck
+    axes, dead) (:attr:`FluxgateAssembly.faults`)."""
+    _, bias_out, stuck, dead = faults
+    held = (last_v[0] if stuck[0] else volts[0], last_v[1] if stuck[1] else volts[1],
+            last_v[2] if stuck[2] else volts[2])
+    if dead:
+        return held, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    return held, held, bias_out
+
+
+@kernels.helper
+def unit_sample(b_sensed_t: Vec3, noise_g: Vec3, unit: tuple[Vec3, Vec3, bool],
+                faults: tuple[Vec3, Vec3, tuple[bool, bool, bool], bool], last_v: Vec3, curve: tuple[float, ...]
+                ) -> tuple[Vec3, Vec3, Vec3]:
+    """One assembly's sample of the field at the sensor (T): :func:`unit_field_g` → :func:`unit_volts` about
+    the axis biases → :func:`unit_output`; returns (last volts, axis volts, bias volts)."""
+    return unit_output(unit_volts(unit_field_g(b_sensed_t, unit, noise_g), faults[0], curve), last_v, faults)
+
+
+def magnetometer_sample(params: tuple, faults: tuple, last_v: tuple[Vec3, Vec3], b_true_t: Vec3, dipole_am2: Vec3,
+                        noise_g: tuple[Vec3, Vec3], active: int) -> tuple[tuple[Vec3, Vec3], tuple[Vec3, ...]]:
+    """Both assemblies' sample of one step (:meth:`Magnetometer.sample_xyz`, spec §5): the field at the sensor
+    B_true + B_residual + Δ·M (T), each unit's :func:`unit_sample`, and the active unit's (``active``: 0 = A,
+    1 = B) volts read back to field about the nominal bias and scale (T, the naive reader). ``params``:
+    (residual T, Δ rows, curve, (unit A, unit B)); ``faults``, ``last_v``, ``noise_g``: per unit, A then B.
+    Returns ((last volts A, last volts B), (volts, bias volts, field T, field at the sensor T)).
+
+    A kernel (:mod:`acds_common.kernels`): one call a step samples the magnetometer, the noise already drawn
+    (the units' numpy streams stay in Python).
+    """
+    residual, delta, curve, units = params
+    dx, dy, dz = mv(delta, dipole_am2)
+    b_sensed = (b_true_t[0] + residual[0] + dx, b_true_t[1] + residual[1] + dy, b_true_t[2] + residual[2] + dz)
+    last_a, volts_a, bias_a = unit_sample(b_sensed, noise_g[0], units[0], faults[0], last_v[0], curve)
+    last_b, volts_b, bias_b = unit_sample(b_sensed, noise_g[1], units[1], faults[1], last_v[1], curve)
+    volts, bias = (volts_a, bias_a) if active == 0 else (volts_b, bias_b)
+    bias_v, scale = curve[2], curve[3]
+    field_t = ((volts[0] - bias_v) / scale * GAUSS_T, (volts[1] - bias_v) / scale * GAUSS_T,
+               (volts[2] - bias_v) / scale * GAUSS_T)
+    return (last_a, last_b), (volts, bias, field_t, b_sensed)
 
 
 class MagnetometerReading:
@@ -208,12 +262,15 @@ class FluxgateAssembly:
         if p.accuracy_error_enabled:
             # Offset and scale errors each take up to half the ±0.1 % FS budget.
             half_g = 0.5 * p.accuracy_frac_fs * p.range_g
-            self._offset_g = tuple(self._rng.uniform(-half_g, half_g, 3).tolist())
-            self._scale_err = tuple((self._rng.uniform(-half_g, half_g, 3) / p.range_g).tolist())
+            offset_g = tuple(self._rng.uniform(-half_g, half_g, 3).tolist())
+            scale_err = tuple((self._rng.uniform(-half_g, half_g, 3) / p.range_g).tolist())
         else:
-            self._offset_g = (0.0, 0.0, 0.0)
-            self._scale_err = (0.0, 0.0, 0.0)
-        self._last_v = (p.bias_v, p.bias_v, p.bias_v)
+            offset_g = (0.0, 0.0, 0.0)
+            scale_err = (0.0, 0.0, 0.0)
+        #: What :func:`unit_field_g` reads every sample: (scale errors, offsets in G, noisy).
+        self.unit = (scale_err, offset_g, p.noise_std_g > 0.0)
+        #: The state :func:`unit_output` carries from sample to sample: the last axis volts (a stuck axis's output).
+        self.last_v = (float(p.bias_v),) * 3
         #: What :func:`axis_volts` reads every sample: the curve's constants (the same values as from the params).
         self.curve = (0.5 * p.nonlinearity_frac, p.range_g ** 2, p.bias_v, p.scale_v_per_g, p.rail_low_v,
                       p.rail_high_v, p.step_v)
@@ -227,16 +284,17 @@ class FluxgateAssembly:
         self._faults_changed()
 
     def _faults_changed(self) -> None:
-        """What every sample reads of the faults, computed when they change: each axis's bias (V, nominal + shift),
-        the bias output clipped to the rails (each as min(max(e, lo), hi)) and whether any axis is stuck."""
+        """What every sample reads of the faults (:attr:`faults`), computed when they change: each axis's bias
+        (V, nominal + shift), the bias output clipped to the rails (each as min(max(e, lo), hi), in floats), the
+        stuck axes and whether the unit is dead."""
         p = self.params
         shift_x, shift_y, shift_z = self._bias_shift_v
         ex, ey, ez = p.bias_v + shift_x, p.bias_v + shift_y, p.bias_v + shift_z
-        self.axis_bias_v = (ex, ey, ez)
-        lo, hi = p.rail_low_v, p.rail_high_v
-        self._bias_out = (lo if ex < lo else hi if ex > hi else ex, lo if ey < lo else hi if ey > hi else ey,
-                          lo if ez < lo else hi if ez > hi else ez)
-        self._any_stuck = any(self._stuck)
+        lo, hi = float(p.rail_low_v), float(p.rail_high_v)
+        bias_out = (lo if ex < lo else hi if ex > hi else ex, lo if ey < lo else hi if ey > hi else ey,
+                    lo if ez < lo else hi if ez > hi else ez)
+        #: (axis biases V, bias outputs V, stuck axes, dead): what :func:`unit_output` and :func:`unit_volts` read.
+        self.faults = ((ex, ey, ez), bias_out, tuple(self._stuck), self._dead)
 
     def inject_fault(self, kind: str, axis: int | None = None, value: float | None = None) -> None:
         """Inject 'bias_shift' (value V, one axis or all), 'stuck_axis' (one axis or all) or 'dead_unit'."""
@@ -255,34 +313,20 @@ class FluxgateAssembly:
             raise MagnetometerError(f'unknown magnetometer fault {kind!r}; expected one of {FAULT_KINDS}')
         self._faults_changed()
 
-    def field_g(self, b_sensed_t: Sequence[float]) -> Vec3:
-        """The field each axis measures, G: b_sensed_t (T) with the unit's scale and offset errors and this
-        sample's noise (drawn from the unit's stream when noise_std_g > 0)."""
-        (sx, sy, sz), (ox, oy, oz) = self._scale_err, self._offset_g
-        bx = b_sensed_t[0] / GAUSS_T * (1.0 + sx) + ox
-        by = b_sensed_t[1] / GAUSS_T * (1.0 + sy) + oy
-        bz = b_sensed_t[2] / GAUSS_T * (1.0 + sz) + oz
+    def noise_g(self) -> Vec3:
+        """This sample's noise, G: three draws from the unit's stream when noise_std_g > 0, else zeros (which
+        :func:`unit_field_g` does not add)."""
         noise_std_g = self.params.noise_std_g
         if noise_std_g > 0.0:
             nx, ny, nz = self._rng.normal(0.0, noise_std_g, 3).tolist()
-            return bx + nx, by + ny, bz + nz
-        return bx, by, bz
-
-    def output(self, volts: Vec3) -> tuple[Vec3, Vec3]:
-        """(axis volts, bias volts) the unit puts out for the axis volts of its field (:func:`unit_volts`): a stuck
-        axis repeats its last output, a dead unit gives 0 V."""
-        if self._any_stuck:
-            last, stuck = self._last_v, self._stuck
-            volts = (last[0] if stuck[0] else volts[0], last[1] if stuck[1] else volts[1],
-                     last[2] if stuck[2] else volts[2])
-        self._last_v = volts
-        if self._dead:
-            return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
-        return volts, self._bias_out
+            return nx, ny, nz
+        return ZERO
 
     def sample_xyz(self, b_sensed_t: Sequence[float]) -> tuple[Vec3, Vec3]:
-        """:meth:`sample` on a float triple: (axis volts, bias volts) as float triples."""
-        return self.output(unit_volts(self.field_g(b_sensed_t), self.axis_bias_v, self.curve))
+        """:meth:`sample` on a float triple: (axis volts, bias volts) as float triples (:func:`unit_sample`)."""
+        self.last_v, volts, bias = unit_sample(b_sensed_t, self.noise_g(), self.unit, self.faults, self.last_v,
+                                               self.curve)
+        return volts, bias
 
     def sample(self, b_sensed_t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Output (axis volts, bias volts), V, for the field at the sensor b_sensed_t (T, body axes)."""
@@ -325,27 +369,35 @@ class Magnetometer:
             raise MagnetometerError(f'coupling_t_per_am2 must be a finite 3x3 matrix, got shape {delta.shape}')
         self.coupling_t_per_am2 = delta
         self._residual = tuple(self.residual_field_t.tolist())
-        #: Each unit's reading covariance, row-major, T² (diagonal: resolution, accuracy, noise).
-        self._covariance9 = {}
-        for name, unit in self.units.items():
-            var = unit.params.variance_g2() * GAUSS_T**2
-            self._covariance9[name] = (var, 0.0, 0.0, 0.0, var, 0.0, 0.0, 0.0, var)
-        self._delta = mat3(delta)
-        self.active_unit = UNITS[0]
-        #: The two assemblies in UNITS order and their volts kernel (one call a read; the units share ``params``,
-        #: hence one curve).
+        #: Each unit's reading covariance in UNITS order, row-major, T² (diagonal: resolution, accuracy, noise).
+        self._covariance9 = tuple((var, 0.0, 0.0, 0.0, var, 0.0, 0.0, 0.0, var)
+                                  for var in (unit.params.variance_g2() * GAUSS_T**2 for unit in self.units.values()))
+        self._active = 0  # the active unit's index in UNITS: what the kernel reads
+        #: The two assemblies in UNITS order.
         self._pair = (self.units[UNITS[0]], self.units[UNITS[1]])
         a, b = self._pair
-        #: Bound to the one signature :meth:`read_xyz` calls it with (:func:`kernels.bound`), fixed by construction:
-        #: :meth:`FluxgateAssembly.field_g` gives floats (a true division of every component), each axis bias is
-        #: ``bias_v`` plus a float shift (0.0 or sums from 0.0), and the curve is unit A's, built once here.
-        #: (The example fields are float triples, not ``field_g``'s: that would draw from the units' noise streams.)
-        self._pair_volts = kernels.bound(pair_volts, ZERO, a.axis_bias_v, ZERO, b.axis_bias_v, a.curve)
+        #: What :func:`magnetometer_sample` reads every step (the units share ``params``, hence one curve).
+        self._params = (self._residual, mat3(delta), a.curve, (a.unit, b.unit))
+        #: Both units' noise when it is off: zeros, nothing drawn.
+        self._quiet = (ZERO, ZERO)
+        #: Bound to the one signature :meth:`sample_xyz` calls it with (:func:`kernels.bound`), fixed by construction:
+        #: ``_params`` is built once here (the residual and Δ floats from float arrays, the curve unit A's, each unit
+        #: tuple float triples from ``tolist`` or literals and a bool), each unit's ``faults`` is rebuilt only by
+        #: ``_faults_changed`` (float biases: ``bias_v`` plus float shifts, rails made floats; bools), its
+        #: ``last_v`` starts as floats and is then the kernel's own float output, the noise is ``ZERO`` or
+        #: ``tolist`` floats, the field and dipole are made float tuples in :meth:`sample_xyz`, and ``_active`` is an int.
+        self._sample = kernels.bound(magnetometer_sample, self._params, (a.faults, b.faults), (a.last_v, b.last_v),
+                                     ZERO, ZERO, self._quiet, 0)
 
     def select_unit(self, unit: str) -> None:
         """Make ``unit`` ('A' or 'B') the active assembly."""
         self._check_unit(unit)
-        self.active_unit = unit
+        self._active = UNITS.index(unit)
+
+    @property
+    def active_unit(self) -> str:
+        """The active assembly, 'A' or 'B'."""
+        return UNITS[self._active]
 
     def inject_fault(self, unit: str, kind: str, axis: int | None = None, value: float | None = None) -> None:
         """Fault one unit: 'bias_shift' (value in V), 'stuck_axis' (output frozen), 'dead_unit' (all 0 V)."""
@@ -371,19 +423,29 @@ class Magnetometer:
 
     def read_xyz(self, b_true_xyz: Sequence[float], dipole_xyz: Sequence[float]) -> MagnetometerReading:
         """:meth:`read` on float triples already checked finite (the stepper's per-step path, spec §5)."""
-        bx, by, bz = b_true_xyz
-        rx, ry, rz = self._residual
-        dx, dy, dz = mv(self._delta, dipole_xyz)
-        b_sensed = (bx + rx + dx, by + ry + dy, bz + rz + dz)
+        volts, bias, field_t, b_sensed = self.sample_xyz(b_true_xyz, dipole_xyz)
+        return MagnetometerReading(volts, bias, field_t, b_sensed, self.active_unit, self.covariance9)
+
+    def sample_xyz(self, b_true_xyz: Sequence[float], dipole_xyz: Sequence[float]) -> tuple[Vec3, Vec3, Vec3, Vec3]:
+        """Both units sampled, the active one's (volts, bias volts, field to a naive reader T, field at the sensor T)
+        as float triples (:func:`magnetometer_sample`, one kernel call; the noise drawn here, unit A's first)."""
+        b0, b1, b2 = b_true_xyz
+        d0, d1, d2 = dipole_xyz
+        # The field and dipole come from other models and messages: the bound kernel takes tuples of three floats,
+        # so anything else (ints, numpy scalars, lists) is made floats first, as the sums they enter would.
+        if not (type(b_true_xyz) is tuple and type(dipole_xyz) is tuple and type(b0) is float and type(b1) is float
+                and type(b2) is float and type(d0) is float and type(d1) is float and type(d2) is float):
+            b_true_xyz, dipole_xyz = (float(b0), float(b1), float(b2)), (float(d0), float(d1), float(d2))
         a, b = self._pair
-        volts_a, volts_b = self._pair_volts(a.field_g(b_sensed), a.axis_bias_v, b.field_g(b_sensed), b.axis_bias_v,
-                                              a.curve)
-        sample_a, sample_b = a.output(volts_a), b.output(volts_b)
-        volts, bias = sample_a if self.active_unit == UNITS[0] else sample_b
-        p = self.units[self.active_unit].params
-        field_t = ((volts[0] - p.bias_v) / p.scale_v_per_g * GAUSS_T, (volts[1] - p.bias_v) / p.scale_v_per_g * GAUSS_T,
-                   (volts[2] - p.bias_v) / p.scale_v_per_g * GAUSS_T)
-        return MagnetometerReading(volts, bias, field_t, b_sensed, self.active_unit, self._covariance9[self.active_unit])
+        noise = (a.noise_g(), b.noise_g()) if a.unit[2] else self._quiet  # the units share params: both or neither
+        (a.last_v, b.last_v), out = self._sample(self._params, (a.faults, b.faults), (a.last_v, b.last_v), b_true_xyz,
+                                                 dipole_xyz, noise, self._active)
+        return out
+
+    @property
+    def covariance9(self) -> tuple[float, ...]:
+        """The active unit's reading covariance, row-major, T²."""
+        return self._covariance9[self._active]
 
     @staticmethod
     def _check_unit(unit: str) -> None:

@@ -44,21 +44,8 @@ class MagnetometerStep(Stepper):
 
     def sample(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Apply commands and faults due at step k, sample both units, return the active one."""
-        events: list[str] = []
-        errors: list[str] = []
-        for text in self._mode_status(inp['mode'])[1]:
-            try:
-                events.append(apply_command(parse_command(text), self.mag))
-            except MagnetometerError as exc:
-                errors.append(f'rejected command {text!r}: {exc}')
-        if self._fault_pending and t_s >= self.cfg['fault_time']:
-            self._fault_pending = False
-            axis = None if self.cfg['fault_axis'] < 0 else self.cfg['fault_axis']
-            value = self.cfg['fault_value_v'] if self.cfg['fault'] == 'bias_shift' else None
-            self.mag.inject_fault(self.cfg['fault_unit'], self.cfg['fault'], axis, value)
-            events.append(f'scenario fault at t={t_s:g} s: unit {self.cfg["fault_unit"]} {self.cfg["fault"]}'
-                          + (f' {value:+g} V' if value is not None else '')
-                          + (' on all axes' if axis is None else f' on axis {"xyz"[axis]}'))
+        commands = self._mode_status(inp['mode'])[1]
+        events, errors = self._apply(commands, t_s) if commands or self._fault_pending else ([], [])
         b_true = (0.0, 0.0, 0.0) if inp['b_true'] is None else inp['b_true'][0]
         dipole = xyz(inp['dipole'])
         if all_finite((*b_true, *dipole)):  # the usual step: one check of both
@@ -72,19 +59,36 @@ class MagnetometerStep(Stepper):
                 self._dipole = dipole
             else:
                 errors.append(f'rejected non-finite achieved dipole {list(dipole)}; holding the last valid dipole')
-        reading = self.mag.read_xyz(self._b_true, self._dipole)  # float triples, checked finite above
-        out: dict[str, Any] = {
-            'volts': reading.volts_xyz,
-            'bias_volts': reading.bias_xyz,
-            'field': (reading.field_xyz, reading.covariance9),
-        }
+        mag = self.mag
+        volts, bias, field, b_sensed = mag.sample_xyz(self._b_true, self._dipole)  # checked finite above
+        out: dict[str, Any] = {'volts': volts, 'bias_volts': bias, 'field': (field, mag.covariance9)}
         if events or errors or (self.telemetry_wanted and k % self.cfg['telemetry_every'] == 0):
+            reading = MagnetometerReading(volts, bias, field, b_sensed, mag.active_unit, mag.covariance9)
             out['diagnostics'] = self.telemetry(reading, events, errors)
-        for line in errors:
-            self.log('error', f't={t_s:g} s: {line}')
-        for line in events:
-            self.log('info', f't={t_s:g} s: {line}')
+            for line in errors:
+                self.log('error', f't={t_s:g} s: {line}')
+            for line in events:
+                self.log('info', f't={t_s:g} s: {line}')
         return out
+
+    def _apply(self, commands: list[str], t_s: float) -> tuple[list[str], list[str]]:
+        """(events, errors) of applying the forwarded ``commands`` and the scenario fault if it is due at t_s."""
+        events: list[str] = []
+        errors: list[str] = []
+        for text in commands:
+            try:
+                events.append(apply_command(parse_command(text), self.mag))
+            except MagnetometerError as exc:
+                errors.append(f'rejected command {text!r}: {exc}')
+        if self._fault_pending and t_s >= self.cfg['fault_time']:
+            self._fault_pending = False
+            axis = None if self.cfg['fault_axis'] < 0 else self.cfg['fault_axis']
+            value = self.cfg['fault_value_v'] if self.cfg['fault'] == 'bias_shift' else None
+            self.mag.inject_fault(self.cfg['fault_unit'], self.cfg['fault'], axis, value)
+            events.append(f'scenario fault at t={t_s:g} s: unit {self.cfg["fault_unit"]} {self.cfg["fault"]}'
+                          + (f' {value:+g} V' if value is not None else '')
+                          + (' on all axes' if axis is None else f' on axis {"xyz"[axis]}'))
+        return events, errors
 
     def telemetry(self, reading: MagnetometerReading, events: list[str], errors: list[str]) -> Any:
         """Table 4-11 magnetometer telemetry: bias voltage, per-axis volts, active unit; events."""
