@@ -18,6 +18,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from acds_common import kernels
 from acds_common.dipole_field import cross3
 from acds_common.vec3 import Mat3, Vec3
 
@@ -28,6 +29,7 @@ class AttitudeError(ValueError):
     """A matrix that is not a proper rotation."""
 
 
+@kernels.helper
 def dcm(q: Sequence[float]) -> Mat3:
     """Rotation matrix R of the unit quaternion q = (x, y, z, w): v_rotated = R v (body → reference)."""
     x, y, z, w = q
