@@ -6,7 +6,8 @@ float as its IEEE bytes: compiled against plain, and plain against :func:`~dynam
 given the stage environment the :class:`~acds_common.environment.Orbit` and
 :class:`~acds_common.environment.TiltedDipoleField` methods compute (the model's path for other orbits and fields).
 The model's one call per step (:func:`~dynamics.rigid_body_model.advance_circular_dipole`,
-:func:`~dynamics.rigid_body_model.advance_stages`: the RK4, the mean torques and the truth values) likewise.
+:func:`~dynamics.rigid_body_model.advance_stages`: the RK4, the mean torques and the truth values) and the reaction
+wheels' (:func:`~dynamics.wheels_model.wheels_step`) likewise.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from dynamics.rigid_body_model import (
     attitude_rk4_circular_dipole,
     truth_values,
 )
+from dynamics.wheels_model import ReactionWheels, WheelsConfig, wheels_step
 
 
 def _orbit_field(rng: random.Random) -> tuple[Orbit, TiltedDipoleField]:
@@ -184,3 +186,26 @@ def test_truth_values_compiled_give_the_same_bits_in_and_out_of_the_shadow(compi
         assert ieee_bits(got) == ieee_bits(truth_values(q, w, r, v, b, tmag, tgg, sun)), f'case {case}'
         if sun[4] and sun[3] is d:
             assert got[-1] == sun_cfg.present_xyz(r)
+
+
+WHEEL_SETS = [{}, {'orthogonal_equivalent_active_wheels': 3}, {'layout': 'four_cant20'},
+              {'layout': 'four_cant20', 'failed_wheel': 1}]
+
+
+def test_wheels_step_compiled_gives_the_same_bits(compile_kernels, ieee_bits):
+    """The wheels' step, compiled against plain, for each wheel set as :class:`ReactionWheels` builds its parameters:
+    volts within, at (±V_sat) and beyond saturation, signed zeros, momenta near and at capacity (limited mid-step,
+    driven back out), short and long steps; every returned float (momenta, torques, body h and ḣ)."""
+    fast = compile_kernels(wheels_step)
+    rng = random.Random(29)
+    for kw in WHEEL_SETS:
+        p = ReactionWheels(WheelsConfig(**kw))._params
+        caps = p[5]
+        for case in range(1500):
+            volts = tuple(rng.choice([0.0, -0.0, 17.1, -17.1, rng.uniform(-40.0, 40.0), rng.uniform(-2.0, 2.0)])
+                          for _ in range(3))
+            h = tuple(rng.choice([0.0, -0.0, c, -c, rng.uniform(-1.0, 1.0) * c, c - rng.uniform(0.0, 0.1)])
+                      if c else 0.0 for c in caps)
+            dt = rng.choice([0.5, 1.0, rng.uniform(1e-3, 30.0)])
+            args = (p, h, volts, dt)
+            assert ieee_bits(fast(*args)) == ieee_bits(wheels_step(*args)), f'{kw} case {case}: {args}'
