@@ -29,6 +29,7 @@ class AttitudeError(ValueError):
     """A matrix that is not a proper rotation."""
 
 
+@kernels.helper
 def dcm(q: Sequence[float]) -> Mat3:
     """Rotation matrix R of the unit quaternion q = (x, y, z, w): v_rotated = R v (body → reference)."""
     x, y, z, w = q

@@ -597,6 +597,21 @@ class SunConfig:
         return cls(right_ascension_rad=ra, declination_rad=dec, eclipse=eclipse)
 
 
+@kernels.helper
+def sun_present_xyz(direction_xyz: Vec3, eclipse: bool, r_eci_m: Sequence[float]) -> bool:
+    """Whether the Sun (unit ECI ``direction_xyz``) is visible from ``r_eci_m``: outside the cylindrical Earth shadow
+    when ``eclipse``, always otherwise (:meth:`Sun.present_xyz`; a helper a compiled kernel calls)."""
+    if not eclipse:
+        return True
+    rx, ry, rz = r_eci_m
+    sx, sy, sz = direction_xyz
+    along = rx * sx + ry * sy + rz * sz
+    if along >= 0.0:
+        return True
+    px, py, pz = rx - along * sx, ry - along * sy, rz - along * sz
+    return px * px + py * py + pz * pz > units.EARTH_RADIUS_M ** 2
+
+
 class Sun:
     """Sun direction and presence (spec §3 "Sun"; sensors ideal per seed 002 §4.3)."""
 
@@ -614,15 +629,7 @@ class Sun:
 
     def present_xyz(self, r_eci_m: Sequence[float]) -> bool:
         """Fast path of :meth:`present` on a float triple (the Sun is fixed, so no time)."""
-        if not self.cfg.eclipse:
-            return True
-        rx, ry, rz = r_eci_m
-        sx, sy, sz = self.direction_xyz
-        along = rx * sx + ry * sy + rz * sz
-        if along >= 0.0:
-            return True
-        px, py, pz = rx - along * sx, ry - along * sy, rz - along * sz
-        return px * px + py * py + pz * pz > units.EARTH_RADIUS_M ** 2
+        return sun_present_xyz(self.direction_xyz, self.cfg.eclipse, r_eci_m)
 
     def present(self, r_eci_m: np.ndarray, t_s: float) -> bool:
         """True when the Sun is visible from ``r_eci_m`` (always True when eclipse is disabled)."""

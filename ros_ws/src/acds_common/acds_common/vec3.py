@@ -47,6 +47,7 @@ def mv(m: Mat3, v: Sequence[float]) -> Vec3:
             m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2])
 
 
+@kernels.helper
 def mtv(m: Mat3, v: Sequence[float]) -> Vec3:
     """Mᵀ v."""
     return (m[0][0] * v[0] + m[1][0] * v[1] + m[2][0] * v[2],

@@ -18,8 +18,10 @@ after every substep.
 Speed: the kernel (:func:`attitude_rk4`) is written on plain Python floats (one derivative is ~200 float
 operations on 3-vectors, where numpy's per-call overhead would dominate); IEEE doubles without fused
 operations give the same bits on every machine. The direct engine runs it compiled
-(:mod:`acds_common.kernels`: the same bits, 8× faster). Numpy appears only at the API edge
-(``Truth``'s arrays are built when read).
+(:mod:`acds_common.kernels`: the same bits, 8× faster). One ``advance`` is one kernel call
+(:func:`advance_circular_dipole` or :func:`advance_stages`): the RK4, the mean torques and the truth's
+float values at the new time (:func:`truth_values`: B and the Sun in body axes, sun presence). Numpy appears
+only at the API edge (``Truth``'s arrays and derived quantities are built when read).
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ from acds_common.environment import (
     circular_dipole_parameters,
     field_xyz,
     sun_frame_dcm,
+    sun_present_xyz,
 )
 from acds_common.environment import ecliptic_normal_eci as default_ecliptic_normal_eci
 from acds_common.environment import gravity_gradient_torque_nm as gravity_gradient_torque_nm  # the public form
@@ -70,6 +73,29 @@ def magnetic_torque_nm(dipole_body_am2: np.ndarray, b_body_t: np.ndarray) -> np.
     return np.array(cross([float(c) for c in dipole_body_am2], [float(c) for c in b_body_t]))
 
 
+#: The truth's float values at one time, what the stepper publishes: r_eci (m), q body → ECI (x, y, z, w),
+#: v_eci (m/s), ω body (rad/s), B body (T), sun direction cosines (B13, B23, B33), mean T_mag and T_gg over the
+#: last ``advance`` (body, N·m), the Sun in body axes, sun present (:func:`truth_values`).
+TruthValues = tuple[Vec3, Quat, Vec3, Vec3, Vec3, Vec3, Vec3, Vec3, Vec3, bool]
+
+#: The Sun as :func:`truth_values` takes it: the ECI direction rotated for the sun sensor, the sun line (the
+#: sun frame's z axis), whether those two are the same row (one rotation gives both), and the Sun's own direction
+#: and eclipse flag (sun presence, :func:`acds_common.environment.sun_present_xyz`).
+SunAxes = tuple[Vec3, Vec3, bool, Vec3, bool]
+
+
+@kernels.helper
+def truth_values(q: Quat, w: Vec3, r: Vec3, v: Vec3, b: Vec3, tmag: Vec3, tgg: Vec3, sun: SunAxes) -> TruthValues:
+    """:data:`TruthValues` at attitude ``q``, rates ``w``, position ``r``, velocity ``v`` and ECI field ``b``,
+    with the mean torques ``tmag`` and ``tgg``: B and the Sun rotated into body axes (Rᵀ v, R of q), the direction
+    cosines (B13, B23, B33) the sun line in body axes (:class:`Truth`)."""
+    rmat = dcm(q)
+    sun_eci, sun_line, same, direction, eclipse = sun
+    sun_body = mtv(rmat, sun_eci)
+    cosines = sun_body if same else mtv(rmat, sun_line)
+    return (r, q, v, w, mtv(rmat, b), cosines, tmag, tgg, sun_body, sun_present_xyz(direction, eclipse, r))
+
+
 class Truth:
     """True state at ``t_s`` for the truth topics and the ideal sensors (spec §2, §3).
 
@@ -79,36 +105,30 @@ class Truth:
     B33) is also the sun unit vector in body axes. Torques are averages over the last ``advance``
     (zeros before the first).
 
-    The model computes the state as float triples, kept in the ``*_xyz`` attributes (what the
-    stepper publishes); the numpy attributes (``q_body_to_eci``, ``b_body_t``, …) and the derived
-    quantities (``dcm_body_sun``, total momentum, energy) are built when read.
+    The model computes the state as float triples (``values``, :data:`TruthValues`, also kept in the ``*_xyz``
+    attributes: what the stepper publishes); the numpy attributes (``q_body_to_eci``, ``b_body_t``, …) and the
+    derived quantities (``dcm_body_sun``, total momentum, energy) are built when read.
     """
 
-    __slots__ = ('t_s', 'q_xyzw', 'omega_xyz', 'r_xyz', 'v_xyz', 'b_eci_xyz', 'sun_present', 'torque_magnetic_xyz',
-                 'torque_gravity_gradient_xyz', 'wheel_h_xyz', '_rmat', '_inertia', '_sun_frame', 'b_body_xyz',
-                 'sun_body_xyz', 'sun_cosines_xyz')
+    __slots__ = ('t_s', 'values', 'r_xyz', 'q_xyzw', 'v_xyz', 'omega_xyz', 'b_body_xyz', 'sun_cosines_xyz',
+                 'torque_magnetic_xyz', 'torque_gravity_gradient_xyz', 'sun_body_xyz', 'sun_present', 'b_eci_xyz',
+                 'wheel_h_xyz', '_inertia', '_sun_frame')
 
-    def __init__(self, t_s: float, q_xyzw: tuple[float, float, float, float], omega_xyz: Vec3, r_xyz: Vec3,
-                 v_xyz: Vec3, b_eci_xyz: Vec3, sun_eci_xyz: Vec3, sun_present: bool, torque_magnetic_xyz: Vec3,
-                 torque_gravity_gradient_xyz: Vec3, wheel_h_xyz: Vec3, inertia: Mat3, sun_frame: Mat3) -> None:
+    def __init__(self, t_s: float, values: TruthValues, b_eci_xyz: Vec3, wheel_h_xyz: Vec3, inertia: Mat3,
+                 sun_frame: Mat3) -> None:
         self.t_s = t_s
-        self.q_xyzw = q_xyzw
-        self.omega_xyz = omega_xyz
-        self.r_xyz = r_xyz
-        self.v_xyz = v_xyz
+        self.values = values
+        (self.r_xyz, self.q_xyzw, self.v_xyz, self.omega_xyz, self.b_body_xyz, self.sun_cosines_xyz,
+         self.torque_magnetic_xyz, self.torque_gravity_gradient_xyz, self.sun_body_xyz, self.sun_present) = values
         self.b_eci_xyz = b_eci_xyz
-        self.sun_present = sun_present
-        self.torque_magnetic_xyz = torque_magnetic_xyz
-        self.torque_gravity_gradient_xyz = torque_gravity_gradient_xyz
         self.wheel_h_xyz = wheel_h_xyz
-        self._rmat = dcm(q_xyzw)
         self._inertia = inertia
         self._sun_frame = sun_frame
-        self.b_body_xyz = mtv(self._rmat, b_eci_xyz)
-        self.sun_body_xyz = mtv(self._rmat, sun_eci_xyz)
-        #: (B13, B23, B33): the sun frame's z axis (the sun line) in body axes; the product above when the model
-        #: gives that row itself as the Sun's direction (the same bits: :class:`RigidBodyModel`).
-        self.sun_cosines_xyz = self.sun_body_xyz if sun_frame[2] is sun_eci_xyz else mtv(self._rmat, sun_frame[2])
+
+    @property
+    def _rmat(self) -> Mat3:
+        """R (body → ECI) of the attitude."""
+        return dcm(self.q_xyzw)
 
     @property
     def q_body_to_eci(self) -> np.ndarray:
@@ -153,7 +173,8 @@ class Truth:
     @property
     def dcm_body_sun(self) -> np.ndarray:
         """B (3×3), B_ij = (body axis i)·(sun-frame axis j)."""
-        return np.array([mtv(self._rmat, axis) for axis in self._sun_frame]).T
+        rmat = self._rmat
+        return np.array([mtv(rmat, axis) for axis in self._sun_frame]).T
 
     @property
     def torque_magnetic_body_nm(self) -> np.ndarray:
@@ -322,6 +343,7 @@ def attitude_rk4(q: Quat, w: Vec3, n: int, t0: float, dt: float, env: tuple[_Env
     return (qx, qy, qz, qw), (wx, wy, wz), (smx, smy, smz), (sgx, sgy, sgz)
 
 
+@kernels.helper
 def attitude_rk4_circular_dipole(q: Quat, w: Vec3, n: int, t0: float, dt: float, start: _Env, orbit: CircularDipole,
                                  inertia: Mat3, inertia_inv: Mat3, m: Vec3, h0: Vec3, hdot: Vec3, td: Vec3, gg: bool,
                                  field: bool) -> tuple[Quat, Vec3, Vec3, Vec3, tuple[Vec3, Vec3, Vec3]]:
@@ -334,6 +356,46 @@ def attitude_rk4_circular_dipole(q: Quat, w: Vec3, n: int, t0: float, dt: float,
     q1, w1, smag, sgg = attitude_rk4(q, w, n, t0, dt, (start,), orbit, end, inertia, inertia_inv, m, h0, hdot, td,
                                      gg, field)
     return q1, w1, smag, sgg, end
+
+
+#: What :func:`advance_circular_dipole` and :func:`advance_stages` take once per model: RK4 substeps, inertia and
+#: its inverse, the gravity gradient on, the Sun (:data:`SunAxes`).
+BodyParams = tuple[int, Mat3, Mat3, bool, SunAxes]
+
+
+@kernels.helper
+def advanced(q: Quat, w: Vec3, smag: Vec3, sgg: Vec3, n: int, end: tuple[Vec3, Vec3, Vec3],
+             sun: SunAxes) -> tuple[bool, Vec3, TruthValues]:
+    """After ``n`` RK4 substeps to (q, ω) with the weighted torque sums ``smag``, ``sgg`` (:func:`attitude_rk4`) and
+    the environment (r, v, B) ``end`` there: (q and ω finite, B_eci, :func:`truth_values` with the mean torques)."""
+    finite = math.isfinite(q[0] + q[1] + q[2] + q[3] + (w[0] + w[1] + w[2]))  # a finite sum: every component finite
+    w6 = 6.0 * n
+    r, v, b = end
+    return finite, b, truth_values(q, w, r, v, b, (smag[0] / w6, smag[1] / w6, smag[2] / w6),
+                                   (sgg[0] / w6, sgg[1] / w6, sgg[2] / w6), sun)
+
+
+def advance_circular_dipole(p: BodyParams, orbit: CircularDipole, q: Quat, w: Vec3, t0: float, dt: float, start: _Env,
+                            m: Vec3, h0: Vec3, hdot: Vec3, td: Vec3, field: bool) -> tuple[bool, Vec3, TruthValues]:
+    """One :meth:`RigidBodyModel.advance` in the circular orbit and tilted dipole ``orbit``
+    (:func:`attitude_rk4_circular_dipole` from the environment ``start`` at t0) and its end (:func:`advanced`).
+    A kernel (:mod:`acds_common.kernels`): the model's one compiled call per step."""
+    n, inertia, inertia_inv, gg, sun = p
+    q1, w1, smag, sgg, end = attitude_rk4_circular_dipole(q, w, n, t0, dt, start, orbit, inertia, inertia_inv, m, h0,
+                                                          hdot, td, gg, field)
+    return advanced(q1, w1, smag, sgg, n, end, sun)
+
+
+def advance_stages(p: BodyParams, q: Quat, w: Vec3, t0: float, dt: float, env: tuple[_Env, ...],
+                   end: tuple[Vec3, Vec3, Vec3], m: Vec3, h0: Vec3, hdot: Vec3, td: Vec3,
+                   field: bool) -> tuple[bool, Vec3, TruthValues]:
+    """One :meth:`RigidBodyModel.advance` for any orbit and field: :func:`attitude_rk4` on the stage environment
+    ``env`` and the end (:func:`advanced`) at the environment ``end`` (r, v, B at t0 + dt). A kernel
+    (:mod:`acds_common.kernels`)."""
+    n, inertia, inertia_inv, gg, sun = p
+    q1, w1, smag, sgg = attitude_rk4(q, w, n, t0, dt, env, None, None, inertia, inertia_inv, m, h0, hdot, td, gg,
+                                     field)
+    return advanced(q1, w1, smag, sgg, n, end, sun)
 
 
 class RigidBodyModel:
@@ -383,27 +445,36 @@ class RigidBodyModel:
         self._q: tuple[float, float, float, float] = tuple(float(c) for c in q0 / np.linalg.norm(q0))  # type: ignore
         self._w = finite_xyz("omega0_body_rad_s", omega0_body_rad_s)
         self._t = finite_float("t0_s", t0_s)
-        self._tmag_avg = ZERO
-        self._tgg_avg = ZERO
+        #: The truth's values at the current time (None until the first ``advance`` or ``truth``).
+        self._values: TruthValues | None = None
         self.disturbance = disturbance
         #: A circular orbit and the tilted dipole as floats: the kernel evaluates them at the stage times itself.
         self._circular_dipole = circular_dipole_parameters(orbit, field)
-        #: The RK4 kernel bound to the one signature :meth:`advance_unchecked` calls it with (:func:`kernels.bound`):
-        #: the types are fixed by construction there: q and ω float tuples (from ``float``/:func:`finite_xyz` here,
-        #: then the kernel's own results), ``substeps`` an ``int``, t a float (:func:`finite_float`, then float sums),
-        #: dt a float (:func:`positive_dt`; :meth:`advance_unchecked`'s contract, the stepper's ``positive_dt``), the
-        #: environment float sextuples (the orbit's and field's floats or the kernel's end environment), the circular
-        #: dipole's parameters and the inertia rows fixed here (floats, :func:`mat3`), m, h0 and ḣ float triples
-        #: (:meth:`advance` makes them with :func:`finite_xyz`; the stepper passes its inputs' Vector3Stamped values,
-        #: plain floats from :func:`acds_common.messages.vector3` or a kernel, the direct engine running only the
-        #: built-in steppers), the disturbance a float triple whatever numbers the thrusters give (sums with the
-        #: floats of ZERO or :func:`finite_xyz`), gravity gradient and field flags bools (``bool`` here, a comparison
-        #: there). The test suite runs every shipped scenario with the check on (:func:`kernels.checking`).
-        rk4 = attitude_rk4 if self._circular_dipole is None else attitude_rk4_circular_dipole
-        env = ((_NO_ENV,) * (2 * self.substeps + 1), None, None) if self._circular_dipole is None else \
-            (_NO_ENV, self._circular_dipole)
-        self._rk4 = kernels.bound(rk4, self._q, self._w, self.substeps, self._t, 1.0, *env, self._inertia_t,
-                                  self._inertia_inv_t, ZERO, ZERO, ZERO, ZERO, self.gravity_gradient, True)
+        #: The Sun as the truth takes it (:data:`SunAxes`; the row itself and ``is``: one rotation when it is the
+        #: sun line) and the per-model constants of the advance kernel (:data:`BodyParams`).
+        self._sun = (self._sun_eci, sun_line, self._sun_eci is sun_line, sun.direction_xyz, bool(sun.cfg.eclipse))
+        self._params: BodyParams = (self.substeps, self._inertia_t, self._inertia_inv_t, self.gravity_gradient,
+                                    self._sun)
+        #: The advance kernel bound to the one signature :meth:`advance_unchecked` calls it with
+        #: (:func:`kernels.bound`): the types are fixed by construction there: the parameters built here (an ``int``,
+        #: float rows from :func:`mat3`, ``bool``s, the Sun's float triples: :func:`mat3` and
+        #: :class:`~acds_common.environment.Sun`'s floats), the circular dipole's parameters fixed here, q and ω
+        #: float tuples (from ``float``/:func:`finite_xyz` here, then the kernel's own results), t a float
+        #: (:func:`finite_float`, then float sums), dt a float (:func:`positive_dt`; :meth:`advance_unchecked`'s
+        #: contract, the stepper's ``positive_dt``), the environment float sextuples and (r, v, B) triples (the
+        #: orbit's and field's floats or the kernel's end environment), m, h0 and ḣ float triples (:meth:`advance`
+        #: makes them with :func:`finite_xyz`; the stepper passes its inputs' Vector3Stamped values, plain floats from
+        #: :func:`acds_common.messages.vector3` or a kernel, the direct engine running only the built-in steppers),
+        #: the disturbance a float triple whatever numbers the thrusters give (sums with the floats of ZERO or
+        #: :func:`finite_xyz`), the field flag a ``bool`` (a comparison there). The test suite runs every shipped
+        #: scenario with the check on (:func:`kernels.checking`).
+        if self._circular_dipole is None:
+            self._advance = kernels.bound(advance_stages, self._params, self._q, self._w, self._t, 1.0,
+                                          (_NO_ENV,) * (2 * self.substeps + 1), (ZERO, ZERO, ZERO), ZERO, ZERO, ZERO,
+                                          ZERO, True)
+        else:
+            self._advance = kernels.bound(advance_circular_dipole, self._params, self._circular_dipole, self._q,
+                                          self._w, self._t, 1.0, _NO_ENV, ZERO, ZERO, ZERO, ZERO, True)
         #: The environment (t, r, v, b) at the last time it was needed in full: an ``advance`` ends
         #: where ``truth`` and the next ``advance`` start.
         self._env_cache: tuple[float, Vec3, Vec3, Vec3] | None = None
@@ -469,9 +540,10 @@ class RigidBodyModel:
                                                                        thruster_torque_body_nm)
         self.advance_unchecked(dt, m, h0, hdot, gas)
 
-    def advance_unchecked(self, dt: float, m: Vec3, h0: Vec3, hdot: Vec3, gas: Vec3 | None) -> None:
+    def advance_unchecked(self, dt: float, m: Vec3, h0: Vec3, hdot: Vec3, gas: Vec3 | None) -> TruthValues:
         """:meth:`advance` for a caller that has checked its inputs (the stepper, every step): ``dt`` a float
-        > 0, the 3-vectors finite float triples (``gas`` the thruster torque or None). Spec §3."""
+        > 0, the 3-vectors finite float triples (``gas`` the thruster torque or None). Spec §3. Returns the
+        truth's values at the new time (:data:`TruthValues`, what :meth:`truth` gives as ``values``)."""
         t0 = self._t
         td = ZERO
         if self.disturbance is not None:
@@ -480,23 +552,23 @@ class RigidBodyModel:
             gx, gy, gz = gas
             td = (td[0] + gx, td[1] + gy, td[2] + gz)
         need_field = m[0] != 0.0 or m[1] != 0.0 or m[2] != 0.0
-        gg = self.gravity_gradient
-        body = (self._inertia_t, self._inertia_inv_t, m, h0, hdot, td, gg, need_field)
+        t1 = t0 + dt
         if self._circular_dipole is None:
-            env = self._stage_environment(t0, dt, need_field or gg, need_field)
-            q, w, smag, sgg = self._rk4(self._q, self._w, self.substeps, t0, dt, env, None, None, *body)
+            env = self._stage_environment(t0, dt, need_field or self.gravity_gradient, need_field)
+            end = self._environment(t1)
+            finite, b, values = self._advance(self._params, self._q, self._w, t0, dt, env, end, m, h0, hdot, td,
+                                              need_field)
         else:  # the kernel evaluates the orbit and field after the start, and gives the end's for truth
             r, _v, b = self._environment(t0)
-            q, w, smag, sgg, end = self._rk4(self._q, self._w, self.substeps, t0, dt, (*r, *b),
-                                             self._circular_dipole, *body)
-            self._env_cache = (t0 + dt, *end)
-        if not math.isfinite(sum(q) + sum(w)):  # a finite sum: every component finite
+            finite, b, values = self._advance(self._params, self._circular_dipole, self._q, self._w, t0, dt,
+                                              (*r, *b), m, h0, hdot, td, need_field)
+            self._env_cache = (t1, values[0], values[2], b)
+        if not finite:
             raise DynamicsError("integration diverged (non-finite state): reduce dt_s or raise substeps")
-        self._q, self._w = q, w
-        self._t = t0 + dt
-        w6 = 6.0 * self.substeps
-        self._tmag_avg = (smag[0] / w6, smag[1] / w6, smag[2] / w6)
-        self._tgg_avg = (sgg[0] / w6, sgg[1] / w6, sgg[2] / w6)
+        self._q, self._w = values[1], values[3]
+        self._t = t1
+        self._values = values
+        return values
 
     def truth(self, wheel_h_body_nms: Sequence[float]) -> Truth:
         """Truth at the current time; ``wheel_h_body_nms`` (N·m·s, body) for the total momentum."""
@@ -506,5 +578,6 @@ class RigidBodyModel:
         """:meth:`truth` for a caller that has checked ``h`` (a finite float triple): the stepper, every step."""
         t = self._t
         r, v, b = self._environment(t)
-        return Truth(t, self._q, self._w, r, v, b, self._sun_eci, self.sun.present_xyz(r), self._tmag_avg,
-                     self._tgg_avg, h, self._inertia_t, self._sun_frame)
+        if self._values is None:  # before the first advance: no torques yet
+            self._values = truth_values(self._q, self._w, r, v, b, ZERO, ZERO, self._sun)
+        return Truth(t, self._values, b, h, self._inertia_t, self._sun_frame)

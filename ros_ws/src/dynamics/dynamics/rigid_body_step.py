@@ -44,7 +44,7 @@ from acds_common.stepper import StepError, Stepper
 from dynamics import integration_accuracy as accuracy
 from dynamics.configuration import RIGID_BODY_SECTIONS, actuator_limits, build_rigid_body
 from dynamics.errors import DynamicsError, positive_dt
-from dynamics.rigid_body_model import Truth
+from dynamics.rigid_body_model import Truth, TruthValues
 
 #: ``angular_velocity_covariance`` of the ideal gyros, rad²/s² (row-major 3×3).
 GYRO_COVARIANCE = (0.0,) * 9
@@ -58,17 +58,17 @@ _ZERO_COV = (0.0,) * 9  # a truth field's covariance: unknown
 _ZERO = (0.0, 0.0, 0.0)
 
 
-def truth_outputs(truth: Truth) -> dict[str, Any]:
-    """Truth and ideal sensors of one step (spec §3 "Sensors in the study are ideal")."""
-    omega = truth.omega_xyz
+def truth_outputs(values: TruthValues) -> dict[str, Any]:
+    """Truth and ideal sensors of one step (spec §3 "Sensors in the study are ideal") from the truth's values."""
+    r, q, v, omega, b_body, sun_cosines, torque_mag, torque_gg, sun_body, sun_present = values
     return {
-        'odometry': OdometryValue(truth.r_xyz, truth.q_xyzw, truth.v_xyz, omega),
-        'b_body': (truth.b_body_xyz, _ZERO_COV),
-        'sun_cosines': truth.sun_cosines_xyz,
-        'torque_mag': truth.torque_magnetic_xyz,
-        'torque_gg': truth.torque_gravity_gradient_xyz,
+        'odometry': OdometryValue(r, q, v, omega),
+        'b_body': (b_body, _ZERO_COV),
+        'sun_cosines': sun_cosines,
+        'torque_mag': torque_mag,
+        'torque_gg': torque_gg,
         'gyro': (omega, GYRO_COVARIANCE),
-        'sun_sensor': truth.sun_body_xyz if truth.sun_present else _ZERO,
+        'sun_sensor': sun_body if sun_present else _ZERO,
     }
 
 
@@ -93,6 +93,10 @@ class RigidBodyStep(Stepper):
         if not all(math.isfinite(b) for bound in self._bounds for b in bound):  # what integrate's check relies on
             raise DynamicsError(f'actuator limits must be finite, got {self._bounds}')
         self._wheel_h = _ZERO
+        #: The last ``mode`` value read and whether it asks the run to end: the mode manager hands on the same
+        #: (immutable) value object while its report stays the same, so most steps read nothing.
+        self._mode_value: Any = None
+        self._run_complete = run_complete(None)
         #: Torque-free so far (external and wheel torques all zero): the drifts are integration error.
         self.torque_free = not self.model.gravity_gradient and self.model.disturbance is None
         self._h0_eci: np.ndarray | None = None  # H in ECI and the rotational energy at t_0
@@ -128,7 +132,7 @@ class RigidBodyStep(Stepper):
 
     def start(self) -> dict[str, Any]:
         """The truth of step 0."""
-        return truth_outputs(self.model.truth(self._wheel_h))
+        return truth_outputs(self.model.truth(self._wheel_h).values)
 
     def health(self, truth: Truth, wall_step_s: float) -> tuple:
         """The integration health status of the step just integrated (module docstring)."""
@@ -155,7 +159,10 @@ class RigidBodyStep(Stepper):
 
     def integrate(self, k: int, _t: float, inp: dict[str, Any]) -> dict[str, Any]:
         """All actuator outputs of step k are in: integrate to t_k+1 and return its truth."""
-        if k >= self.total_steps or run_complete(inp['mode']):
+        mode = inp['mode']
+        if mode is not self._mode_value:
+            self._mode_value, self._run_complete = mode, run_complete(mode)
+        if k >= self.total_steps or self._run_complete:
             self.finished = True
             return {}
         h, hdot, dipole = xyz(inp['wheel_h']), xyz(inp['wheel_hdot']), xyz(inp['dipole'])
@@ -178,11 +185,10 @@ class RigidBodyStep(Stepper):
         if self._h0_eci is None:  # the constants of the motion at t_0, with the wheels' momentum h(t_0)
             truth0 = model.truth_unchecked(h)
             self._h0_eci, self._e0_j = truth0.h_total_eci_nms, truth0.rotational_energy_j
-        model.advance_unchecked(dt, dipole, h, hdot, gas)  # the inputs were checked above
+        values = model.advance_unchecked(dt, dipole, h, hdot, gas)  # the inputs were checked above
         self._wheel_h = h_end
-        truth = model.truth_unchecked(h_end)
-        out = truth_outputs(truth)
-        w = truth.omega_xyz
+        out = truth_outputs(values)
+        w = values[3]
         omega = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
         if omega > self._omega_checked:
             self._omega_checked = omega
@@ -194,7 +200,7 @@ class RigidBodyStep(Stepper):
             self._wall_s += wall
             self._wall_steps += 1
             if k % DIAGNOSTICS_EVERY == 0:
-                out['diagnostics'] = self.health(truth, wall)
+                out['diagnostics'] = self.health(model.truth_unchecked(h_end), wall)
         return out
 
     def _refuse(self, k: int, h: Any, hdot: Any, dipole: Any, h_end: Any) -> None:

@@ -7,6 +7,9 @@ Seed 002: §4.2.2/Table 4-2 (V_sat = 17.1 V, average wheel torque 0.117 ft-lb pe
 (square law; "only three reaction wheels were modeled - one for each axis"; Table 4-6 capacities),
 §4.3.2.2 (yaw wheel saturates at 39 ft-lb-sec), §6.1/§6.2 (four wheels, momentum axes 90° apart,
 symmetric about the Y-Z plane, canted 20° from it).
+
+A step is one kernel call (:func:`wheels_step`, on floats in :data:`SLOTS` wheel slots: :mod:`acds_common.kernels`,
+compiled in the direct engine); numpy appears only at the API edge.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from acds_common import units
+from acds_common import kernels, units
 
 from dynamics.errors import DynamicsError, finite_float, finite_vector3, finite_xyz, positive_dt
 
@@ -69,15 +72,70 @@ def _min_max_norm(a_scaled: np.ndarray, v: np.ndarray) -> float:
     return min(float(np.max(np.abs(m0 + t * z))) for t in cands)
 
 
-def _rows_times(rows: tuple[tuple[float, ...], ...], v: Sequence[float]) -> tuple[float, float, float]:
-    """A 3×N matrix (its rows) times an N-vector, on floats."""
-    out = [0.0, 0.0, 0.0]
-    for i, row in enumerate(rows):
-        acc = 0.0
-        for a, x in zip(row, v, strict=True):
-            acc += a * x
-        out[i] = acc
-    return out[0], out[1], out[2]
+#: Wheel slots of the per-step kernel (:func:`wheels_step`): the 4-wheel cluster's wheels; three orthogonal wheels
+#: leave the last slot empty (no axis, zero capacity, no torque: it stays at zero momentum).
+SLOTS = 4
+#: Per wheel slot, as :func:`wheels_step` takes and gives it.
+Slots = tuple[float, float, float, float]
+
+
+@kernels.helper
+def _row_times(row: Slots, v: Slots) -> float:
+    """A row of a 3×N matrix times an N-vector (slots), on floats, summed in slot order."""
+    acc = 0.0
+    for j in range(SLOTS):
+        acc += row[j] * v[j]
+    return acc
+
+
+@kernels.helper
+def _dot3(row: tuple[float, float, float], r0: float, r1: float, r2: float) -> float:
+    """A distribution row times the body-axis request (r0, r1, r2)."""
+    d0, d1, d2 = row
+    return d0 * r0 + d1 * r1 + d2 * r2
+
+
+@kernels.helper
+def _limit(x: float, c: float) -> float:
+    """x limited to ±c."""
+    return -c if x < -c else c if x > c else x
+
+
+#: What :func:`wheels_step` takes once per wheel set: the square-law gain k, V_sat, one wheel per body axis
+#: (``orthogonal``), the distribution rows (slot × body axis), the axis rows (body axis × slot), the capacities.
+WheelParams = tuple[float, float, bool, tuple[tuple[float, float, float], ...], tuple[Slots, Slots, Slots], Slots]
+
+
+def wheels_step(p: WheelParams, h: Slots, volts: Sequence[float], dt: float) -> tuple[Slots, Slots, tuple[
+        float, float, float], tuple[float, float, float]]:
+    """One step of :meth:`ReactionWheels.step_xyz_unchecked` on the wheels' momenta ``h`` (per slot, N·m·s):
+    (momenta at the step end, wheel torques before capacity limiting, h at the step start and the mean ḣ in body
+    axes). A kernel (:mod:`acds_common.kernels`), compiled in the direct engine."""
+    k, vsat, orthogonal, dist, axes, caps = p
+    vx, vy, vz = volts  # body-axis torque requests k·V|V|, V limited to ±V_sat
+    vx = -vsat if vx < -vsat else vsat if vx > vsat else vx
+    vy = -vsat if vy < -vsat else vsat if vy > vsat else vy
+    vz = -vsat if vz < -vsat else vsat if vz > vsat else vz
+    r0, r1, r2 = k * vx * abs(vx), k * vy * abs(vy), k * vz * abs(vz)
+    if orthogonal:
+        torque = (r0, r1, r2, 0.0)
+    else:
+        torque = (_dot3(dist[0], r0, r1, r2), _dot3(dist[1], r0, r1, r2), _dot3(dist[2], r0, r1, r2),
+                  _dot3(dist[3], r0, r1, r2))
+    peak = max(abs(torque[0]), abs(torque[1]), abs(torque[2]), abs(torque[3]))
+    t_max = k * vsat * vsat
+    if peak > t_max:
+        torque = (torque[0] * (t_max / peak), torque[1] * (t_max / peak), torque[2] * (t_max / peak),
+                  torque[3] * (t_max / peak))
+    # each wheel's h + τ·dt limited to ±its capacity
+    h_end = (_limit(h[0] + torque[0] * dt, caps[0]), _limit(h[1] + torque[1] * dt, caps[1]),
+             _limit(h[2] + torque[2] * dt, caps[2]), _limit(h[3] + torque[3] * dt, caps[3]))
+    if orthogonal:
+        start, end = (h[0], h[1], h[2]), (h_end[0], h_end[1], h_end[2])
+    else:
+        start = (_row_times(axes[0], h), _row_times(axes[1], h), _row_times(axes[2], h))
+        end = (_row_times(axes[0], h_end), _row_times(axes[1], h_end), _row_times(axes[2], h_end))
+    return h_end, torque, start, ((end[0] - start[0]) / dt, (end[1] - start[1]) / dt, (end[2] - start[2]) / dt)
 
 
 def box_capacity_nms(axes_body: np.ndarray, capacities_nms: np.ndarray) -> np.ndarray:
@@ -170,23 +228,38 @@ class ReactionWheels:
         if np.any(np.abs(h) > self._caps * (1.0 + 1e-12)):
             raise DynamicsError(f"h0_body_nms {h0.tolist()} needs wheel momenta {h.tolist()} N·m·s "
                                 f"beyond the wheel capacities {self._caps.tolist()} N·m·s")
-        # The per-step state and matrices as floats (N wheels): momenta, axis rows (3×N), distribution rows (N×3).
-        self._h: tuple[float, ...] = tuple(h.tolist())
-        self._torque: tuple[float, ...] = (0.0,) * len(self._h)
-        self._axes_rows = tuple(tuple(row) for row in self._axes.tolist())
-        self._dist_rows = tuple(tuple(row) for row in self._dist.tolist())
-        self._caps_t = tuple(self._caps.tolist())
         #: One wheel per body axis (three_orthogonal): the body-axis and per-wheel quantities coincide.
-        self._orthogonal = self._axes.shape == (3, 3) and bool(np.all(self._axes == np.eye(3))) and bool(
+        orthogonal = self._axes.shape == (3, 3) and bool(np.all(self._axes == np.eye(3))) and bool(
             np.all(self._dist == np.eye(3)))
+        n = self._axes.shape[1]
+        if not (orthogonal or n == SLOTS):  # the slots' empty last wheel is exact only with one wheel per axis
+            raise DynamicsError(f"the wheel kernel takes three orthogonal wheels or {SLOTS}, got {n} wheels")
+        self._n = n
+        # The per-step state and matrices as floats in the kernel's slots (N wheels, then empty ones): momenta,
+        # torques, and the parameters (:data:`WheelParams`: axis rows 3×slots, distribution rows slots×3).
+        pad = SLOTS - n
+        self._h: Slots = tuple(h.tolist()) + (0.0,) * pad  # type: ignore[assignment]
+        self._torque: Slots = (0.0,) * SLOTS  # type: ignore[assignment]
+        self._params: WheelParams = (
+            float(cfg.torque_gain_nm_per_v2), float(cfg.v_sat_v), orthogonal,
+            tuple(tuple(row) for row in self._dist.tolist()) + ((0.0, 0.0, 0.0),) * pad,
+            tuple(tuple(row) + (0.0,) * pad for row in self._axes.tolist()),  # type: ignore[arg-type]
+            tuple(self._caps.tolist()) + (0.0,) * pad)  # type: ignore[arg-type]
+        #: :func:`wheels_step` bound to the one signature :meth:`step_xyz_unchecked` calls it with
+        #: (:func:`kernels.bound`): the parameters float tuples and a ``bool`` built here (``float``, ``tolist``), the
+        #: momenta float slots (``tolist`` here, then the kernel's own results), volts a float triple (the
+        #: contract of :meth:`step_xyz_unchecked`: :meth:`step_xyz` makes them with :func:`finite_xyz`, the stepper
+        #: passes its input's Vector3Stamped value or its last valid one, plain floats from
+        #: :func:`acds_common.messages.vector3` or a kernel) and dt a float (:func:`positive_dt`).
+        self._step = kernels.bound(wheels_step, self._params, self._h, (0.0, 0.0, 0.0), 1.0)
 
     def momentum_body_nms(self) -> np.ndarray:
         """Total wheel momentum in body axes, N·m·s."""
-        return self._axes @ np.array(self._h)
+        return self._axes @ np.array(self._h[:self._n])
 
     def wheel_momenta_nms(self) -> np.ndarray:
         """Signed momentum of each wheel along its own axis, N·m·s."""
-        return np.array(self._h)
+        return np.array(self._h[:self._n])
 
     def wheel_capacities_nms(self) -> np.ndarray:
         """Momentum capacity of each wheel, N·m·s."""
@@ -198,11 +271,11 @@ class ReactionWheels:
 
     def wheel_torques_nm(self) -> np.ndarray:
         """Torque applied to each wheel during the last step before capacity limiting, N·m."""
-        return np.array(self._torque)
+        return np.array(self._torque[:self._n])
 
     def saturated(self) -> np.ndarray:
         """Per wheel: True when the wheel is at its momentum capacity (either sign)."""
-        return np.abs(np.array(self._h)) >= self._caps
+        return np.abs(np.array(self._h[:self._n])) >= self._caps
 
     def capacity_per_axis_nms(self) -> np.ndarray:
         """Body-axis momentum capacities, N·m·s (Table 4-6 box, see ``box_capacity_nms``)."""
@@ -216,31 +289,9 @@ class ReactionWheels:
     def step_xyz_unchecked(self, volts: Sequence[float], dt: float) -> tuple[tuple[float, float, float],
                                                                            tuple[float, float, float]]:
         """:meth:`step_xyz` for a caller that has checked its inputs (the stepper, every step): ``volts`` three
-        finite numbers, ``dt`` a float > 0. Spec §4."""
-        k, vsat = self.cfg.torque_gain_nm_per_v2, self.cfg.v_sat_v
-        vx, vy, vz = volts  # body-axis torque requests k·V|V|, V limited to ±V_sat
-        vx = -vsat if vx < -vsat else vsat if vx > vsat else vx
-        vy = -vsat if vy < -vsat else vsat if vy > vsat else vy
-        vz = -vsat if vz < -vsat else vsat if vz > vsat else vz
-        r0, r1, r2 = k * vx * abs(vx), k * vy * abs(vy), k * vz * abs(vz)
-        torque = (r0, r1, r2) if self._orthogonal else [d0 * r0 + d1 * r1 + d2 * r2 for d0, d1, d2 in self._dist_rows]
-        peak = max(map(abs, torque))
-        t_max = k * vsat * vsat
-        if peak > t_max:
-            torque = [t * (t_max / peak) for t in torque]
-        self._torque = tuple(torque)
-        h_start = self._h
-        caps = self._caps_t
-        h_end = [0.0] * len(caps)  # each wheel's h + τ·dt limited to ±its capacity
-        for i, c in enumerate(caps):
-            h = h_start[i] + torque[i] * dt
-            h_end[i] = -c if h < -c else c if h > c else h
-        self._h = tuple(h_end)
-        if self._orthogonal:
-            start, end = h_start, h_end
-        else:
-            start, end = _rows_times(self._axes_rows, h_start), _rows_times(self._axes_rows, h_end)
-        return start, ((end[0] - start[0]) / dt, (end[1] - start[1]) / dt, (end[2] - start[2]) / dt)
+        finite floats, ``dt`` a float > 0. Spec §4 (:func:`wheels_step`)."""
+        self._h, self._torque, start, hdot = self._step(self._params, self._h, volts, dt)
+        return start, hdot
 
     def step(self, volts_body_axes_v: np.ndarray, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
         """Apply body-axis drive volts for ``dt_s`` s; return (h at step start, mean ḣ) in body axes.
