@@ -17,7 +17,7 @@ want=$(cd "$ROOT" && cat requirements.lock ros_ws/src/*/setup.py ros_ws/src/*/se
 if [[ -f "$STAMP" && "$(cat "$STAMP")" == "$want" && -x "$VENV/bin/python" ]]; then
   exit 0
 fi
-echo "[setup] preparing $VENV (first run takes ~1 min)" >&2
+echo "[setup] preparing $VENV (first run takes ~2 min)" >&2
 if [[ ! -x "$VENV/bin/python" ]]; then
   "$PY" -m venv "$VENV"
 fi
@@ -25,5 +25,8 @@ fi
 args=()
 for p in "${PKGS[@]}"; do args+=(-e "$p"); done
 "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation --use-pep517 "${args[@]}" 2> >(grep -v "is ignored: it is neither" >&2)
+# The direct engine's compiled kernels into numba's disk cache, so no first run compiles them (issue 24).
+echo "[setup] compiling the direct engine's kernels (numba, once per checkout: ~40 s)" >&2
+"$VENV/bin/python" -m acds_runtime.warm_kernels
 echo "$want" > "$STAMP"
 echo "[setup] done" >&2
