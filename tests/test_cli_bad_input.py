@@ -43,6 +43,15 @@ def test_unknown_verb_and_option_are_clear_errors():
     assert proc.returncode == 2 and 'unrecognized arguments: --warp' in proc.stderr
 
 
+def test_bench_refuses_too_few_steps_to_measure_before_starting():
+    """The graph line measures up to MONITOR_LAG + 2 steps before the end (while every node lives): fewer steps
+    than that leave nothing to measure."""
+    proc = run_acds('bench', '--steps', '100')
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        'acds bench: error: argument --steps: 100 steps is too few to measure: at least 500 (see acds bench --help)']
+
+
 @pytest.mark.parametrize(('args', 'message'), [
     (['--external', 'wheel_law'], "--external: external node 'wheel_law': not a node of this graph"),
     (['--external', 'rigid_body'], "external node 'rigid_body': it owns sim time"),

@@ -14,7 +14,8 @@ import sys
 
 from acds_common.scenario import ScenarioError, list_scenarios
 
-from .arguments import OneLineParser, UsageError, positive_int, step_count
+from .arguments import OneLineParser, UsageError, positive_int
+from .bench import bench_steps
 from .workspace import workspace
 
 
@@ -74,7 +75,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description='Print graph lockstep steps/s, a bare rclpy chain with the same hops, their ratio, '
                                    'and core-only dynamics steps/s.')
     p.add_argument('--json', action='store_true', help='last line: one JSON object')
-    p.add_argument('--steps', type=step_count, default=2000, help='steps per measurement (default 2000)')
+    p.add_argument('--steps', type=bench_steps, default=2000, help='steps per measurement (default 2000, at least 500)')
     p.set_defaults(func=cmd_bench)
     return parser
 

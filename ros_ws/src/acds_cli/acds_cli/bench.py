@@ -38,8 +38,21 @@ from pathlib import Path
 from typing import Any
 
 SCENARIO = 'heao_b_acquisition'
+#: Fewest steps a measurement takes: the graph line measures from the tenth step to MONITOR_LAG (50) + 2 steps
+#: before the end, while every node process lives (:func:`graph_rate`).
+MIN_STEPS = 500
 #: The dispersion line's study: samples 0…DISPERSION_SAMPLES − 1 of this seed.
 DISPERSION_SEED, DISPERSION_SAMPLES = 1, 20
+
+
+def bench_steps(text: str) -> int:
+    """``--steps``: a number of control steps, MIN_STEPS … the most a run may have."""
+    from .arguments import step_count
+
+    value = step_count(text)
+    if value < MIN_STEPS:
+        raise argparse.ArgumentTypeError(f'{value} steps is too few to measure: at least {MIN_STEPS}')
+    return value
 
 
 def _cpu_s(pid: int) -> float:
@@ -56,11 +69,15 @@ def _self_cpu_s() -> float:
 def graph_rate(steps: int) -> dict[str, Any]:
     """Steady-state steps/s, CPU ms/step per process and deliveries/step of the recorded six-node graph."""
     from acds_common import topics
+    from acds_common.graph import MONITOR_LAG
     from acds_common.scenario import load_scenario
     from acds_runtime.launcher import GraphRun
 
     sc = load_scenario(SCENARIO)
     skip = steps // 10
+    # The last mark while every node process lives: the monitor takes in step k with the nodes at most MONITOR_LAG
+    # steps ahead, and they leave after the last step (a mark at the last step read the /proc of a node gone).
+    last = steps - 2 - MONITOR_LAG
     marks: dict[str, Any] = {}
     work = Path(tempfile.mkdtemp(prefix='acds_bench_'))
     graph = GraphRun(sc, work / 'run', steps=steps, echo=lambda _l: None, record=work / 'bag')
@@ -73,7 +90,7 @@ def graph_rate(steps: int) -> dict[str, Any]:
     def progress(k: int, _total: int, wall: float) -> None:
         if k == skip:
             marks['t0'], marks['cpu0'] = wall, sample()
-        elif k == steps - 1 and 't1' not in marks:
+        elif k == last and 't1' not in marks:
             marks['t1'], marks['cpu1'] = wall, sample()
             mon = graph.monitor
             assert mon is not None
@@ -83,7 +100,7 @@ def graph_rate(steps: int) -> dict[str, Any]:
     graph.progress = progress
     with graph:
         graph.wait()
-    span = steps - 1 - skip
+    span = last - skip
     wall = marks['t1'] - marks['t0']
     cpu = {name: 1e3 * (marks['cpu1'][name] - marks['cpu0'][name]) / span for name in marks['cpu0']}
     return {'steps_per_s': span / wall, 'cpu_ms_per_step': cpu, 'deliveries_per_step': marks['deliveries'],
