@@ -64,6 +64,24 @@ def test_a_two_worker_local_cluster_equals_one_process(texts, serial):
     assert [_comparable(s) for s in got] == [_comparable(s) for s in serial]
 
 
+def _profiler_on() -> bool:
+    import dask
+    return bool(dask.config.get('distributed.worker.profile.enabled'))
+
+
+def test_the_local_cluster_workers_run_without_dasks_profiler():
+    """Dask's profiler samples a worker's task thread every 10 ms for a dashboard the local cluster does not serve
+    (~5 % of a sample's CPU): its workers run without it."""
+    from acds_runtime.montecarlo import _connect
+
+    client, cluster = _connect(2, None)
+    try:
+        assert list(client.run(_profiler_on).values()) == [False, False]
+    finally:
+        client.close()
+        cluster.close()
+
+
 def test_a_killed_worker_loses_no_sample(texts):
     """Kill one of two workers while it computes a sample (SIGKILL, as a lost host): the scheduler reruns its
     work elsewhere and the result set is complete, in order and identical to one process's — percentiles too."""

@@ -215,6 +215,7 @@ def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:
     """(client, cluster or None) for a local cluster of ``jobs`` workers or the user's ``scheduler``."""
     import logging
 
+    import dask
     from dask.distributed import Client, LocalCluster
 
     if scheduler is None:
@@ -228,8 +229,12 @@ def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:
         try:
             blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
             try:
-                cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None,
-                                       silence_logs=logging.ERROR, preload=[__name__])
+                # Dask's statistical profiler samples each worker's task thread every 10 ms for a dashboard this
+                # cluster does not serve: ~5 % of a sample's CPU (30 case-1 samples: 84.6-88.3 CPU s without it,
+                # 89.6-91.6 with). The workers take the configuration their nannies are created with.
+                with dask.config.set({'distributed.worker.profile.enabled': False}):
+                    cluster = LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
+                                           dashboard_address=None, silence_logs=logging.ERROR, preload=[__name__])
                 client = Client(cluster, set_as_default=False)
             finally:
                 signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
