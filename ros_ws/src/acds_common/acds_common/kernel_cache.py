@@ -51,8 +51,8 @@ def _codes(code: CodeType) -> Iterator[CodeType]:
 def reached_helpers(fn: Callable[..., Any]) -> list[Callable[..., Any]]:
     """The registered helpers ``fn`` calls, directly or through other helpers: each global name of its code that
     is a helper, and each attribute name of its code that is a helper of a module it names (``vec3.mv``)."""
-    helpers = set(kernels.registered_helpers())
-    seen: dict[Callable[..., Any], None] = {}
+    helpers = {id(h) for h in kernels.registered_helpers()}  # by identity: a global may be unhashable
+    seen: dict[int, Callable[..., Any]] = {}
     stack = [fn]
     while stack:
         f = stack.pop()
@@ -61,10 +61,10 @@ def reached_helpers(fn: Callable[..., Any]) -> list[Callable[..., Any]]:
         candidates = [f.__globals__.get(name) for name in names]
         candidates += [getattr(m, name, None) for m in modules for name in names]
         for c in candidates:
-            if callable(c) and c in helpers and c not in seen:
-                seen[c] = None
+            if id(c) in helpers and id(c) not in seen:
+                seen[id(c)] = c
                 stack.append(c)
-    return list(seen)
+    return list(seen.values())
 
 
 class _HelperStamped:
