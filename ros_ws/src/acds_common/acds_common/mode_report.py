@@ -12,8 +12,9 @@ one compares the text 'true' itself.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from typing import Generic, TypeVar
 
 from acds_common.cdr import Status
 from acds_common.messages import MODE_STATUS, OK
@@ -21,6 +22,7 @@ from acds_common.messages import MODE_STATUS, OK
 #: Key prefix of a forwarded ground command: ``command/<node>``.
 COMMAND_PREFIX = 'command/'
 _FLAG = {True: 'true', False: 'false'}
+T = TypeVar('T')
 _RESERVED = ('mode', 'cause', 'captured', 'run_complete')
 
 
@@ -99,25 +101,33 @@ def mode_status(value: Sequence[Status] | None, node: str) -> tuple[str | None, 
     return mode, commands
 
 
-class ModeStatusReader:
-    """:func:`mode_status` for one node, kept for the last ``mode`` value read.
+class ModeValueReader(Generic[T]):
+    """``read(value)`` kept for the last ``mode`` value read: what a node or summary reads of the mode each step.
 
     The mode manager hands on the same value object while its report stays the same (it reuses its encoding),
     and the direct engine passes that object on in memory: most steps then read nothing. A value is an immutable
     tuple of :class:`Status`, so the same object means the same fields; a node process decodes a new object every
-    step and reads it every step. The commands list returned is the one kept: the caller reads it, never changes it.
+    step and reads it every step. The result returned is the one kept: the caller reads it, never changes it.
     """
+
+    def __init__(self, read: Callable[[Sequence[Status] | None], T]) -> None:
+        self._read = read
+        self._value: Sequence[Status] | None = None
+        self._result = read(None)
+
+    def __call__(self, value: Sequence[Status] | None) -> T:
+        """``read(value)``, computed only when ``value`` is another object than the last one."""
+        if value is not self._value:
+            self._value, self._result = value, self._read(value)
+        return self._result
+
+
+class ModeStatusReader(ModeValueReader[tuple[str | None, list[str]]]):
+    """:func:`mode_status` for one node (mode, commands forwarded to it in order), kept for the last value read."""
 
     def __init__(self, node: str) -> None:
         self.node = node
-        self._value: Sequence[Status] | None = None
-        self._fields = mode_status(None, node)
-
-    def __call__(self, value: Sequence[Status] | None) -> tuple[str | None, list[str]]:
-        """(mode, commands forwarded to the node in order) of ``value``, as :func:`mode_status` gives them."""
-        if value is not self._value:
-            self._value, self._fields = value, mode_status(value, self.node)
-        return self._fields
+        super().__init__(lambda value: mode_status(value, node))
 
 
 def mode_state(value: Sequence[Status] | None) -> tuple[str, str, bool] | None:

@@ -38,7 +38,7 @@ import numpy as np
 from acds_common import topics
 from acds_common.cdr import OdometryValue
 from acds_common.messages import OK, WALL_CLOCK_PREFIX, WARN, diagnostic, xyz
-from acds_common.mode_report import run_complete
+from acds_common.mode_report import ModeValueReader, run_complete
 from acds_common.stepper import StepError, Stepper
 
 from dynamics import integration_accuracy as accuracy
@@ -93,10 +93,8 @@ class RigidBodyStep(Stepper):
         if not all(math.isfinite(b) for bound in self._bounds for b in bound):  # what integrate's check relies on
             raise DynamicsError(f'actuator limits must be finite, got {self._bounds}')
         self._wheel_h = _ZERO
-        #: The last ``mode`` value read and whether it asks the run to end: the mode manager hands on the same
-        #: (immutable) value object while its report stays the same, so most steps read nothing.
-        self._mode_value: Any = None
-        self._run_complete = run_complete(None)
+        #: Whether the step's ``mode`` value asks the run to end, read when a new value arrives.
+        self._run_complete = ModeValueReader(run_complete)
         #: Torque-free so far (external and wheel torques all zero): the drifts are integration error.
         self.torque_free = not self.model.gravity_gradient and self.model.disturbance is None
         self._h0_eci: np.ndarray | None = None  # H in ECI and the rotational energy at t_0
@@ -159,10 +157,7 @@ class RigidBodyStep(Stepper):
 
     def integrate(self, k: int, _t: float, inp: dict[str, Any]) -> dict[str, Any]:
         """All actuator outputs of step k are in: integrate to t_k+1 and return its truth."""
-        mode = inp['mode']
-        if mode is not self._mode_value:
-            self._mode_value, self._run_complete = mode, run_complete(mode)
-        if k >= self.total_steps or self._run_complete:
+        if k >= self.total_steps or self._run_complete(inp['mode']):
             self.finished = True
             return {}
         h, hdot, dipole = xyz(inp['wheel_h']), xyz(inp['wheel_hdot']), xyz(inp['dipole'])

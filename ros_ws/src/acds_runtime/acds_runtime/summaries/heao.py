@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 from acds_common import topics
-from acds_common.mode_report import mode_state
+from acds_common.mode_report import ModeValueReader, mode_state
 from acds_common.modes import GAS_MODES
 from acds_common.units import nms_to_ftlbs
 
@@ -93,11 +93,8 @@ class Accumulator:
         #: The mode history's change points: (t_s, mode, cause, captured), what the times need.
         self.history: list[tuple[float, str, str, bool]] = []
         self._last_state: tuple[str, bool] | None = None
-        #: The last ``mode`` value read and its (mode, cause, captured): the mode manager hands on the same immutable
-        #: value while its report stays the same (:class:`acds_common.mode_report.ModeStatusReader`), so most steps
-        #: read nothing.
-        self._mode_value: Any = None
-        self._mode_fields: tuple[str, str, bool] | None = None
+        #: (mode, cause, captured) of the step's ``mode`` value, read when a new value arrives.
+        self._mode_state = ModeValueReader(mode_state)
         # Running peaks and last values as float triples (every step; arrays only in contribute).
         self.peak_h = (0.0, 0.0, 0.0)
         self.peak_rss = 0.0
@@ -122,10 +119,7 @@ class Accumulator:
     def step(self, k: int, values: dict[str, Any]) -> None:
         """One step: keep the mode history's change points and the running peaks."""
         t = k * self.dt_s
-        value = values.get(_MODE)
-        if value is not self._mode_value:
-            self._mode_value, self._mode_fields = value, mode_state(value)
-        state = self._mode_fields
+        state = self._mode_state(values.get(_MODE))
         if state is not None:
             mode, cause, captured = state
             if cause or (mode, captured) != self._last_state:
