@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
+from acds_cli import __main__ as acds_main
+from acds_cli.verbs import sweep
 from acds_cli.verbs.sweep import GROUPS, expand, table
 from acds_runtime.summaries.heao import acquisition_times, saturated, transitions
 
@@ -56,3 +59,22 @@ def test_sweep_groups_and_table():
     row_a = next(line for line in text.splitlines() if line.startswith('a '))
     assert '1.5' in row_a and '2000' in row_a and '—' in row_a
     assert 'b' in text and 'FAILED: exit code 1: boom' in text
+
+
+@pytest.mark.parametrize(('given', 'engine'), [((), 'direct'), (('--engine', 'graph'), 'graph'),
+                                               (('--engine', 'direct'), 'direct')])
+def test_sweep_without_runs_runs_each_scenario_on_the_engine_asked_direct_by_default(monkeypatch, capsys,
+                                                                                    given, engine):
+    """Issue 24 §4: ``sweep A B`` (no ``--runs``) ignored ``--engine`` and ran every scenario on the graph;
+    each scenario's ``run`` process now gets the engine asked for, direct when none is (as ``--help`` says)."""
+    calls = []
+
+    def fake_run_one(name, workdir, extra):
+        calls.append((name, extra))
+        return {'scenario': name, 'sim_minutes': 0.1, 'wall_seconds': 0.0}
+    monkeypatch.setattr(sweep, 'run_one', fake_run_one)
+    assert acds_main.main(['sweep', 'heao_b_case5', 'heao_b_case6', '--until-min', '0.1', *given]) == 0
+    assert [name for name, _ in calls] == ['heao_b_case5', 'heao_b_case6']
+    for _name, extra in calls:
+        assert extra[extra.index('--engine') + 1] == engine, extra
+    assert 'heao_b_case6' in capsys.readouterr().out
