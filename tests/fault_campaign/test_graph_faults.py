@@ -86,6 +86,26 @@ def test_a_stalled_run_monitor_is_named_with_where_its_thread_is(launch_graph):
     assert "the run monitor's thread now:" in text and 'in __call__' in text and 'self.release.wait' in text, text
 
 
+@pytest.mark.parametrize(('line', 'acked', 'on_monitor'), [
+    # the monitor acknowledged step 10: the time owner may fire up to step 60 and announce /clock 61, no further
+    ('[reaction_wheels] LOCKSTEP FAILURE: waited 4.0 s for /clock step 62 from the time owner', 10, True),
+    ('[reaction_wheels] LOCKSTEP FAILURE: waited 4.0 s for /clock step 61 from the time owner', 10, False),
+    ('[reaction_wheels] LOCKSTEP FAILURE: waited 4.0 s for /clock step 62 from the time owner', 20, False),
+    ('[rigid_body] LOCKSTEP FAILURE: stage dynamics waited 4.0 s for step 61 input(s): '
+     f'{topics.resolve(topics.MONITOR_ACK)} (from run_monitor, step 11)', 10, True),
+    ('[reaction_wheels] waited 4.0 s for /clock step 62 from the time owner (not a failure line)', 10, False),
+])
+def test_a_node_that_waited_on_a_clock_step_the_monitor_withholds_blames_the_monitor(line, acked, on_monitor):
+    """Under load the node waiting on /clock can time out before the time owner waiting on the monitor's
+    acknowledgement (two timeouts started a moment apart; seen once in a loaded fresh-clone suite): the report still
+    names the monitor when the step waited for is one its acknowledgements withhold, and only then."""
+    from types import SimpleNamespace
+
+    from acds_runtime.launcher import GraphRun
+    graph = SimpleNamespace(monitor=SimpleNamespace(acked_step=acked))
+    assert GraphRun._waited_on_monitor(graph, SimpleNamespace(tail=[line])) is on_monitor
+
+
 #: A plain ROS 2 reader of /clock (``ros2 topic echo /clock`` with the lockstep QoS): one line per message.
 _CLOCK_READER = """
 import rclpy

@@ -42,6 +42,12 @@ MONITOR_LAG = 50
 MONITOR_ACK_EVERY = 10
 
 
+def monitor_allows(k: int, acked: int) -> bool:
+    """Whether the time owner may fire step ``k`` with the run monitor's acknowledgements up to step ``acked``
+    (-1: none yet): it runs at most :data:`MONITOR_LAG` steps ahead of them."""
+    return acked >= k - MONITOR_LAG
+
+
 @dataclass(frozen=True)
 class Output:
     """A published topic: ``key`` in the stepper's result, the topic (relative to the node's namespace), frames.

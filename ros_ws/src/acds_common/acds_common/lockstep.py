@@ -60,6 +60,7 @@ from acds_common.graph import (
     Output,
     external_of,
     instance_name,
+    monitor_allows,
     node_spec,
     time_owner_among,
 )
@@ -73,6 +74,10 @@ from acds_common.parameters import (
 )
 from acds_common.stepper import StepError, load_stepper
 from acds_common.timing import StepTimes, overrun
+
+#: What a node that is not the time owner waited for when /clock stopped (its failure line; the launcher reads the step
+#: back with :func:`clock_step_waited_for`).
+CLOCK_WAIT = 'for /clock step {k} from the time owner'
 
 #: QoS of every lockstep data topic: nothing is dropped between matched endpoints, late joiners
 #: get the history, and the history is deep enough for an observer (recorder) that runs up to
@@ -477,7 +482,7 @@ class LockstepNode(Node):
             return False
         if self.time_owner:
             return k <= self._clock_step and (MONITOR_NAME not in self.graph_nodes
-                                              or self._monitor_acked >= k - MONITOR_LAG)
+                                              or monitor_allows(k, self._monitor_acked))
         return not stage.paced_by_clock or k <= self._clock_step
 
     def _try_fire(self) -> None:
@@ -615,7 +620,7 @@ class LockstepNode(Node):
                 continue  # the run ended before step k: nothing of it will come
             missing = [f'{self.resolve_topic_name(inp.topic)} (from {inp.source}, step {k - inp.lag})'
                        for inp in stage.inputs if not self._input_value(inp, k)[0]]
-            if self.time_owner and k <= self._clock_step and self._monitor_acked < k - MONITOR_LAG \
+            if self.time_owner and k <= self._clock_step and not monitor_allows(k, self._monitor_acked) \
                     and MONITOR_NAME in self.graph_nodes:
                 missing.append(f'{self.resolve_topic_name(topics.MONITOR_ACK)} (from {MONITOR_NAME}, '
                                f'step {k - MONITOR_LAG})')
@@ -623,7 +628,7 @@ class LockstepNode(Node):
                 self.fail(f'stage {stage.name} waited {waited:.1f} s for step {k} input(s): ' + ', '.join(missing))
                 return
             if not self.time_owner and stage.paced_by_clock and k > self._clock_step and i == 0:
-                self.fail(f'waited {waited:.1f} s for /clock step {k} from the time owner')
+                self.fail(f'waited {waited:.1f} s ' + CLOCK_WAIT.format(k=k))
                 return
 
     def _check_ready(self, now: float) -> None:
@@ -784,11 +789,18 @@ def run_node(name: str, args: list[str] | None = None) -> int:
     os._exit(code)
 
 
+def clock_step_waited_for(line: str) -> int | None:
+    """The /clock step a node's failure line says it waited for from the time owner (:data:`CLOCK_WAIT`), or None."""
+    _, mark, rest = line.partition(CLOCK_WAIT.partition('{k}')[0])
+    step = rest.partition(' ')[0]
+    return int(step) if mark and step.isdigit() else None
+
+
 def completed_step(line: str) -> int | None:
     """The last step a time owner's output line announces (:data:`COMPLETE_PREFIX`), or None."""
     _, mark, rest = line.partition(COMPLETE_PREFIX)
     return int(rest) if mark and rest.strip().isdigit() else None
 
 
-__all__ = ['COMMAND_QOS', 'COMPLETE_PREFIX', 'LOCKSTEP_QOS', 'ConfigError', 'LockstepError', 'LockstepNode',
-           'completed_step', 'message_class', 'release_node', 'run_node']
+__all__ = ['CLOCK_WAIT', 'COMMAND_QOS', 'COMPLETE_PREFIX', 'LOCKSTEP_QOS', 'ConfigError', 'LockstepError', 'LockstepNode',
+           'clock_step_waited_for', 'completed_step', 'message_class', 'release_node', 'run_node']

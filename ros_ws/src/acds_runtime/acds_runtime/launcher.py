@@ -28,7 +28,7 @@ from typing import IO, Any
 
 import yaml
 from acds_common import topics
-from acds_common.graph import Graph, build_graph
+from acds_common.graph import Graph, build_graph, monitor_allows
 from acds_common.lockstep import (
     EXIT_LOCKSTEP,
     FAILURE_LINES,
@@ -36,6 +36,7 @@ from acds_common.lockstep import (
     READY_TIMEOUT_S,
     STACK_SIGNAL,
     STOP_GRACE_S,
+    clock_step_waited_for,
     completed_step,
     is_stopped,
 )
@@ -436,8 +437,7 @@ class GraphRun:
             head += f': {failure[-1]}'
         over_deadline = any(DEADLINE_FAILURE in line for line in failure)
         report = _last_lines(proc)
-        ack = topics.resolve(topics.MONITOR_ACK)
-        on_monitor = [p for p in self.processes.values() if any(ack in line for line in p.tail if 'FAILURE' in line)]
+        on_monitor = [p for p in self.processes.values() if self._waited_on_monitor(p)]
         if on_monitor and self.monitor is not None:
             # a node waited on the launcher's own run monitor (it paces the time owner): no node is to blame
             head = (f'the run monitor (in this launcher) stopped acknowledging /clock: it had taken in /clock up to '
@@ -454,6 +454,22 @@ class GraphRun:
             if culprit != proc.name and culprit in self.processes:
                 report += self._stack_of(self.processes[culprit])
         return head + report
+
+    def _waited_on_monitor(self, proc: NodeProcess) -> bool:
+        """Whether a node failed waiting on the run monitor: the time owner on its acknowledgement, or another node on
+        a /clock step the monitor's acknowledgements withhold from the time owner (it fires step k only when
+        :func:`~acds_common.graph.monitor_allows` it, then announces k + 1). The second holds whichever of the two
+        timeouts, started a moment apart, a loaded machine ends first."""
+        if self.monitor is None:
+            return False
+        ack = topics.resolve(topics.MONITOR_ACK)
+        for line in list(proc.tail):
+            if 'FAILURE' not in line:
+                continue
+            step = clock_step_waited_for(line)
+            if ack in line or (step is not None and not monitor_allows(step - 1, self.monitor.acked_step)):
+                return True
+        return False
 
     def _stack_of(self, proc: NodeProcess) -> str:
         """The last lines of a node the graph waited on, with its Python stack (:meth:`_ask_stack`)."""

@@ -82,6 +82,9 @@ class RunMonitor:
         self._on_clock = on_clock
         self._lock = threading.Lock()
         self.clock_step = -1
+        #: The last /clock step this monitor acknowledged (-1: none yet): the time owner fires no step beyond
+        #: what :func:`~acds_common.graph.monitor_allows` lets it.
+        self.acked_step = -1
         self.topics: dict[str, TopicState] = {}
         self._clock = TopicState(topics.CLOCK, topics.TYPES[topics.CLOCK], {graph.time_owner}, True, True)
         for spec, out in graph.outputs():
@@ -211,6 +214,7 @@ class RunMonitor:
                 self._clock.kept.append(data)
         if k % MONITOR_ACK_EVERY == 0:
             self._ack.publish(self._ack_codec.encode(t_ns))
+            self.acked_step = max(self.acked_step, k)
         if self._on_clock is not None:
             self._on_clock(t_ns)
 
