@@ -11,13 +11,14 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 BASE = (ROOT / 'scenarios' / 'heao_b_acquisition_cold_gas_short.yaml').read_text()
 # T4 (−y) turned to fire like T3: the six thrusters give no torque about −y.
-NO_MINUS_Y = ('  thruster_positions_m: [0, 0, 1.2, 0, 0, -1.2, -2.4, 0, -1.2, -2.4, 0, -1.2, -2.4, 1.2, 0, -2.4, -1.2, 0]\n'
+NO_MINUS_Y = ('  thruster_layout: custom\n'
+              '  thruster_positions_m: [0, 0, 1.2, 0, 0, -1.2, -2.4, 0, -1.2, -2.4, 0, -1.2, -2.4, 1.2, 0, -2.4, -1.2, 0]\n'
               '  thruster_directions: [0, -1, 0, 0, -1, 0, 0, 0, 1, 0, 0, 1, 0, -1, 0, 0, 1, 0]\n')
 
 
 @pytest.mark.parametrize(('section', 'message'), [
-    (NO_MINUS_Y, 'cold_gas.thruster_positions_m / thruster_directions: no thruster gives a torque about -y '
-                 '(T3 and T4 torque +y)'),
+    (NO_MINUS_Y, 'cold_gas.thruster_positions_m / thruster_directions: no thruster, nor couple of two, gives a '
+                 'torque about -y alone'),
     ('  isp_s: -65\n', 'cold_gas.isp_s: -65 is out of range [1, 400]'),
     ('  load_mass_lb: 0.1\n', 'cold_gas: tank pressure at t0 76 psia (0.1 lb in 7533 cm³ at 293 K) is not above the '
                               'regulator set point 150 psia'),

@@ -82,7 +82,9 @@ SECTIONS: dict[str, dict[str, Field]] = {
         'cmg_hold_damping': Field('float', 'CMG attitude-hold damping ratio ζ (not in the seed)', 0.7,
                                   lo=0.0, hi=10.0),
         # ---- cold-gas acquisition law (seed 002 §3.1; acds_controller.cold_gas_law), with node cold_gas
-        'gas_rate_deadband': quantity('gas law: no pulse while every |ω_i − ω_ref,i| is within this', 0.02 * DEG,
+        'gas_rate_deadband': quantity('gas law: no pulse while every |ω_i − ω_ref,i| is within this (half the hand-over '
+                                      'rate, modes.gas_handover_rate: the rates settle inside the capture test; '
+                                      'acds_controller.cold_gas_law)', 0.005 * DEG,
                                       'rad_s', RATE, lo=0.0, hi=0.1),
         'gas_position_gain': quantity('gas law: rate reference per radian of sun-line error, ω_ref = −K·θ', 0.02,
                                       'per_s', {'per_s': 1.0}, lo=0.0, hi=10.0),

@@ -22,6 +22,8 @@ from ..arguments import UsageError, check_output_file, positive_int
 #: The study's figures the budget is printed beside (seed 002 §3.2), lb.
 STUDY_THREE_ACQUISITIONS_LB = 4.3
 STUDY_LOAD_LB = 4.6
+#: Seed 002 §2: "The cold gas system selected will permit sun acquisition within ten minutes", min.
+STUDY_ACQUISITION_MIN = 10.0
 
 
 def cmd_budget(args: argparse.Namespace) -> int:
