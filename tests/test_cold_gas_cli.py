@@ -93,8 +93,12 @@ def test_budget_json_goes_into_a_folder_it_creates(tmp_path):
     out = tmp_path / 'new' / 'budget.json'
     env = {'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': str(tmp_path / 'ros_log')}
     proc = subprocess.run([sys.executable, '-m', 'acds_cli', 'cold-gas-budget', 'heao_b_acquisition_cold_gas_short',
-                           '--acquisitions', '1', '--json', str(out)],
+                           '--runs', '2', '--acquisitions', '1', '--json', str(out)],
                           capture_output=True, text=True, cwd=ROOT, env=env, timeout=300, check=False)
     assert proc.returncode == 0 and 'Traceback' not in proc.stderr, proc.stderr
     import json
-    assert len(json.loads(out.read_text())['acquisitions']) == 1
+    budget = json.loads(out.read_text())
+    assert len(budget['draws']) == 2 and [len(c['acquisitions']) for c in budget['chains']] == [1, 1]
+    worst = max(budget['draws'], key=lambda d: d['gas_used_lb'])
+    assert budget['chains'][0]['sample'] == worst['index']  # the chain flies the draw that used the most gas
+    assert budget['chains'][0]['acquisitions'][0]['truth_digest'] == worst['truth_digest']
