@@ -22,7 +22,7 @@ F = F_nom·p_feed/p_set (F = C_F·A_t·p_c with fixed C_F and throat). Flow ṁ 
 used is exactly Σ F·t_thrust/(Isp·g0). Isp = 65 s from Table 5-3 itself: every flight-qualified tank's impulse
 over its gas capacity is 64.9–65.3 lbf·s/lb (150/2.3, …, 2850/43.8), and §5.3's 300 lbf·s for the 4.6 lb system
 is the same 65 s. Check against physics: the ideal infinite-expansion limit for N₂ at 293 K is
-√(2γ/(γ−1)·R·T)/g0 = 79.5 s (:func:`ideal_vacuum_isp_limit_s`); 65 s is 82 % of it, the usual delivered
+√(2γ/(γ−1)·R·T)/g0 = 79.6 s (:func:`ideal_vacuum_isp_limit_s`); 65 s is 82 % of it, the usual delivered
 fraction of a small cold-gas nozzle.
 
 **Valves.** A command of τ s starting at s opens the valve at s + t_open and closes it at s + τ + t_close
