@@ -57,13 +57,18 @@ def test_thruster_arms_impulse_and_delta_v():
     assert stated(r'pitch by one radial thruster \(arm (\d\.\d+) m\)') == [f'{arr.arm_m[2]:.3f}']
     assert stated(r'yaw by the two tangential thrusters of one place \(2 × (\d\.\d+) m\)') == [f'{arr.arm_m[4] / 2:.3f}']
     assert stated(r'roll by one tangential thruster at each place \(2 × (\d\.\d+) m;') == [f'{arr.arm_m[0] / 2:.3f}']
+    cfg = RcsConfig(arr)
+    (step,) = stated(r"minimum impulse bit's rate step, at most (\d\.\d+) deg/s on the roll axis")
+    roll_step = cfg.minimum_impulse_bit_ns * arr.arm_m[0] / (u.SLUG_FT2_KG_M2 * HEAO_B_INERTIA_SLUG_FT2[0])
+    assert step == f'{math.degrees(roll_step):.4f}'
+    assert all(cfg.minimum_impulse_bit_ns * arr.arm_m[2 * a] / (u.SLUG_FT2_KG_M2 * i) <= roll_step
+               for a, i in enumerate(HEAO_B_INERTIA_SLUG_FT2))  # roll's is the largest
     (platform,) = stated(r'null 1 deg/s about every axis on these arms is (\d+\.\d\d) lbf·s')
     assert platform == f'{ideal_damping_impulse_lbf_s("platform"):.2f}'
     (outriggers,) = stated(r'one thruster per signed axis: (\d+\.\d\d) lbf·s\)')
     assert outriggers == f'{ideal_damping_impulse_lbf_s("outriggers"):.2f}'
     impulse, dv, lb, kg = stated(r"whole load's impulse, (\d+) N·s, is a Δv of (\d\.\d+) m/s on HEAO-B's (\d,\d+) lb, "
                                  r'(\d,\d+) kg, Table 4-1')
-    cfg = RcsConfig(arr)
     total_ns = cfg.load_mass_kg * cfg.exhaust_velocity_m_s
     mass_kg = 6436 * u.LB_KG  # Table 4-1, HEAO-B weight
     assert (impulse, dv, lb, kg) == (f'{total_ns:.0f}', f'{total_ns / mass_kg:.2f}', '6,436', f'{mass_kg:,.0f}')
