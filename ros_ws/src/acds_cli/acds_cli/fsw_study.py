@@ -22,7 +22,7 @@ from typing import Any
 
 from acds_common.scenario import Scenario
 
-from .arguments import UsageError
+from .arguments import UsageError, non_negative_int, positive_number
 from .verbs.montecarlo import (
     _execution_text,
     _run_length,
@@ -46,28 +46,6 @@ class _TooManyFailures(Exception):
     """More samples failed than ``--max-failures`` allows."""
 
 
-def _non_negative(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'expected a whole number, got {text!r}') from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f'must be ≥ 0, got {text}')
-    return value
-
-
-def _grace(text: str) -> float:
-    import math
-
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not 0.0 < value <= 600.0:
-        raise argparse.ArgumentTypeError(f'expected seconds in (0, 600], got {text!r}')
-    return value
-
-
 def add_fsw_options(p: argparse.ArgumentParser) -> None:
     """The options of a study flown by the user's flight software."""
     from acds_runtime.flight_software import STOP_GRACE_S
@@ -86,10 +64,10 @@ def add_fsw_options(p: argparse.ArgumentParser) -> None:
     p.add_argument('--deadline-ms', type=deadline, action='append', metavar='NODE=MS',
                    help="a node's wall-time budget per step, ms (repeatable): its steps over it, per sample and in all")
     p.add_argument('--deadline-strict', action='store_true', help='fail a sample at its first step over a deadline')
-    p.add_argument('--max-failures', type=_non_negative, default=MAX_FAILURES, metavar='M',
+    p.add_argument('--max-failures', type=non_negative_int, default=MAX_FAILURES, metavar='M',
                    help=f'stop the study when more than M samples failed (default {MAX_FAILURES}); --resume runs '
                         'the failed and unrun ones again')
-    p.add_argument('--fsw-grace-s', type=_grace, default=STOP_GRACE_S, metavar='S',
+    p.add_argument('--fsw-grace-s', type=positive_number, default=STOP_GRACE_S, metavar='S',
                    help=f'seconds your node has to leave after SIGINT before it is killed (default {STOP_GRACE_S:g})')
 
 
