@@ -159,9 +159,8 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
 
     def after(key: tuple[str, int], summary: dict[str, Any]) -> None:
         if 'error' not in summary:
-            stop = summary.get('fsw', {}).get('stop', {})
-            if stop.get('how', '').startswith('killed'):
-                print(f'[montecarlo] sample {key[1]}: the flight software was {stop["how"]}', file=sys.stderr)
+            if _killed(summary):
+                print(f'[montecarlo] sample {key[1]}: the flight software was {_killed(summary)}', file=sys.stderr)
             return
         failures.append(key)
         print(failure_line(key, summary), file=sys.stderr, flush=True)
@@ -220,13 +219,21 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     return 1 if failed else 0
 
 
+def _killed(summary: dict[str, Any]) -> str:
+    """'killed (still running G s after SIGINT)' when the study had to kill the sample's node, else ''."""
+    how = summary.get('fsw', {}).get('stop', {}).get('how', '')
+    return how if how.startswith('killed') else ''
+
+
 def failure_line(key: tuple[str, int], summary: dict[str, Any]) -> str:
-    """A failed sample: one line naming why, then the node's last lines (indented)."""
+    """A failed sample: one line naming why, then the node's last lines (indented), where its output is and
+    whether it had to be killed."""
     why = summary['error'].splitlines()[0]
     tail = summary.get('fsw', {}).get('last_lines') or []
     side = 'built-in ' if key[0] == BUILT_IN else ''
+    killed = f'; the flight software was {_killed(summary)}' if _killed(summary) else ''
     return (f'[montecarlo] {side}sample {key[1]} failed: {why}' + ''.join(f'\n    | {line}' for line in tail)
-            + (f'\n    (its output: {summary["fsw"]["log"]})' if 'fsw' in summary else ''))
+            + (f'\n    (its output: {summary["fsw"]["log"]}{killed})' if 'fsw' in summary else ''))
 
 
 def _sample_line(rec: dict[str, Any]) -> str:

@@ -354,6 +354,9 @@ def cmd_pick_sample(args: argparse.Namespace) -> int:
         records = json.loads((folder / 'samples.json').read_text())
     except (OSError, json.JSONDecodeError) as exc:
         raise UsageError(f'{folder}: not a montecarlo output folder ({exc})') from None
+    if 'fsw_command' in spec:
+        raise UsageError(f'{folder}: a study flown by your own node (--external); the baseline rule picks from a '
+                         'dispersion study of the built-in nodes (its report.md names the samples that differ most)')
     if spec.get('complete') is False:
         raise UsageError(f'{folder}: the study is incomplete (its report phase was interrupted: montecarlo.json says '
                          f'complete: false); finish it with {spec["command"]} --resume {folder}')
