@@ -132,3 +132,25 @@ def test_a_node_that_ignores_sigint_is_killed_after_the_grace_period(tmp_path):
     finally:
         signal.signal(signal.SIGINT, before)
     assert stop_process(proc, 0.5) == {'how': 'killed (still running 0.5 s after SIGINT)', 'exit_code': -9}
+
+
+def test_the_scenario_keys_give_the_node_and_the_command(tmp_path):
+    """``external`` and ``fsw_command`` in the scenario: a study flown by the node without the options; the key's
+    command is checked as the option's, and named as the key."""
+    text = (ROOT / 'scenarios' / 'oresat_detumble.yaml').read_text().replace('name: oresat_detumble\n',
+                                                                              'name: oresat_fsw\n')
+    path = tmp_path / 'oresat_fsw.yaml'
+    design = 'oresat_torque_rod_awg35.json'  # the scenario names its rod design relative to its own folder
+    (tmp_path / design).write_text((ROOT / 'scenarios' / design).read_text())
+    path.write_text(text + f'external: [{NODE}]\nfsw_command: "env -i oresat_detumble_fsw"\n')
+    proc = run_acds('montecarlo', str(path), '--runs', '2', '--engine', 'direct', '--out', str(tmp_path / 'study'))
+    assert proc.returncode == 2 and '--external: the direct engine runs every node' in proc.stderr, proc.stderr
+    proc = run_acds('montecarlo', str(path), '--runs', '2', '--out', str(tmp_path / 'study'))
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.startswith('acds montecarlo: error: scenario oresat_fsw key fsw_command: env -i starts your '
+                                  'node without'), proc.stderr
+    path.write_text(text + f'external: [{NODE}]\nfsw_command: "{COMMAND}"\n')
+    proc = run_acds('montecarlo', str(path), '--runs', '1', '--until-min', '0.05', '--jobs', '1', '--paired',
+                    '--out', str(tmp_path / 'study'), '--quiet')
+    assert proc.returncode == 0, proc.stderr
+    assert 'identical in 1 of 1' in proc.stdout and 'flown by `oresat_detumble_fsw --ros-args' in proc.stderr

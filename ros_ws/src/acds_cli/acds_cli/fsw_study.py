@@ -18,6 +18,7 @@ import functools
 import shlex
 import sys
 import time
+from types import SimpleNamespace
 from typing import Any
 
 from acds_common.scenario import Scenario
@@ -121,7 +122,7 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     """Draw, fly each sample with the user's node (and the built-in, ``--paired``), report (module doc)."""
     from acds_runtime import fsw_report
     from acds_runtime.dispersion_report import write_json
-    from acds_runtime.flight_software import FswSpec, run_fsw_sample
+    from acds_runtime.flight_software import FswSpec, built_in_text, run_fsw_sample
     from acds_runtime.montecarlo import run_sample
 
     external, command, overrides = _check(args, base)
@@ -138,8 +139,9 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     extra += ['--paired'] * args.paired + [a for n, ms in args.deadline_ms or [] for a in ('--deadline-ms', f'{n}={ms:g}')]
     extra += ['--deadline-strict'] * args.deadline_strict
     command_line = study_command(['montecarlo', args.scenario], args) + ''.join(f' {shlex.quote(a)}' for a in extra)
-    cases = [BUILT_IN, FSW] if args.paired else [FSW]
-    keyed = {(case, s.index): s for case in cases for s in samples}
+    keyed: dict[tuple[str, int], Any] = {(FSW, s.index): s for s in samples}
+    if args.paired:  # the built-in side first (seconds per sample on the direct engine)
+        keyed = {**{(BUILT_IN, s.index): SimpleNamespace(text=built_in_text(s.text)) for s in samples}, **keyed}
     journal = open_journal(out, {'verb': 'montecarlo', 'scenario': base.name, 'seed': args.seed, 'runs': args.runs,
                                  'vary': args.vary, 'engine': 'graph', 'until_min': args.until_min, 'steps': steps,
                                  'external': external, 'fsw_command': command.template, 'paired': args.paired,
@@ -208,8 +210,10 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
             lines.append(f'differs most: sample {d["index"]} ({d["key"]} Δ {d["difference"]}); replay: '
                          f'{records[d["index"]]["replay"]}')
     lines += ['', *fsw_report.timing_table(timing)]
-    failed = [r for r in records if 'error' in r['flight_software']]
-    lines += [failure_line((FSW, r['index']), r['flight_software']) for r in failed]
+    failed = [((case, r['index']), r[side]) for r in records for case, side in ((BUILT_IN, 'built_in'),
+                                                                                (FSW, 'flight_software'))
+              if 'error' in r.get(side, {})]
+    lines += [failure_line(key, summary) for key, summary in failed]
     print('\n'.join(lines))
     (out / 'report.md').write_text('```\n' + '\n'.join(lines) + '\n```\n\nper sample:\n\n' + '\n'.join(
         _sample_line(r) for r in records) + '\n')
@@ -243,8 +247,8 @@ def _sample_line(rec: dict[str, Any]) -> str:
         return f'- sample {rec["index"]}: failed: {ours["error"].splitlines()[0]}'
     same = ''
     if 'built_in' in rec:
-        same = ', identical to the built-in' if rec['built_in'].get('truth_digest') == ours.get('truth_digest') \
-            else ', differs from the built-in'
+        same = (', the built-in failed' if 'error' in rec['built_in'] else ', identical to the built-in'
+                if rec['built_in'].get('truth_digest') == ours.get('truth_digest') else ', differs from the built-in')
     timing = '; '.join(f'{i} p50 {t["p50_ms"]:.3f} / p99 {t["p99_ms"]:.3f} / max {t["max_ms"]:.3f} ms'
                        + (f', {t["over_deadline"]} over {t["deadline_ms"]:g} ms' if 'deadline_ms' in t else '')
                        for i, t in (rec['timing'] or {}).items() if t)

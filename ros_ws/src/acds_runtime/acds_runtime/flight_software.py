@@ -175,6 +175,15 @@ def node_parameters_file(graph: GraphRun, path: Path) -> Path:
     return path
 
 
+def built_in_text(text: str) -> str:
+    """A sample's scenario with every node the launcher's own (its keys ``external`` and ``fsw_command`` left out):
+    the built-in law flown on the same draws (``--paired``)."""
+    raw = yaml.safe_load(text)
+    if 'external' not in raw and 'fsw_command' not in raw:
+        return text
+    return yaml.safe_dump({k: v for k, v in raw.items() if k not in ('external', 'fsw_command')}, sort_keys=False)
+
+
 class FswGraphRun(GraphRun):
     """A sample's graph whose external node is a process the study started: its exit before the time owner
     completed fails the sample at once, naming it (rather than the graph timing out on its missing outputs)."""
