@@ -154,3 +154,24 @@ def test_the_scenario_keys_give_the_node_and_the_command(tmp_path):
                     '--out', str(tmp_path / 'study'), '--quiet')
     assert proc.returncode == 0, proc.stderr
     assert 'identical in 1 of 1' in proc.stdout and 'flown by `oresat_detumble_fsw --ros-args' in proc.stderr
+
+
+def test_the_paired_report_counts_identical_pairs_and_names_the_samples_that_differ_most():
+    from acds_runtime.fsw_report import paired, paired_table
+
+    def run(i: int, t: float | None, e: float, digest: str) -> dict:
+        return {'detumble_time_min': t, 'energy_j': e, 'sim_minutes': 100.0, 'steps': 6000, 'truth_digest': digest,
+                'detumble_threshold_deg_s': 0.1}
+    built_in = [run(i, 80.0 + i, 50.0 + i, f'd{i}') for i in range(6)]
+    ours = [dict(b) for b in built_in]
+    ours[2] = run(2, 82.0, 57.0, 'other')  # energy 5 J (10 %) over the built-in's
+    ours[4] = run(4, None, 54.0, 'other too')  # not detumbled where the built-in was
+    stats = paired([(i, a, b) for i, (a, b) in enumerate(zip(ours, built_in, strict=True))], seed=1)
+    assert (stats['identical'], stats['compared']) == (4, 6)
+    assert list(stats['quantities']) == ['detumble_time_min', 'energy_j']  # constants and run keys left out
+    energy = stats['quantities']['energy_j']
+    assert energy['max_abs_difference'] == 5.0 and energy['difference']['p50'] == 0.0
+    assert energy['difference']['interval']['p95'][1] == 5.0  # the bootstrap of the differences
+    assert stats['quantities']['detumble_time_min']['one_sided'] == 1
+    assert [(d['index'], d['key']) for d in stats['differ_most']] == [(4, 'detumble_time_min'), (2, 'energy_j')]
+    assert paired_table(stats)[0].startswith('identical in 4 of 6')

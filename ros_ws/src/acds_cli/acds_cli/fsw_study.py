@@ -206,8 +206,10 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     if pairs is not None:
         lines += ['', 'paired with the built-in node (same draws), percentiles over the samples:',
                   *fsw_report.paired_table(pairs)]
+        if not pairs['differ_most']:
+            lines.append('no sample differs from its built-in pair (nothing to replay)')
         for d in pairs['differ_most']:
-            lines.append(f'differs most: sample {d["index"]} ({d["key"]} Δ {d["difference"]}); replay: '
+            lines.append(f'differs most: sample {d["index"]} ({d["key"]} Δ {_delta(d["difference"])}); replay: '
                          f'{records[d["index"]]["replay"]}')
     lines += ['', *fsw_report.timing_table(timing)]
     failed = [((case, r['index']), r[side]) for r in records for case, side in ((BUILT_IN, 'built_in'),
@@ -221,6 +223,10 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     print(f'[montecarlo] report.md, report.json, samples.json, samples.jsonl and each sample\'s run folder '
           f'(samples/<name>: fsw.log, graph.log) in {out}', file=sys.stderr)
     return 1 if failed else 0
+
+
+def _delta(d: float | None) -> str:
+    return 'reached by one side only' if d is None else f'{d:+.4g}'
 
 
 def _killed(summary: dict[str, Any]) -> str:
