@@ -176,8 +176,9 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
                                   task_of=lambda key, _steps: tasks[key[0]], after=after)
     except _TooManyFailures:
         print(f'[montecarlo] stopped: {len(failures)} samples failed, more than --max-failures {args.max_failures}; '
-              f'{journal.kept()} of {len(keyed)} kept in {journal.path}; once the node is fixed, run the failed and '
-              f'unrun samples with:\n  {command_line} --resume {out}', file=sys.stderr)
+              f'{sum("error" not in v for v in journal.done.values())} of {len(keyed)} finished, kept in {journal.path}; '
+              f'once the node is fixed, run the failed and unrun samples with:\n  {command_line} --resume {out}',
+              file=sys.stderr)
         return 1
     wall = time.monotonic() - t0
     records = []
