@@ -97,12 +97,45 @@ def clean_zombies(before: set[str] | None = None) -> tuple[list[str], list[Path]
     return removed, folders
 
 
-def _environment() -> dict[str, str]:
-    """What a worker's results depend on besides the scenario: the interpreter and numpy versions."""
-    import numpy
+def worker_configuration() -> dict[str, str]:
+    """This Dask worker's numeric configuration (:func:`acds_common.numeric_config.numeric_configuration`) and its
+    address (``worker``)."""
+    from acds_common.numeric_config import numeric_configuration
+    from dask.distributed import get_worker
+    return {**numeric_configuration(), 'worker': get_worker().address}
 
-    import acds_runtime
-    return {'python': sys.version.split()[0], 'numpy': numpy.__version__, 'acds_runtime': acds_runtime.__file__}
+
+def mixed_worker(config: dict[str, str], expected: dict[str, str]) -> str | None:
+    """How a worker's ``config`` differs from the client's ``expected``, as one line naming the worker and its host;
+    None when they agree."""
+    from acds_common.numeric_config import differences
+
+    diff = differences(expected, config, 'the client')
+    if not diff:
+        return None
+    return f'worker {config["worker"]} on host {config["host"]} differs from the client: {"; ".join(diff)}'
+
+
+def run_checked_sample(text: str, engine: str, steps: int | None, expected: dict[str, str], allow_mixed: bool
+                       ) -> tuple[dict[str, Any] | None, str | None]:
+    """A Dask worker's task: (the sample's summary, None) on a worker whose numeric configuration is the client's
+    ``expected``; on another, (None, :func:`mixed_worker`'s line) without running the sample, or with
+    ``allow_mixed`` (the summary, that line). Every worker is checked before the study sends samples
+    (:func:`_check_workers`); this check covers a worker that joined after it."""
+    mixed = mixed_worker(worker_configuration(), expected)
+    if mixed is not None and not allow_mixed:
+        return None, mixed
+    return run_sample(text, engine, steps), mixed
+
+
+#: What the user passes to accept workers whose numeric configuration differs from the client's.
+ALLOW_MIXED_OPTION = '--allow-mixed-workers'
+
+
+def refusal(line: str) -> str:
+    """The study's one line refusing a mixed worker (:func:`mixed_worker`'s ``line``)."""
+    return (f'{line}: refused, its results would not be this machine\'s bits (start `dask worker` from the project\'s '
+            f'.venv with the same set-up, or pass {ALLOW_MIXED_OPTION} to accept it)')
 
 
 def task_key(text: str, engine: str, steps: int | None) -> str:
@@ -112,22 +145,29 @@ def task_key(text: str, engine: str, steps: int | None) -> str:
 
 @dataclass
 class Execution:
-    """Where the samples ran: ``where`` ('in-process', 'local cluster', or the scheduler), worker count."""
+    """Where the samples ran: ``where`` ('in-process', 'local cluster', or the scheduler), worker count, and the
+    workers accepted with another numeric configuration (``notes``, ``allow_mixed``)."""
 
     where: str
     workers: int
     threads: int
     notes: list[str] = field(default_factory=list)
 
+    def mixed(self) -> str:
+        """What a report's header adds for the mixed workers the user accepted: '' when there were none."""
+        return ''.join(f'; MIXED WORKERS {note}' for note in self.notes)
+
 
 def run_samples(texts: Sequence[str], *, engine: str = 'direct', steps: int | None = None, jobs: int = 1,
                 scheduler: str | None = None, progress: bool = True,
-                on_result: Callable[[int, dict[str, Any]], None] | None = None
+                on_result: Callable[[int, dict[str, Any]], None] | None = None, allow_mixed: bool = False
                 ) -> tuple[list[dict[str, Any]], Execution]:
     """Run every sample; its summaries in the order of ``texts``, and where they ran.
 
     ``on_result(i, summary)`` is called as each sample finishes (``i`` its position in ``texts``), in the
-    order they finish. On the graph engine, what killed studies left behind is removed first
+    order they finish. A Dask worker whose numeric configuration differs from this process's is refused
+    (:class:`MonteCarloError`, one line) before any of its results is passed on, or with ``allow_mixed`` accepted
+    and named in the execution's notes. On the graph engine, what killed studies left behind is removed first
     (:func:`clean_zombies`) and what this one's runs leave (an interrupted one too) at its end.
     """
     if engine not in ENGINES:
@@ -152,7 +192,7 @@ def run_samples(texts: Sequence[str], *, engine: str = 'direct', steps: int | No
                 if on_result is not None:
                     on_result(i, results[-1])
             return results, Execution('in-process', 1, 1)
-        return _run_dask(texts, engine, steps, jobs, scheduler, bar, on_result)
+        return _run_dask(texts, engine, steps, jobs, scheduler, bar, on_result, allow_mixed)
     finally:
         bar.close()
         if before is not None:  # the zombies of runs this study's end interrupted (live or young ones: next start)
@@ -258,29 +298,41 @@ def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:
     return client, None
 
 
-def _check_workers(client: Any, notes: list[str]) -> None:
-    """Every worker can import the project, and says which numpy it runs (a different one may round differently)."""
+def _check_workers(client: Any, expected: dict[str, str], allow_mixed: bool, notes: list[str]) -> None:
+    """Every worker can import the project and has the client's numeric configuration ``expected``; one that
+    differs is refused (:class:`MonteCarloError`, :func:`refusal`), or with ``allow_mixed`` noted."""
     try:
-        envs = client.run(_environment)
+        configs = client.run(worker_configuration)
     except Exception as exc:  # noqa: BLE001 (whatever a worker raises, the message is the report)
         raise MonteCarloError(f'a Dask worker cannot run samples ({type(exc).__name__}: {exc}); every worker host '
                               'needs the project set up (./scripts/acds setup) and the worker started from its '
                               '.venv') from None
-    here = _environment()
-    for address, env in sorted(envs.items()):
-        if (env['python'], env['numpy']) != (here['python'], here['numpy']):
-            notes.append(f'worker {address} runs Python {env["python"]} / numpy {env["numpy"]}, this machine '
-                         f'{here["python"]} / {here["numpy"]}: results may differ in the last bits')
+    for _address, config in sorted(configs.items()):
+        _mixed(mixed_worker(config, expected), allow_mixed, notes)
+
+
+def _mixed(line: str | None, allow_mixed: bool, notes: list[str]) -> None:
+    """Refuse a mixed worker's ``line`` (:class:`MonteCarloError`), or with ``allow_mixed`` note it once."""
+    if line is None:
+        return
+    if not allow_mixed:
+        raise MonteCarloError(refusal(line))
+    note = f'accepted ({ALLOW_MIXED_OPTION}): {line}'
+    if note not in notes:
+        notes.append(note)
 
 
 def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, scheduler: str | None, bar: Any,
-              on_result: Callable[[int, dict[str, Any]], None] | None) -> tuple[list[dict[str, Any]], Execution]:
+              on_result: Callable[[int, dict[str, Any]], None] | None, allow_mixed: bool
+              ) -> tuple[list[dict[str, Any]], Execution]:
+    from acds_common.numeric_config import numeric_configuration
     from dask.distributed import as_completed
 
     client, cluster = _connect(jobs, scheduler)
     try:
         notes: list[str] = []
-        _check_workers(client, notes)
+        expected = numeric_configuration()
+        _check_workers(client, expected, allow_mixed, notes)
         info = client.scheduler_info()['workers']
         execution = Execution(scheduler or 'local cluster', len(info), sum(w.get('nthreads', 1) for w in info.values()),
                               notes)
@@ -289,13 +341,15 @@ def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, s
             indices.setdefault(task_key(text, engine, steps), []).append(i)
         pending = as_completed(loop=client.loop)
         for key, ix in indices.items():
-            pending.add(client.submit(run_sample, texts[ix[0]], engine, steps, key=key, pure=False))
+            pending.add(client.submit(run_checked_sample, texts[ix[0]], engine, steps, expected, allow_mixed, key=key,
+                                      pure=False))
         results: list[dict[str, Any] | None] = [None] * len(texts)
         for future in pending:
             try:
-                summary = future.result()
+                summary, mixed = future.result()
             except Exception as exc:  # noqa: BLE001 (a sample that failed on every try is reported, not dropped)
-                summary = {'error': f'{type(exc).__name__}: {exc}'}
+                summary, mixed = {'error': f'{type(exc).__name__}: {exc}'}, None
+            _mixed(mixed, allow_mixed, notes)  # a worker that joined after the check: refused before its result is kept
             ix = indices[future.key]
             future.release()  # read: the scheduler may forget it (a lost worker then recomputes nothing read)
             for i in ix:
