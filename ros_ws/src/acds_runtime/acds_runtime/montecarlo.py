@@ -97,31 +97,29 @@ def clean_zombies(before: set[str] | None = None) -> tuple[list[str], list[Path]
     return removed, folders
 
 
-def worker_configuration() -> dict[str, str]:
+def worker_configuration(dask_worker: Any = None) -> dict[str, str]:
     """This Dask worker's numeric configuration (:func:`acds_common.numeric_config.numeric_configuration`) and its
-    address (``worker``)."""
+    address (``worker``); ``dask_worker``: the worker ``Client.run`` passes, else the one running this task."""
     from acds_common.numeric_config import numeric_configuration
     from dask.distributed import get_worker
-    return {**numeric_configuration(), 'worker': get_worker().address}
+    return {**numeric_configuration(), 'worker': (dask_worker or get_worker()).address}
 
 
-def mixed_worker(config: dict[str, str], expected: dict[str, str]) -> str | None:
-    """How a worker's ``config`` differs from the client's ``expected``, as one line naming the worker and its host;
-    None when they agree."""
+def mixed_worker(config: dict[str, str], expected: dict[str, str]) -> tuple[str, str] | None:
+    """How a worker's ``config`` differs from the client's ``expected``: (the worker and its host, the differences),
+    or None when they agree."""
     from acds_common.numeric_config import differences
 
     diff = differences(expected, config, 'the client')
-    if not diff:
-        return None
-    return f'worker {config["worker"]} on host {config["host"]} differs from the client: {"; ".join(diff)}'
+    return (f'worker {config["worker"]} on host {config["host"]}', '; '.join(diff)) if diff else None
 
 
 def run_checked_sample(text: str, engine: str, steps: int | None, expected: dict[str, str], allow_mixed: bool
-                       ) -> tuple[dict[str, Any] | None, str | None]:
+                       ) -> tuple[dict[str, Any] | None, tuple[str, str] | None]:
     """A Dask worker's task: (the sample's summary, None) on a worker whose numeric configuration is the client's
-    ``expected``; on another, (None, :func:`mixed_worker`'s line) without running the sample, or with
-    ``allow_mixed`` (the summary, that line). Every worker is checked before the study sends samples
-    (:func:`_check_workers`); this check covers a worker that joined after it."""
+    ``expected``; on another (:func:`mixed_worker`), (None, how it differs) without running the sample, or with
+    ``allow_mixed`` (the summary, how it differs). Every worker is checked before the study sends samples
+    (:func:`_check_workers`); this covers a worker that joined after that."""
     mixed = mixed_worker(worker_configuration(), expected)
     if mixed is not None and not allow_mixed:
         return None, mixed
@@ -132,10 +130,11 @@ def run_checked_sample(text: str, engine: str, steps: int | None, expected: dict
 ALLOW_MIXED_OPTION = '--allow-mixed-workers'
 
 
-def refusal(line: str) -> str:
-    """The study's one line refusing a mixed worker (:func:`mixed_worker`'s ``line``)."""
-    return (f'{line}: refused, its results would not be this machine\'s bits (start `dask worker` from the project\'s '
-            f'.venv with the same set-up, or pass {ALLOW_MIXED_OPTION} to accept it)')
+def refusal(mixed: tuple[str, str]) -> str:
+    """The study's one line refusing a mixed worker (:func:`mixed_worker`)."""
+    who, diff = mixed
+    return (f'{who} differs from the client: {diff}; refused, its samples could differ in the last bits (start the '
+            f'worker from the project\'s .venv, set up as here, or pass {ALLOW_MIXED_OPTION} to accept it)')
 
 
 def task_key(text: str, engine: str, steps: int | None) -> str:
@@ -146,12 +145,18 @@ def task_key(text: str, engine: str, steps: int | None) -> str:
 @dataclass
 class Execution:
     """Where the samples ran: ``where`` ('in-process', 'local cluster', or the scheduler), worker count, and the
-    workers accepted with another numeric configuration (``notes``, ``allow_mixed``)."""
+    workers accepted with another numeric configuration (``allow_mixed``): {how they differ: [worker on host]}."""
 
     where: str
     workers: int
     threads: int
-    notes: list[str] = field(default_factory=list)
+    mixed_workers: dict[str, list[str]] = field(default_factory=dict)
+
+    @property
+    def notes(self) -> list[str]:
+        """One line per difference among the accepted mixed workers, naming them."""
+        return [f'accepted ({ALLOW_MIXED_OPTION}): {", ".join(who)} differ(s) from the client: {diff}'
+                for diff, who in self.mixed_workers.items()]
 
     def mixed(self) -> str:
         """What a report's header adds for the mixed workers the user accepted: '' when there were none."""
@@ -298,9 +303,9 @@ def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:
     return client, None
 
 
-def _check_workers(client: Any, expected: dict[str, str], allow_mixed: bool, notes: list[str]) -> None:
+def _check_workers(client: Any, expected: dict[str, str], allow_mixed: bool, accepted: dict[str, list[str]]) -> None:
     """Every worker can import the project and has the client's numeric configuration ``expected``; one that
-    differs is refused (:class:`MonteCarloError`, :func:`refusal`), or with ``allow_mixed`` noted."""
+    differs is refused (:func:`_mixed`)."""
     try:
         configs = client.run(worker_configuration)
     except Exception as exc:  # noqa: BLE001 (whatever a worker raises, the message is the report)
@@ -308,18 +313,19 @@ def _check_workers(client: Any, expected: dict[str, str], allow_mixed: bool, not
                               'needs the project set up (./scripts/acds setup) and the worker started from its '
                               '.venv') from None
     for _address, config in sorted(configs.items()):
-        _mixed(mixed_worker(config, expected), allow_mixed, notes)
+        _mixed(mixed_worker(config, expected), allow_mixed, accepted)
 
 
-def _mixed(line: str | None, allow_mixed: bool, notes: list[str]) -> None:
-    """Refuse a mixed worker's ``line`` (:class:`MonteCarloError`), or with ``allow_mixed`` note it once."""
-    if line is None:
+def _mixed(mixed: tuple[str, str] | None, allow_mixed: bool, accepted: dict[str, list[str]]) -> None:
+    """Refuse a mixed worker (:class:`MonteCarloError`, :func:`refusal`), or with ``allow_mixed`` add it to
+    ``accepted`` (:attr:`Execution.mixed_workers`)."""
+    if mixed is None:
         return
     if not allow_mixed:
-        raise MonteCarloError(refusal(line))
-    note = f'accepted ({ALLOW_MIXED_OPTION}): {line}'
-    if note not in notes:
-        notes.append(note)
+        raise MonteCarloError(refusal(mixed))
+    who, diff = mixed
+    if who not in accepted.setdefault(diff, []):
+        accepted[diff].append(who)
 
 
 def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, scheduler: str | None, bar: Any,
@@ -330,12 +336,12 @@ def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, s
 
     client, cluster = _connect(jobs, scheduler)
     try:
-        notes: list[str] = []
+        accepted: dict[str, list[str]] = {}
         expected = numeric_configuration()
-        _check_workers(client, expected, allow_mixed, notes)
+        _check_workers(client, expected, allow_mixed, accepted)
         info = client.scheduler_info()['workers']
         execution = Execution(scheduler or 'local cluster', len(info), sum(w.get('nthreads', 1) for w in info.values()),
-                              notes)
+                              accepted)
         indices: dict[str, list[int]] = {}
         for i, text in enumerate(texts):
             indices.setdefault(task_key(text, engine, steps), []).append(i)
@@ -349,7 +355,7 @@ def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, s
                 summary, mixed = future.result()
             except Exception as exc:  # noqa: BLE001 (a sample that failed on every try is reported, not dropped)
                 summary, mixed = {'error': f'{type(exc).__name__}: {exc}'}, None
-            _mixed(mixed, allow_mixed, notes)  # a worker that joined after the check: refused before its result is kept
+            _mixed(mixed, allow_mixed, accepted)  # a worker that joined after the check: refused before its result is kept
             ix = indices[future.key]
             future.release()  # read: the scheduler may forget it (a lost worker then recomputes nothing read)
             for i in ix:
