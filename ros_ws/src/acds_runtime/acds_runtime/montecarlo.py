@@ -9,6 +9,12 @@ tasks rescheduled by the Dask scheduler on the workers left (up to
 failed, never dropped); a sample's run is deterministic (lockstep, seeded), so a retried sample
 gives the result a single machine gives.
 
+Every worker's numeric configuration (:mod:`acds_common.numeric_config`: Python, numpy and its SIMD dispatch,
+OpenBLAS, the kernel compiler, the project's sources) is the client's, checked before samples are sent
+(:func:`_check_workers`) and by each sample's task (:func:`run_checked_sample`, for a worker that joins later): a
+worker that differs is refused in one line (:func:`refusal`), or accepted with ``allow_mixed`` and named in the
+execution's notes, which the report's header carries.
+
 ``jobs=1`` without a scheduler runs the samples one after the other in this process (no Dask);
 ``jobs>1`` starts a ``LocalCluster`` of that many single-threaded worker processes; ``scheduler``
 ("tcp://host:8786") uses the user's cluster (``dask scheduler`` / ``dask worker``; README).
