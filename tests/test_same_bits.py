@@ -129,6 +129,7 @@ def test_the_pin_is_in_force_where_the_environments_python_starts():
     assert f'NPY_DISABLE_CPU_FEATURES={OTHER_SIMD!r}' in json.loads(own.stdout)['pin']
 
 
+@pytest.mark.timeout(900)  # ~25 s on the idle 2-core machine; > 300 s beside four busy sessions (load 20)
 def test_a_study_on_dask_workers_started_by_hand_gives_the_local_studys_digests(scheduler, tmp_path):
     """20 samples on the README's cluster and locally (``--jobs 2``), 30 min each (on this AVX-512 host an unpinned
     worker already differs in sample 0 there): the same digest for every sample and the same samples.csv, byte for
@@ -145,7 +146,7 @@ def test_a_study_on_dask_workers_started_by_hand_gives_the_local_studys_digests(
     assert (tmp_path / 'cluster' / 'samples.csv').read_bytes() == (tmp_path / 'local' / 'samples.csv').read_bytes()
 
 
-@pytest.mark.timeout(900)  # three Dask worker processes started and two studies on a loaded 2-core machine
+@pytest.mark.timeout(900)  # a Dask worker process started and three studies: 380 s beside four busy sessions
 def test_a_worker_with_another_simd_dispatch_is_refused_in_one_line(scheduler, tmp_path):
     """A worker started with the user's own NPY_DISABLE_CPU_FEATURES. Joining during a study (after the check at its
     start), it is refused at its first sample, which it does not run; present when a study starts, the study refuses
