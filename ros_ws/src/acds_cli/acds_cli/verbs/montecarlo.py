@@ -158,7 +158,7 @@ def study_command(verb: list[str], args: argparse.Namespace) -> str:
 
 
 def _execution_text(execution: Any) -> str:
-    return f'{execution.where}, {execution.workers} worker(s), {execution.threads} thread(s)'
+    return f'{execution.where}, {execution.workers} worker(s), {execution.threads} thread(s){execution.mixed()}'
 
 
 def study_folder(prefix: str, name: str, args: argparse.Namespace) -> Path:
@@ -221,6 +221,7 @@ def run_journaled(journal: Any, samples: dict[tuple[str, int], Any], args: argpa
         for (steps, task), keys in batches.items():
             execution = run_samples([samples[k].text for k in keys], engine=args.engine, steps=steps, jobs=args.jobs,
                                     scheduler=args.scheduler, progress=not args.quiet, task=task,
+                                    allow_mixed=args.allow_mixed_workers,
                                     on_result=lambda i, summary, keys=keys: done(keys[i], summary))[1]
     except (KeyboardInterrupt, _Stop) as exc:
         why = 'Ctrl-C' if isinstance(exc, KeyboardInterrupt) else exc.args[0]
@@ -403,11 +404,14 @@ def cmd_pick_sample(args: argparse.Namespace) -> int:
 
 def add_execution_options(p: argparse.ArgumentParser) -> None:
     """--runs/--seed/--jobs/--scheduler/--engine shared by ``montecarlo`` and the paired ``sweep``."""
-    from acds_runtime.montecarlo import ENGINES
+    from acds_runtime.montecarlo import ALLOW_MIXED_OPTION, ENGINES
 
     p.add_argument('--seed', type=_seed, default=1, help='study seed (default 1); sample K is the same for every N')
     p.add_argument('--scheduler', metavar='ADDRESS',
                    help='run on this Dask cluster (tcp://host:8786) instead of a local one')
+    p.add_argument(ALLOW_MIXED_OPTION, action='store_true',
+                   help='accept Dask workers whose numeric configuration (Python, numpy and its SIMD dispatch, OpenBLAS, '
+                        'kernel compiler, project sources) differs from this machine\'s; the report names them')
     p.add_argument('--engine', choices=ENGINES, default='direct',
                    help='direct (default: one process, bit-identical to the graph) or graph (one process per node)')
     p.add_argument('--resume', metavar='DIR',

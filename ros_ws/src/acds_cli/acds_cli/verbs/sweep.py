@@ -346,7 +346,8 @@ def gas_table(case: dict[str, Any]) -> str:
 
 
 def _execution(execution: Any) -> str:
-    return 'nothing left to run' if execution is None else f'{execution.where}, {execution.workers} worker(s)'
+    return ('nothing left to run' if execution is None
+            else f'{execution.where}, {execution.workers} worker(s){execution.mixed()}')
 
 
 def register(sub: argparse._SubParsersAction) -> None:
