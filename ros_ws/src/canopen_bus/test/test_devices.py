@@ -177,3 +177,40 @@ def test_the_contract_and_the_eds_come_from_the_dictionaries_the_cards_serve(tmp
     assert od[0x4002][14].name == 'ecef_x' and od[0x1803][1].default & 0x7FF == 0x4B4
     with pytest.raises(ValueError, match='name one device'):
         contract.write('eds', sc, '')
+
+
+def test_card_faults_silence_the_pdos_and_drop_or_delay_the_sdo_replies():
+    w = Wire()
+    w.dev.boot()
+    w.dev.silenced = True
+    w.frames.clear()
+    assert w.dev.tick(0.0) == [0x738]  # the heartbeat goes on, no TPDO
+    w.dev.sdo_lost = True
+    w.frames.clear()
+    w.dev.receive(0x638, bytes([0x40, 0x07, 0x40, 0x04, 0, 0, 0, 0]), 0.0)
+    assert w.frames == [] and w.dev.sdo_dropped == 1
+    w.dev.sdo_lost, w.dev.sdo_delay_s = False, 0.05
+    w.dev.receive(0x638, bytes([0x40, 0x07, 0x40, 0x04, 0, 0, 0, 0]), 0.0)
+    assert w.frames == []
+    import time
+    end = time.monotonic() + 5.0
+    while not w.frames and time.monotonic() < end:
+        time.sleep(0.01)
+    assert w.frames and w.frames[0][0] == 0x5B8
+
+
+def test_a_zero_axis_fault_reaches_the_bus_at_its_step():
+    import copy
+    import dataclasses
+
+    from acds_common.scenario import load_scenario
+    from acds_runtime.direct import DirectRun
+
+    sc = load_scenario('oresat_c3_detumble')
+    values = copy.copy(sc.values)
+    values['can_bus'] = {**sc.values['can_bus'], 'fault': 'zero_axis', 'fault_object': 0x4004, 'fault_axis': 2,
+                         'fault_time': 0.5}
+    run = DirectRun(dataclasses.replace(sc, values=values), steps=10)
+    run.run()
+    adcs = run.steppers['canopen_cards'].devices['adcs']
+    assert adcs.get_raw(0x4004, 3) == 0 and adcs.get_raw(0x4003, 3) != 0 and adcs.get_raw(0x4004, 1) != 0
