@@ -106,6 +106,8 @@ class CardsStep(Stepper):
         self.last_write_step: int | None = None
         self.writes_stopped = False
         self._fault_pending = cfg['fault'] != 'none'
+        if self.on_bus:  # on the bus before the first step (its handshake is not the first step's time)
+            self._connect()
         self._fault_sensor: tuple[str, int, tuple[int, ...]] | None = None  # (device, index, axes) once active
         self._stuck: dict[int, int] = {}
 
@@ -146,8 +148,7 @@ class CardsStep(Stepper):
         events: list[str] = []
         target = None
         if self.on_bus:
-            if self.bus is None:
-                self._connect()
+            if self.wall0 is None:
                 self.wall0 = time.time()
             target = self.wall0 + t_s / self.rtf
             delay = target - time.time()
@@ -373,5 +374,10 @@ class CardsStep(Stepper):
             self.notifier.stop()
         if self.bus is not None:
             self.bus.shutdown()
+        with self.lock:  # frames that came after the last step's sample: logged, applied at no step (-1)
+            for entry in self.journal:
+                if entry[4] is None:
+                    entry[4] = -1
+            self._flush()
         if self.canlog is not None:
             self.canlog.close()
