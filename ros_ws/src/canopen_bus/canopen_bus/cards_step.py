@@ -102,7 +102,7 @@ class CardsStep(Stepper):
         self.sdo_latency = Percentiles()
         self.setpoint_age = Percentiles()
         self.late_steps: list[int] = []
-        self._sdo_rx = {0x600 + d.node_id for d in self.devices.values()}
+        self._command_rx = {cid for d in self.devices.values() for cid in (0x600 + d.node_id, *(p.cob_id for p in d.rpdos))}
         self.last_write_step: int | None = None
         self.writes_stopped = False
         self._fault_pending = cfg['fault'] != 'none'
@@ -170,7 +170,7 @@ class CardsStep(Stepper):
                     entry[4] = k
             events += self._heartbeat(k, taken)
             events += self._writes(k, taken)
-            ages = [sample_wall - w for w, cid, _d in taken if cid in self._sdo_rx] if self.on_bus else []
+            ages = [sample_wall - w for w, cid, _d in taken if cid in self._command_rx] if self.on_bus else []
             for age in ages:
                 self.setpoint_age.add(age)
             if self._fault_pending and t_s >= self.cfg['fault_time']:
@@ -237,7 +237,7 @@ class CardsStep(Stepper):
 
     def _writes(self, k: int, taken: list) -> list[str]:
         """Whether the flight computer stopped (or resumed) its SDO requests to the cards, named with the step."""
-        if any(cid in self._sdo_rx for _w, cid, _d in taken):
+        if any(cid in self._command_rx for _w, cid, _d in taken):
             line = [] if self.last_write_step is None or not self.writes_stopped else [
                 f'flight computer resumed its SDO requests at step {k} (t={self.step_time_s(k):g} s)']
             self.last_write_step, self.writes_stopped = k, False

@@ -90,6 +90,10 @@ class EmulatedDevice:
         self.sdo = SdoStats()
         self._request_wall: float | None = None
         self.tpdos: list[Pdo] = pdos(od, name, 'tpdo')
+        self.rpdos: list[Pdo] = pdos(od, name, 'rpdo')
+        for pdo in self.rpdos:
+            self.network.subscribe(pdo.cob_id, self._on_rpdo)
+        self.rpdo_errors = 0
         overrides = tpdo_period_s or {}
         self.tpdo_period_s = {p.number: overrides.get(p.number, p.event_timer_ms / 1000.0) for p in self.tpdos}
         self._tpdo_next = {p.number: 0.0 for p in self.tpdos}
@@ -113,6 +117,21 @@ class EmulatedDevice:
                 self.sdo.requests += 1
                 self._request_wall = wall_time
             self.network.notify(can_id, bytearray(data), wall_time)
+
+    def _on_rpdo(self, can_id: int, data: bytearray, _timestamp: float) -> None:
+        """An RPDO (OPERATIONAL only): its bytes into the mapped objects, in mapping order; a frame shorter than the
+        mapping is counted and left out."""
+        if self.nmt_state != 'OPERATIONAL':
+            return
+        pdo = next(p for p in self.rpdos if p.cob_id == can_id)
+        if len(data) * 8 < pdo.bits:
+            self.rpdo_errors += 1
+            return
+        offset = 0
+        for index, sub, bits in pdo.mapped:
+            store = self.node.data_store.setdefault(index, {})
+            store[sub] = bytes(data[offset:offset + bits // 8])
+            offset += bits // 8
 
     def take_pending(self) -> list[tuple[float, int, bytes]]:
         """The frames applied since the last call (call with :attr:`lock` held, at the step that samples them)."""
