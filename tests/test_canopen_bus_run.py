@@ -50,11 +50,15 @@ class Master:
         self.writes = 0
         self.timeouts = 0
         self.rates: list[tuple[int, int, int]] = []
-        self.net.subscribe(0x1B8, lambda _id, data, _t: self.rates.append(
-            tuple(int.from_bytes(data[i:i + 2], 'little', signed=True) for i in (0, 2, 4))))
+        self.first_pdo = threading.Event()
+        self.net.subscribe(0x1B8, self._gyro)
         self.threads = [threading.Thread(target=self._heartbeat), threading.Thread(target=self._law)]
         for t in self.threads:
             t.start()
+
+    def _gyro(self, _id: int, data: bytes, _t: float) -> None:
+        self.rates.append(tuple(int.from_bytes(data[i:i + 2], 'little', signed=True) for i in (0, 2, 4)))
+        self.first_pdo.set()
 
     def _heartbeat(self) -> None:
         while not self.stop.wait(0.1):
@@ -108,10 +112,18 @@ def test_a_scripted_master_flies_the_cards_and_the_replay_gives_the_same_truth(t
     reader.start()
     assert waiting.wait(60), 'the run never said it waits for the heartbeat:\n' + ''.join(lines)
     master = Master(port)
+    # Bad input on the live bus: a malformed line (the hub names it), a frame for a COB-ID the ADCS card does not
+    # serve (0x238: an RPDO it has not), a frame in the ADCS card's own heartbeat COB-ID (a node id claimed twice).
+    # Sent once the cards are on the bus (the master has their first gyro TPDO).
+    rogue = socket.create_connection(('127.0.0.1', port), timeout=5.0)
+    rogue.sendall(b'< open vcan0 >< rawmode >')
+    assert master.first_pdo.wait(60), 'no gyro TPDO from the cards:\n' + ''.join(lines)
+    rogue.sendall(b'< send 7FF 9 0 >< send 238 1 1 >< send 738 1 5 >')
     try:
         run.wait(timeout=120)
     finally:
         master.close()
+        rogue.close()
         reader.join()
     out = ''.join(lines)
     assert run.returncode == 0, out
@@ -121,6 +133,8 @@ def test_a_scripted_master_flies_the_cards_and_the_replay_gives_the_same_truth(t
     assert master.writes > 20 and live['can_setpoint_changes'] > 0, (master.writes, master.timeouts, out)
     assert live['can_peak_setpoint_ma'] == pytest.approx(69.44, abs=1e-6)
     assert 'clamped at the limit' in out
+    assert "bad line '< send 7FF 9 0 >' (length 9 outside 0..8)" in out
+    assert 'COB-ID 0x238 is addressed to emulated device adcs' in out and 'COB-ID 0x738, which is emulated' in out
     assert live['peak_current_ma'] > 10.0
     assert live['can_sensor_lateness_ms']['p50'] < 1e3 * 0.1 / RTF
     assert live['can_sdo_latency_ms'] is not None and live['can_setpoint_age_ms'] is not None

@@ -103,6 +103,9 @@ class CardsStep(Stepper):
         self.setpoint_age = Percentiles()
         self.late_steps: list[int] = []
         self._command_rx = {cid for d in self.devices.values() for cid in (0x600 + d.node_id, *(p.cob_id for p in d.rpdos))}
+        self._node_ids = {d.node_id: name for name, d in self.devices.items()}
+        self.unknown: set[int] = set()
+        self.unknown_frames = 0
         self.last_write_step: int | None = None
         self.writes_stopped = False
         self._fault_pending = cfg['fault'] != 'none'
@@ -132,6 +135,14 @@ class CardsStep(Stepper):
                 self.claimed.add(cid)
                 self.log('warn', f'another client sends COB-ID 0x{cid:03X}, which is emulated device '
                                  f'{self.own_ids[cid]}\'s (a node id claimed twice), first near step {self.step_now}')
+            elif cid not in self.own_ids and cid not in self._command_rx and cid & 0x7F in self._node_ids \
+                    and cid > 0x80:
+                self.unknown_frames += 1
+                if cid not in self.unknown:
+                    self.unknown.add(cid)
+                    self.log('warn', f'COB-ID 0x{cid:03X} is addressed to emulated device '
+                                     f'{self._node_ids[cid & 0x7F]} (node 0x{cid & 0x7F:02X}), which serves no such '
+                                     f'object: ignored and counted, first near step {self.step_now}')
             for dev in self.devices.values():
                 dev.receive(cid, data, msg.timestamp)
 
@@ -360,6 +371,7 @@ class CardsStep(Stepper):
             'sdo_replies_dropped': sum(d.sdo_dropped for d in self.devices.values()),
             'last_setpoint_request_step': self.last_write_step if self.last_write_step is not None else 'none',
             'setpoints_clamped': self.clamp_count,
+            'unknown_cob_id_frames': self.unknown_frames,
             'late_steps': len(self.late_steps),
         }
         for name, p in (('sensor_lateness', self.lateness), ('sdo_latency', self.sdo_latency),
