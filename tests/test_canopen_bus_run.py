@@ -156,10 +156,38 @@ def test_a_scripted_master_flies_the_cards_and_the_replay_gives_the_same_truth(t
 
 def test_bad_bus_options_are_one_line_and_exit_2(tmp_path):
     env = {**os.environ, 'ACDS_WORKSPACE': str(tmp_path)}
+    kernel = tmp_path / 'kernel_can.yaml'
+    kernel.write_text(f'extends: {ROOT / "scenarios" / "oresat_c3_detumble.yaml"}\nname: kernel_can\n'
+                      'can_bus:\n  interface: socketcan\n  channel: nosuchcan7\n')
     for args, needle in ((['heao_b_acquisition_short', '--can-port', '1234'], 'has no CAN bus'),
+                         ([str(kernel)], 'this machine has no network interface nosuchcan7'),
                          (['oresat_c3_detumble', '--replay-can', str(tmp_path / 'none.asc')], 'no such file'),
                          (['oresat_c3_detumble', '--can-port', '70000'], 'not a TCP port')):
         r = subprocess.run([*ACDS, 'run', *args, '--engine', 'direct', '--no-record'], env=env, capture_output=True,
                            text=True, timeout=60)
         assert r.returncode == 2 and needle in r.stderr, r.stderr
         assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+
+
+@pytest.mark.skipif(not Path('/sys/class/net/vcan0').exists(),
+                    reason='no SocketCAN interface vcan0 on this machine (ip link add dev vcan0 type vcan is refused here)')
+def test_the_cards_on_a_kernel_can_interface(tmp_path):
+    kernel = tmp_path / 'kernel_can.yaml'
+    kernel.write_text(f'extends: {ROOT / "scenarios" / "oresat_c3_detumble.yaml"}\nname: kernel_can\n'
+                      'input_timeout_s: 5\ncan_bus:\n  interface: socketcan\n  channel: vcan0\n')
+    bus = can.Bus(interface='socketcan', channel='vcan0')
+    stop = threading.Event()
+    beat = threading.Thread(target=lambda: [bus.send(can.Message(arbitration_id=0x701, data=[5], is_extended_id=False))
+                                            for _ in iter(lambda: stop.wait(0.1), True)])
+    beat.start()
+    try:
+        r = subprocess.run([*ACDS, 'run', str(kernel), '--engine', 'direct', '--steps', '30', '--rtf', '10',
+                            '--no-record', '--run-dir', str(tmp_path / 'run')], capture_output=True, text=True,
+                           timeout=120, env={**os.environ, 'ACDS_WORKSPACE': str(tmp_path)})
+    finally:
+        stop.set()
+        beat.join()
+        bus.shutdown()
+    assert r.returncode == 0, r.stderr
+    assert 'the kernel interface vcan0' in r.stderr and 'flight computer heartbeat after' in r.stderr
+    assert any(f.arbitration_id == 0x1B8 for f in can.LogReader(str(tmp_path / 'run' / 'can.asc')))

@@ -117,10 +117,14 @@ class CardsStep(Stepper):
     # -- the bus ----------------------------------------------------------------------------------------
     def _connect(self) -> None:
         import can
-        host, _, port = self.cfg['endpoint'].rpartition(':')
+        kind, _, where = self.cfg['endpoint'].partition(':')
         try:
-            self.bus = can.Bus(interface='socketcand', channel='vcan0', host=host, port=int(port))
-        except (OSError, can.CanError, TimeoutError) as exc:
+            if kind == 'socketcan':  # a kernel interface (can_bus.interface: socketcan)
+                self.bus = can.Bus(interface='socketcan', channel=where)
+            else:
+                host, _, port = where.rpartition(':')
+                self.bus = can.Bus(interface='socketcand', channel='vcan0', host=host, port=int(port))
+        except (OSError, ValueError, can.CanError, TimeoutError) as exc:
             raise StepError(f'canopen_cards: cannot join the CAN bus at {self.cfg["endpoint"]}: {exc}') from None
         self.notifier = can.Notifier(self.bus, [self._on_message], timeout=0.1)
 
