@@ -191,3 +191,16 @@ def test_the_cards_on_a_kernel_can_interface(tmp_path):
     assert r.returncode == 0, r.stderr
     assert 'the kernel interface vcan0' in r.stderr and 'flight computer heartbeat after' in r.stderr
     assert any(f.arbitration_id == 0x1B8 for f in can.LogReader(str(tmp_path / 'run' / 'can.asc')))
+
+
+def test_a_flight_computer_that_never_comes_fails_the_run_in_one_line_when_the_scenario_says_so(tmp_path):
+    never = tmp_path / 'never.yaml'
+    never.write_text(f'extends: {ROOT / "scenarios" / "oresat_c3_detumble.yaml"}\nname: never\ninput_timeout_s: 0.5\n'
+                     'can_bus:\n  on_heartbeat_loss: fail\n')
+    r = subprocess.run([*ACDS, 'run', str(never), '--engine', 'direct', '--steps', '5', '--no-record', '--can-port', '0',
+                        '--run-dir', str(tmp_path / 'run')], capture_output=True, text=True, timeout=120,
+                       env={**os.environ, 'ACDS_WORKSPACE': str(tmp_path)})
+    assert r.returncode == 1, r.stderr
+    failed = [line for line in r.stderr.splitlines() if 'run failed' in line]
+    assert len(failed) == 1 and 'no heartbeat from the flight computer (node 0x01, COB-ID 0x701) within 0.5 s' in failed[0]
+    assert 'clients on the bus: none' in failed[0]
