@@ -75,6 +75,7 @@ class CardsStep(Stepper):
         for m in self.maps:
             dev = EmulatedDevice(m.name, m.od, m.node_id, self._send, m.tpdo_period_s)
             dev.lock = self.lock
+            dev.on_malformed = self._malformed
             self.devices[m.name] = dev
         self.own_ids = {cid: name for name, d in self.devices.items()
                         for cid in (0x580 + d.node_id, 0x700 + d.node_id, *(p.cob_id for p in d.tpdos))}
@@ -149,6 +150,9 @@ class CardsStep(Stepper):
                                      f'object: ignored and counted, first near step {self.step_now}')
             for dev in self.devices.values():
                 dev.receive(cid, data, msg.timestamp)
+
+    def _malformed(self, line: str) -> None:
+        self.log('warn', f'{line} (near step {self.step_now})')
 
     def _send(self, can_id: int, data: bytes) -> None:
         """A frame from a device (with :attr:`lock` held): journaled; on the bus when there is one."""
@@ -376,6 +380,7 @@ class CardsStep(Stepper):
             'last_setpoint_request_step': self.last_write_step if self.last_write_step is not None else 'none',
             'setpoints_clamped': self.clamp_count,
             'unknown_cob_id_frames': self.unknown_frames,
+            'malformed_frames': sum(d.malformed for d in self.devices.values()),
             'late_steps': len(self.late_steps),
         }
         for name, p in (('sensor_lateness', self.lateness), ('sdo_latency', self.sdo_latency),

@@ -105,6 +105,10 @@ class EmulatedDevice:
         self.sdo_lost = False
         self.sdo_delay_s = 0.0
         self.sdo_dropped = 0
+        #: Frames addressed to the device that its CANopen services cannot read (an NMT command of one byte, an
+        #: empty SDO request): counted, each reported through ``on_malformed`` (one line), ignored.
+        self.malformed = 0
+        self.on_malformed: Callable[[str], None] | None = None
         self.booted = False
 
     # -- frames in ------------------------------------------------------------------------------------------
@@ -116,7 +120,13 @@ class EmulatedDevice:
             if can_id == 0x600 + self.node_id:
                 self.sdo.requests += 1
                 self._request_wall = wall_time
-            self.network.notify(can_id, bytearray(data), wall_time)
+            try:
+                self.network.notify(can_id, bytearray(data), wall_time)
+            except Exception as exc:  # noqa: BLE001 (canopen's services unpack without a length check)
+                self.malformed += 1
+                if self.on_malformed is not None:
+                    self.on_malformed(f'device {self.name}: frame 0x{can_id:03X} [{bytes(data).hex() or "empty"}] is '
+                                      f'not a valid CANopen message for it ({type(exc).__name__}: {exc}); ignored')
 
     def _on_rpdo(self, can_id: int, data: bytearray, _timestamp: float) -> None:
         """An RPDO (OPERATIONAL only): its bytes into the mapped objects, in mapping order; a frame shorter than the

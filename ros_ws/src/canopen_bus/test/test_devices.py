@@ -238,3 +238,13 @@ def test_an_rpdo_writes_its_mapped_objects(tmp_path):
     assert (dev.get_raw(0x4007, 4), dev.get_raw(0x4007, 5)) == (1000, -2000)
     dev.receive(0x220, b'\x01', 0.0)
     assert dev.rpdo_errors == 1
+
+
+def test_a_frame_the_canopen_services_cannot_read_is_one_line_and_the_device_goes_on():
+    lines = []
+    w = Wire()
+    w.dev.on_malformed = lines.append
+    for cid, data in ((0x000, b'\x01'), (0x638, b''), (0x638, b'\x40\x00')):
+        w.dev.receive(cid, data, 0.0)
+    assert w.dev.malformed == 3 and len(lines) == 3 and 'frame 0x000 [01] is not a valid CANopen message' in lines[0]
+    assert w.request(bytes([0x40, 0x07, 0x40, 0x04, 0, 0, 0, 0]))[0] == 0x43  # still serving
