@@ -159,8 +159,15 @@ def test_bad_bus_options_are_one_line_and_exit_2(tmp_path):
     kernel = tmp_path / 'kernel_can.yaml'
     kernel.write_text(f'extends: {ROOT / "scenarios" / "oresat_c3_detumble.yaml"}\nname: kernel_can\n'
                       'can_bus:\n  interface: socketcan\n  channel: nosuchcan7\n')
+    (tmp_path / 'map.yaml').write_text('devices:\n  adcs:\n    dictionary: oresat1/adcs\n    objects:\n      - {index: 0x4000, '
+                                       'subs: [1, 2, 3], quantity: body_rate, si_per_count: 1.0e-4, unit: rad/s, '
+                                       'full_scale: 8.73}\n')
+    misfit = tmp_path / 'misfit.yaml'
+    misfit.write_text(f'extends: {ROOT / "scenarios" / "oresat_c3_detumble.yaml"}\nname: misfit\n'
+                      'can_bus:\n  mapping: map.yaml\n')
     for args, needle in ((['heao_b_acquisition_short', '--can-port', '1234'], 'has no CAN bus'),
                          ([str(kernel)], 'this machine has no network interface nosuchcan7'),
+                         ([str(misfit)], '0x4000:1 holds -32768..32767 counts; full_scale 8.73 rad/s'),
                          (['oresat_c3_detumble', '--replay-can', str(tmp_path / 'none.asc')], 'no such file'),
                          (['oresat_c3_detumble', '--can-port', '70000'], 'not a TCP port')):
         r = subprocess.run([*ACDS, 'run', *args, '--engine', 'direct', '--no-record'], env=env, capture_output=True,

@@ -106,9 +106,11 @@ class EmulatedDevice:
         self.sdo_delay_s = 0.0
         self.sdo_dropped = 0
         #: Frames addressed to the device that its CANopen services cannot read (an NMT command of one byte, an
-        #: empty SDO request): counted, each reported through ``on_malformed`` (one line), ignored.
+        #: empty SDO request): counted, each reported through ``on_malformed`` (one line), ignored; the SDO aborts
+        #: too (once per object and abort code).
         self.malformed = 0
         self.on_malformed: Callable[[str], None] | None = None
+        self._aborts_named: set[tuple[int, tuple]] = set()
         self.booted = False
 
     # -- frames in ------------------------------------------------------------------------------------------
@@ -172,6 +174,13 @@ class EmulatedDevice:
 
     def _abort(self, abort_code: int = 0x08000000) -> None:
         self.sdo.aborts[abort_code] = self.sdo.aborts.get(abort_code, 0) + 1
+        where = (self.node.sdo._index, self.node.sdo._subindex)
+        if (abort_code, where) not in self._aborts_named and self.on_malformed is not None:
+            self._aborts_named.add((abort_code, where))
+            obj = 'an unread object' if where[0] is None else f'0x{where[0]:04X}:{where[1]}'
+            self.on_malformed(f'device {self.name}: SDO abort 0x{abort_code:08X} '
+                              f'({ABORT_CODES.get(abort_code, "other")}) for {obj} (named once per object and code; '
+                              f'counted)')
         self._server_abort(abort_code)
 
     # -- the dictionary ---------------------------------------------------------------------------------

@@ -48,6 +48,12 @@ def test_sdo_expedited_and_the_standard_abort_codes():
     assert _abort_code(w.request(bytes([0x2B, 0x07, 0x40, 0x04, 1, 0, 0, 0]))) == 0x06070010   # 2 bytes into int32
     assert w.dev.sdo.aborts == {0x06020000: 1, 0x06090011: 1, 0x06010002: 1, 0x06070010: 1}
     assert w.dev.sdo.requests == 6
+    lines = []
+    w.dev.on_malformed = lines.append
+    for _ in range(3):
+        w.request(bytes([0x2B, 0x00, 0x40, 0x01, 1, 0, 0, 0]))
+    assert lines == ['device adcs: SDO abort 0x06010002 (read-only object) for 0x4000:1 (named once per object and '
+                     'code; counted)']
 
 
 def test_sdo_segmented_upload_of_a_long_object():
@@ -246,5 +252,6 @@ def test_a_frame_the_canopen_services_cannot_read_is_one_line_and_the_device_goe
     w.dev.on_malformed = lines.append
     for cid, data in ((0x000, b'\x01'), (0x638, b''), (0x638, b'\x40\x00')):
         w.dev.receive(cid, data, 0.0)
-    assert w.dev.malformed == 3 and len(lines) == 3 and 'frame 0x000 [01] is not a valid CANopen message' in lines[0]
+    assert w.dev.malformed == 3 and 'frame 0x000 [01] is not a valid CANopen message' in lines[0]
+    assert sum('is not a valid CANopen message' in line for line in lines) == 3
     assert w.request(bytes([0x40, 0x07, 0x40, 0x04, 0, 0, 0, 0]))[0] == 0x43  # still serving
