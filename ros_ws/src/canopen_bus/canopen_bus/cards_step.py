@@ -30,14 +30,14 @@ from typing import Any
 
 import numpy as np
 from acds_common import units
-from acds_common.messages import ERROR, OK, WARN, diagnostic
+from acds_common.messages import ERROR, OK, WALL_CLOCK_PREFIX, WARN, diagnostic
 from acds_common.stepper import StepError, Stepper
+from acds_common.timing import StepTimes
 
 from canopen_bus.canlog import CanLog, CanLogError, read_replay
 from canopen_bus.device import EmulatedDevice
 from canopen_bus.dictionary import DictionaryError
 from canopen_bus.mapping import IDENTITY, DeviceMap, ObjectMap, load_mapping
-from canopen_bus.timing import Percentiles
 
 NAN3 = (math.nan, math.nan, math.nan)
 
@@ -99,9 +99,9 @@ class CardsStep(Stepper):
         self.clamped: set[int] = set()
         self.clamp_count = 0
         self.claimed: set[int] = set()
-        self.lateness = Percentiles()
-        self.sdo_latency = Percentiles()
-        self.setpoint_age = Percentiles()
+        self.lateness = StepTimes()
+        self.sdo_latency = StepTimes()
+        self.setpoint_age = StepTimes()
         self.late_steps: list[int] = []
         self._command_rx = {cid for d in self.devices.values() for cid in (0x600 + d.node_id, *(p.cob_id for p in d.rpdos))}
         self._node_ids = {d.node_id: name for name, d in self.devices.items()}
@@ -191,7 +191,7 @@ class CardsStep(Stepper):
             events += self._writes(k, taken)
             ages = [sample_wall - w for w, cid, _d in taken if cid in self._command_rx] if self.on_bus else []
             for age in ages:
-                self.setpoint_age.add(age)
+                self.setpoint_age.add(k, age)
             if self._fault_pending and t_s >= self.cfg['fault_time']:
                 events.append(self._inject_fault(k, t_s))
             setpoint = self._setpoints(events)
@@ -212,11 +212,11 @@ class CardsStep(Stepper):
         lateness = math.nan
         if target is not None:
             lateness = sample_wall - target
-            self.lateness.add(lateness)
+            self.lateness.add(k, lateness)
             if lateness > self.control_period_s / self.rtf:
                 self.late_steps.append(k)
         for v in lat_sdo:
-            self.sdo_latency.add(v)
+            self.sdo_latency.add(k, v)
         moment = tuple(self.k_am2_per_a[i] * setpoint[i] for i in range(3))
         out: dict[str, Any] = {
             'command': moment,
@@ -381,11 +381,13 @@ class CardsStep(Stepper):
             'setpoints_clamped': self.clamp_count,
             'unknown_cob_id_frames': self.unknown_frames,
             'malformed_frames': sum(d.malformed for d in self.devices.values()),
-            'late_steps': len(self.late_steps),
+            f'{WALL_CLOCK_PREFIX}late_steps': len(self.late_steps),
         }
-        for name, p in (('sensor_lateness', self.lateness), ('sdo_latency', self.sdo_latency),
-                        ('setpoint_age', self.setpoint_age)):
-            values.update({f'{name}_{q}_ms': f'{v * 1e3:.3f}' for q, v in p.summary().items()})
+        for name, times in (('sensor_lateness', self.lateness), ('sdo_latency', self.sdo_latency),
+                            ('setpoint_age', self.setpoint_age)):
+            if times.count:  # wall-clock keys: the machine's, not the data's (digests and compare leave them out)
+                values.update({f'{WALL_CLOCK_PREFIX}{name}_{q}': f'{v:.3f}' for q, v in times.report().items()
+                               if q != 'steps'})
         values.update({f'event_{i}': e for i, e in enumerate(events)})
         return diagnostic(self.node, values, message, level)
 
