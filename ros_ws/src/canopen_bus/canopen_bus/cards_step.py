@@ -103,6 +103,7 @@ class CardsStep(Stepper):
         self.sdo_latency = StepTimes()
         self.setpoint_age = StepTimes()
         self.late_steps: list[int] = []
+        #: COB-IDs that carry the flight computer's commands to the cards: SDO requests and RPDOs.
         self._command_rx = {cid for d in self.devices.values() for cid in (0x600 + d.node_id, *(p.cob_id for p in d.rpdos))}
         self._node_ids = {d.node_id: name for name, d in self.devices.items()}
         self.unknown: set[int] = set()
@@ -110,10 +111,10 @@ class CardsStep(Stepper):
         self.last_write_step: int | None = None
         self.writes_stopped = False
         self._fault_pending = cfg['fault'] != 'none'
-        if self.on_bus:  # on the bus before the first step (its handshake is not the first step's time)
-            self._connect()
         self._fault_sensor: tuple[str, int, tuple[int, ...]] | None = None  # (device, index, axes) once active
         self._stuck: dict[int, int] = {}
+        if self.on_bus:  # on the bus before the first step (its handshake is not the first step's time)
+            self._connect()
 
     # -- the bus ----------------------------------------------------------------------------------------
     def _connect(self) -> None:
