@@ -48,7 +48,7 @@ def _with_bus(scenario: Any, **values: Any) -> Any:
     return dataclasses.replace(scenario, values=new)
 
 
-def prepare(scenario: Any, args: argparse.Namespace, run_dir: Path, echo: Any) -> BusSession | None:
+def prepare(scenario: Any, args: argparse.Namespace, run_dir: Path) -> BusSession | None:
     """The bus session of this run (None: the scenario has no CAN cards); ValueError (one line) for an option that
     does not fit."""
     given = [f'--{n.replace("_", "-")}' for n in ('can_port', 'can_host', 'replay_can') if getattr(args, n) is not None]
@@ -68,7 +68,7 @@ def prepare(scenario: Any, args: argparse.Namespace, run_dir: Path, echo: Any) -
             read_replay(log)
         except CanLogError as exc:
             raise ValueError(str(exc)) from None
-        return BusSession(_with_bus(scenario, rtf=rtf, replay_can=str(log)), None, echo)
+        return BusSession(_with_bus(scenario, rtf=rtf, replay_can=str(log)), None)
     if scenario.get('can_bus', 'interface') == 'socketcan':
         channel = scenario.get('can_bus', 'channel')
         if given:
@@ -76,10 +76,10 @@ def prepare(scenario: Any, args: argparse.Namespace, run_dir: Path, echo: Any) -
         if not Path('/sys/class/net', channel).exists():
             raise ValueError(f'can_bus.interface socketcan: this machine has no network interface {channel} (create '
                              f'one: ip link add dev {channel} type vcan && ip link set up {channel}; or use socketcand)')
-        return BusSession(_with_bus(scenario, rtf=rtf, can_log=str(run_dir / 'can.asc')), ('socketcan', channel), echo)
+        return BusSession(_with_bus(scenario, rtf=rtf, can_log=str(run_dir / 'can.asc')), ('socketcan', channel))
     host = args.can_host or DEFAULT_HOST
     port = DEFAULT_PORT if args.can_port is None else args.can_port
-    return BusSession(_with_bus(scenario, rtf=rtf, can_log=str(run_dir / 'can.asc')), (host, port), echo)
+    return BusSession(_with_bus(scenario, rtf=rtf, can_log=str(run_dir / 'can.asc')), (host, port))
 
 
 class BusSession:
@@ -88,8 +88,8 @@ class BusSession:
     #: It paces the run itself (``acds run --rtf`` is its real-time factor, on either engine).
     paces = True
 
-    def __init__(self, scenario: Any, endpoint: tuple[str, int] | None, echo: Any) -> None:
-        self.scenario, self.endpoint, self.echo = scenario, endpoint, echo
+    def __init__(self, scenario: Any, endpoint: tuple[str, Any] | None) -> None:
+        self.scenario, self.endpoint = scenario, endpoint
         self.hub: Hub | None = None
         self.listener: Any = None
         self.notifier: Any = None
