@@ -147,6 +147,7 @@ def test_a_scripted_master_flies_the_cards_and_the_replay_gives_the_same_truth(t
     replay = _run(tmp_path, 'replay', '--replay-can', str(log))
     out2, _ = replay.communicate(timeout=120)
     assert replay.returncode == 0, out2
+    assert f'heartbeat watched in the steps of R = {RTF:g}' in out2  # the recorded run's, from can.asc.run.json
     again = json.loads((tmp_path / 'replay.json').read_text())
     assert again['truth_digest'] == live['truth_digest']
     assert again['can_setpoint_changes'] == live['can_setpoint_changes']

@@ -91,7 +91,7 @@ class CardsStep(Stepper):
         self.journal: list[list] = []
         self.bus = None
         self.notifier = None
-        self.canlog = CanLog(Path(cfg['can_log'])) if cfg['can_log'] and self.on_bus else None
+        self.canlog = CanLog(Path(cfg['can_log']), self.rtf) if cfg['can_log'] and self.on_bus else None
         self.wall0: float | None = None
         self.step_now = -1
         self.last_hb_step: int | None = None

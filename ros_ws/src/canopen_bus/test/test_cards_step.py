@@ -31,7 +31,7 @@ def _download(sub: int, microamps: int) -> can.Message:
 
 def test_a_setpoint_is_held_until_the_step_that_samples_it_and_logged_with_that_step(tmp_path):
     st = _cards()
-    st.canlog = CanLog(tmp_path / 'can.asc')
+    st.canlog = CanLog(tmp_path / 'can.asc', 10.0)
     outs = [st.exchange(k, k * 0.1, INPUTS) for k in range(3)]
     st._on_message(_download(4, 5000))  # arrives between step 2 and step 3
     outs += [st.exchange(k, k * 0.1, INPUTS) for k in range(3, 5)]
