@@ -318,6 +318,8 @@ class CardsStep(Stepper):
             return None if odom is None else tuple(odom.angular)
         if quantity == 'magnetic_field':
             return None if inp.get('b_true') is None else tuple(inp['b_true'][0])
+        if quantity == 'sensed_magnetic_field':  # magnetometer_sim's, its faults included
+            return None if inp.get('sensed_field') is None else tuple(inp['sensed_field'][0])
         if quantity in ('ecef_position', 'ecef_velocity'):
             if odom is None:
                 return None
