@@ -17,7 +17,9 @@ setup(
     description='CANopen devices from an object dictionary on a socketcand-protocol bus (spec §13).',
     license='Apache-2.0',
     entry_points={
+        'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
         'console_scripts': [
+            'canopen_cards = canopen_bus.cards_node:main',
             'canopen_bus_hub = canopen_bus.hub:main',
         ],
     },

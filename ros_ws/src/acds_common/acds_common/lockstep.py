@@ -778,6 +778,8 @@ def run_node(name: str, args: list[str] | None = None) -> int:
     except (KeyboardInterrupt, ExternalShutdownException):
         code = EXIT_OK
     finally:
+        if node is not None:
+            node.stepper.close()
         release_node(executor, node)
     # Leave without the interpreter's finalization: it deletes the DDS participant, which then talks to peers
     # that are leaving too (stalls of 2 s measured there; the likely place of a >10 s exit hang seen in suite
