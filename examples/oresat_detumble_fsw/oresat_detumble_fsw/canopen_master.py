@@ -26,7 +26,6 @@ import signal
 import struct
 import sys
 import threading
-import time
 
 from oresat_detumble_fsw.law import detumble_gain, detumble_moment
 

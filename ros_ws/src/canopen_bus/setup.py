@@ -18,6 +18,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
+        'acds.verbs': ['c3 = canopen_bus.c3_cli'],
         'console_scripts': [
             'canopen_cards = canopen_bus.cards_node:main',
             'canopen_bus_hub = canopen_bus.hub:main',

@@ -1,9 +1,10 @@
 """``acds c3``: start the user's OreSat C3, unmodified, against a running bus scenario (spec §13).
 
-    acds c3 --run-dir RUN [--host 127.0.0.1] [--detumble SCENARIO] [--seconds S]
+    acds c3 [--run-dir RUN] [--can-host 127.0.0.1] [--can-port 29536] [--detumble SCENARIO] [--seconds S]
 
 starts the C3 (:mod:`canopen_bus.c3_runner`: private mount namespace, user nobody, mock hardware, flight mode off,
-its output in ``RUN/c3/``) on the socketcand bus at HOST:29536, and with ``--detumble`` acts as its operator: once
+its output in ``RUN/c3/``, by default a new folder ``runs/c3_<UTC time>`` of the workspace) on the socketcand bus
+at HOST:29536, and with ``--detumble`` acts as its operator: once
 its heartbeat (COB-ID 0x701) is on the bus, it sets the C3's ADCS manager to DETUMBLE with the orbit the scenario's
 flight software carries (``controller.detumble_orbit_period_s`` and ``magnetic_inclination_rad``) by SDO to node
 0x01, and prints what the C3 reads back. It runs until the C3 ends, ``--seconds`` pass, or Ctrl-C/SIGTERM, then
@@ -20,7 +21,7 @@ import threading
 import time
 from pathlib import Path
 
-from .c3_runner import C3_NODE_ID, C3_SOCKETCAND_PORT, CHANNEL, C3Error, C3Process
+from .c3_runner import C3_NODE_ID, C3_SOCKETCAND_PORT, CHANNEL, C3Error, C3Process, checkout_root
 
 #: How long the operator waits for the C3's first heartbeat (its start imports scipy and skyfield: ~3–20 s here).
 HEARTBEAT_WAIT_S = 60.0
@@ -30,8 +31,8 @@ def detumble_orbit(scenario_name: str) -> tuple[float, float]:
     """The orbit period (s) and inclination (rad) the scenario's flight software carries."""
     from acds_common.scenario import load_scenario
 
-    controller = load_scenario(scenario_name)['controller']
-    return float(controller['detumble_orbit_period_s']), float(controller['magnetic_inclination_rad'])
+    scenario = load_scenario(scenario_name)
+    return scenario.get('controller', 'detumble_orbit_period'), scenario.get('controller', 'magnetic_inclination')
 
 
 def wait_heartbeat(network, node_id: int, timeout_s: float) -> float:
@@ -63,9 +64,10 @@ def operate_detumble(host: str, port: int, orbit_period_s: float, inclination_ra
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser('c3', help='start the OreSat C3 flight software against a running bus scenario',
                        description=__doc__.split('\n\n')[1] if __doc__ else None)
-    p.add_argument('--run-dir', type=Path, required=True, help="the bus run's folder (the C3's output goes to RUN/c3/)")
-    p.add_argument('--host', default='127.0.0.1', help='the bus (socketcand hub) host (default 127.0.0.1)')
-    p.add_argument('--port', type=int, default=C3_SOCKETCAND_PORT,
+    p.add_argument('--run-dir', type=Path, default=None,
+                   help="the bus run's folder: the C3's output goes to RUN/c3/ (default: a new runs/c3_<UTC time>)")
+    p.add_argument('--can-host', default='127.0.0.1', help='the bus (socketcand hub) host (default 127.0.0.1)')
+    p.add_argument('--can-port', type=int, default=C3_SOCKETCAND_PORT,
                    help=f'the hub port; the C3 only connects to {C3_SOCKETCAND_PORT}')
     p.add_argument('--detumble', metavar='SCENARIO',
                    help="set the C3's ADCS manager to DETUMBLE with this scenario's orbit once its heartbeat is on")
@@ -75,23 +77,26 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.run_dir is None:
+        args.run_dir = checkout_root() / 'runs' / time.strftime('c3_%Y%m%d_%H%M%S', time.gmtime())
+        args.run_dir.mkdir(parents=True)
     if not args.run_dir.is_dir():
         print(f'acds c3: error: --run-dir {args.run_dir}: no such folder', file=sys.stderr)
         return 2
     orbit = detumble_orbit(args.detumble) if args.detumble else None
-    c3 = C3Process(args.run_dir / 'c3', host=args.host, port=args.port, verbose=args.verbose)
+    c3 = C3Process(args.run_dir / 'c3', host=args.can_host, port=args.can_port, verbose=args.verbose)
     try:
         c3.check()
     except C3Error as e:
         print(f'acds c3: error: {e}', file=sys.stderr)
         return 2
     with c3:
-        print(f'[c3] OreSat C3 pid {c3.pid} on socketcand {args.host}:{args.port} ({CHANNEL}), log {c3.log_path}',
+        print(f'[c3] OreSat C3 pid {c3.pid} on socketcand {args.can_host}:{args.can_port} ({CHANNEL}), log {c3.log_path}',
               file=sys.stderr, flush=True)
         t0 = time.monotonic()
         try:
             if orbit:
-                back = operate_detumble(args.host, args.port, *orbit)
+                back = operate_detumble(args.can_host, args.can_port, *orbit)
                 print(f'[c3] ADCS manager set by SDO to node 0x01: control_mode {back["control_mode"]} (DETUMBLE), '
                       f'orbital_period {back["orbital_period"]:.1f} s, orbital_inclination '
                       f'{back["orbital_inclination"]:.2f} deg; its first setpoint comes when its 300 s IDLE sleep '
