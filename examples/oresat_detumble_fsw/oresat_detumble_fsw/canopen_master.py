@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import signal
 import struct
 import sys
@@ -145,6 +146,8 @@ def main(argv: list[str] | None = None) -> int:
     from oresat_configs import OreSatConfig
 
     args = build_parser().parse_args(argv)
+    # python-can's socketcand client warns of every TCP read that splits a frame (it keeps the rest and goes on).
+    logging.getLogger('can.interfaces.socketcand').setLevel(logging.ERROR)
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, lambda *_a: stop.set())
