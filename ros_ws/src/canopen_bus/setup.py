@@ -18,6 +18,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
+        'acds.run_options': [f'{package_name} = {package_name}.run_plugin'],
+        'acds.summaries': [f'{package_name} = {package_name}.summary'],
         'acds.verbs': ['c3 = canopen_bus.c3_cli'],
         'console_scripts': [
             'canopen_cards = canopen_bus.cards_node:main',

@@ -36,7 +36,7 @@ from acds_common.stepper import StepError, Stepper
 from canopen_bus.canlog import CanLog, CanLogError, read_replay
 from canopen_bus.device import EmulatedDevice
 from canopen_bus.dictionary import DictionaryError
-from canopen_bus.mapping import DeviceMap, ObjectMap, load_mapping
+from canopen_bus.mapping import IDENTITY, DeviceMap, ObjectMap, load_mapping
 from canopen_bus.timing import Percentiles
 
 NAN3 = (math.nan, math.nan, math.nan)
@@ -78,6 +78,9 @@ class CardsStep(Stepper):
             self.devices[m.name] = dev
         self.own_ids = {cid: name for name, d in self.devices.items()
                         for cid in (0x580 + d.node_id, 0x700 + d.node_id, *(p.cob_id for p in d.tpdos))}
+        #: (device, object, per-subindex encoder) of every sensor object, in mapping order.
+        self._sensor_objects = [(self.devices[m.name], o, [m.od[o.index][sub].encode_raw for sub in o.subs])
+                                for m in self.maps for o in m.objects if not o.command]
         self.rng = {(m.name, o.index): np.random.default_rng([self.seed, m.node_id, o.index])
                     for m in self.maps for o in m.objects}
         self.k_am2_per_a = cfg['dipole_per_amp']
@@ -271,25 +274,30 @@ class CardsStep(Stepper):
     def _sensors(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, tuple]:
         """Write every sensor object from the truth of step k; {quantity: the SI value sent (mean over objects)}."""
         sums: dict[str, list] = {}
-        for m in self.maps:
-            dev = self.devices[m.name]
-            for o in m.objects:
-                if o.command:
-                    continue
-                value = self._quantity(o.quantity, t_s, inp)
-                if value is None:
-                    continue
-                vec = np.asarray(o.mounting) @ np.asarray(value, dtype=float)
-                if o.noise_std > 0:
-                    vec = vec + self.rng[(m.name, o.index)].normal(0.0, o.noise_std, 3)
-                si = []
-                for axis, sub in enumerate(o.subs):
-                    lo, hi = o.limits[axis]
-                    counts = min(hi, max(lo, int(round(vec[axis] / o.si_per_count))))
-                    dev.set_raw(o.index, sub, counts)
-                    si.append(counts * o.si_per_count)
-                sums.setdefault(o.quantity, []).append(si)
-        return {q: tuple(float(x) for x in np.mean(v, axis=0)) for q, v in sums.items()}
+        values: dict[str, Any] = {}
+        for dev, o, packers in self._sensor_objects:
+            if o.quantity not in values:
+                values[o.quantity] = self._quantity(o.quantity, t_s, inp)
+            value = values[o.quantity]
+            if value is None:
+                continue
+            if o.mounting is not IDENTITY:
+                value = [sum(m * v for m, v in zip(row, value, strict=True)) for row in o.mounting]
+            if o.noise_std > 0:
+                value = [v + n for v, n in zip(value, self.rng[(dev.name, o.index)].normal(0.0, o.noise_std, 3).tolist(),
+                                               strict=True)]
+            store = dev.node.data_store.setdefault(o.index, {})
+            sent = []
+            for (lo, hi), sub, encode, v in zip(o.limits, o.subs, packers, value, strict=True):
+                counts = min(hi, max(lo, round(v / o.si_per_count)))
+                store[sub] = encode(counts)
+                sent.append(counts * o.si_per_count)
+            acc = sums.setdefault(o.quantity, [0.0, 0.0, 0.0, 0])
+            acc[0] += sent[0]
+            acc[1] += sent[1]
+            acc[2] += sent[2]
+            acc[3] += 1
+        return {q: (a[0] / a[3], a[1] / a[3], a[2] / a[3]) for q, a in sums.items()}
 
     def _flush(self) -> None:
         if self.canlog is not None:

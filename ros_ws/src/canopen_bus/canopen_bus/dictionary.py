@@ -9,6 +9,7 @@ timer and the mapped objects, each checked to fit the 8 bytes of a classic CAN f
 from __future__ import annotations
 
 import dataclasses
+import functools
 from pathlib import Path
 
 import canopen
@@ -35,6 +36,13 @@ class Pdo:
         return sum(b for _i, _s, b in self.mapped)
 
 
+@functools.lru_cache(maxsize=4)
+def _oresat_config(mission: str):
+    """oresat-configs' mission configuration (seconds to build: kept for the process)."""
+    from oresat_configs import OreSatConfig
+    return OreSatConfig(mission)
+
+
 def load_dictionary(source: str, base: Path | None = None) -> odict.ObjectDictionary:
     """``MISSION/CARD`` (oresat-configs) or an EDS/DCF path (relative to ``base``) → the object dictionary."""
     if source.lower().endswith(('.eds', '.dcf')):
@@ -48,9 +56,8 @@ def load_dictionary(source: str, base: Path | None = None) -> odict.ObjectDictio
     mission, sep, card = source.partition('/')
     if not sep:
         raise DictionaryError(f'object dictionary {source!r}: expected MISSION/CARD (e.g. oresat1/adcs) or an .eds/.dcf')
-    from oresat_configs import OreSatConfig
     try:
-        config = OreSatConfig(mission)
+        config = _oresat_config(mission)
     except Exception as exc:  # oresat-configs raises ValueError/KeyError for an unknown mission
         raise DictionaryError(f'object dictionary {source!r}: oresat-configs has no mission {mission!r} ({exc})') from None
     if card not in config.od_db:

@@ -116,6 +116,7 @@ def _object(device: str, od: odict.ObjectDictionary, i: int, entry: dict) -> Obj
                 raise DictionaryError(f'{where}: 0x{index:04X}:{s} holds {lo}..{hi} counts; full_scale {full_scale} '
                                       f'{unit} at {scale} {unit}/count needs ±{counts:.0f}')
     mounting = tuple(tuple(float(v) for v in row) for row in entry.get('mounting', IDENTITY))
+    mounting = IDENTITY if mounting == IDENTITY else mounting
     if len(mounting) != 3 or any(len(r) != 3 for r in mounting):
         raise DictionaryError(f'{where}: mounting must be a 3×3 matrix (rows)')
     return ObjectMap(index, subs, quantity, scale, unit, tuple(limits), None if full_scale is None else float(full_scale),
