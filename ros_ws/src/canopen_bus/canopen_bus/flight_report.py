@@ -62,11 +62,41 @@ class FlightComputerReport:
         return (f'the flight computer (node 0x{self.node_id:02X}) stopped writing setpoints at step {last} '
                 f'(t = {last * dt_s:.1f} s) while its heartbeat went on to step {hb_last} (t = {hb_last * dt_s:.1f} s)')
 
+    def lines(self, dt_s: float) -> list[str]:
+        """The run's account of the flight computer, one line each."""
+        hb0, hb1 = self.heartbeat_steps
+        out = [f'flight computer node 0x{self.node_id:02X}: ' + (
+            f'{self.heartbeats} heartbeats, steps {hb0}..{hb1}' if self.heartbeats else 'no heartbeat on the bus')]
+        for name, w in self.setpoints.items():
+            out.append(f'  {name}: ' + ('never written' if not w.count else
+                       f'{w.count} writes ({w.nonzero} non-zero), steps {w.first_step}..{w.last_step}, '
+                       f'values {w.low}..{w.high}'))
+        if self.other_sdo or self.aborts:
+            out.append(f'  other SDO requests to the cards: {self.other_sdo}; aborts answered: '
+                       + (', '.join(f'0x{c:08X} × {n}' for c, n in self.aborts.items()) or 'none'))
+        stopped = self.stopped_line(dt_s, quiet_steps=max(1, round(10.0 / dt_s)))
+        if stopped:
+            out.append('  ' + stopped)
+        return out
+
     def as_dict(self) -> dict[str, Any]:
         return {'node_id': self.node_id, 'heartbeats': self.heartbeats,
                 'heartbeat_first_step': self.heartbeat_steps[0], 'heartbeat_last_step': self.heartbeat_steps[1],
                 'setpoints': {k: vars(v) for k, v in self.setpoints.items()}, 'other_sdo_requests': self.other_sdo,
                 'aborts': {f'0x{code:08X}': n for code, n in self.aborts.items()}}
+
+
+def setpoint_objects(mapping: Path) -> dict[tuple[int, int, int], str]:
+    """{(card node id, index, sub): name} of the mapping's command objects (the quantities in ``mapping.COMMANDS``)."""
+    from canopen_bus.mapping import COMMANDS, load_mapping
+
+    out = {}
+    for dev in load_mapping(Path(mapping)):
+        for o in dev.objects:
+            if o.quantity in COMMANDS:
+                for sub in o.subs:
+                    out[(dev.node_id, o.index, sub)] = f'{dev.name} 0x{o.index:04X}.{sub} {dev.od[o.index][sub].name}'
+    return out
 
 
 def report(can_log: Path, fc_node_id: int, setpoint_objects: dict[tuple[int, int, int], str],
