@@ -20,6 +20,7 @@ setup(
         'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
         'acds.run_options': [f'{package_name} = {package_name}.run_plugin'],
         'acds.summaries': [f'{package_name} = {package_name}.summary'],
+        'acds.contract': [f'{package_name} = {package_name}.contract'],
         'acds.verbs': ['c3 = canopen_bus.c3_cli'],
         'console_scripts': [
             'canopen_cards = canopen_bus.cards_node:main',

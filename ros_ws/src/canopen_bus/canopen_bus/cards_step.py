@@ -102,7 +102,12 @@ class CardsStep(Stepper):
         self.sdo_latency = Percentiles()
         self.setpoint_age = Percentiles()
         self.late_steps: list[int] = []
-        self._sdo_seen = 0
+        self._sdo_rx = {0x600 + d.node_id for d in self.devices.values()}
+        self.last_write_step: int | None = None
+        self.writes_stopped = False
+        self._fault_pending = cfg['fault'] != 'none'
+        self._fault_sensor: tuple[str, int, tuple[int, ...]] | None = None  # (device, index, axes) once active
+        self._stuck: dict[int, int] = {}
 
     # -- the bus ----------------------------------------------------------------------------------------
     def _connect(self) -> None:
@@ -163,10 +168,12 @@ class CardsStep(Stepper):
                 if entry[4] is None:
                     entry[4] = k
             events += self._heartbeat(k, taken)
-            if self.on_bus:
-                for wall, cid, _data in taken:
-                    if any(cid == 0x600 + d.node_id for d in self.devices.values()):
-                        self.setpoint_age.add(sample_wall - wall)
+            events += self._writes(k, taken)
+            ages = [sample_wall - w for w, cid, _d in taken if cid in self._sdo_rx] if self.on_bus else []
+            for age in ages:
+                self.setpoint_age.add(age)
+            if self._fault_pending and t_s >= self.cfg['fault_time']:
+                events.append(self._inject_fault(k, t_s))
             setpoint = self._setpoints(events)
             sent = self._sensors(k, t_s, inp)
             if k == 0:
@@ -197,18 +204,13 @@ class CardsStep(Stepper):
             'body_rate': sent.get('body_rate', NAN3),
             'magnetic_field': sent.get('magnetic_field', NAN3),
             'ecef_position': sent.get('ecef_position', NAN3),
-            'timing': (lateness, max(lat_sdo) if lat_sdo else math.nan, self._age_max(taken, sample_wall)),
+            'timing': (lateness, max(lat_sdo) if lat_sdo else math.nan, max(ages) if ages else math.nan),
         }
         if events or (self.telemetry_wanted and k % self.cfg['telemetry_every'] == 0):
             out['diagnostics'] = self._telemetry(events)
             for line in events:
-                self.log('warn' if 'lost' in line or 'clamped' in line else 'info', line)
+                self.log('warn' if any(w in line for w in ('lost', 'clamped', 'stopped', 'fault')) else 'info', line)
         return out
-
-    def _age_max(self, taken: list, sample_wall: float) -> float:
-        ages = [sample_wall - w for w, cid, _d in taken if self.on_bus and any(
-            cid == 0x600 + d.node_id for d in self.devices.values())]
-        return max(ages) if ages else math.nan
 
     def _heartbeat(self, k: int, taken: list) -> list[str]:
         """The flight computer's heartbeat, watched in steps (the same in a replay)."""
@@ -231,6 +233,42 @@ class CardsStep(Stepper):
                 raise StepError(line + '; can_bus.on_heartbeat_loss: fail')
             return [line + '; flying on with the setpoints held']
         return []
+
+    def _writes(self, k: int, taken: list) -> list[str]:
+        """Whether the flight computer stopped (or resumed) its SDO requests to the cards, named with the step."""
+        if any(cid in self._sdo_rx for _w, cid, _d in taken):
+            line = [] if self.last_write_step is None or not self.writes_stopped else [
+                f'flight computer resumed its SDO requests at step {k} (t={self.step_time_s(k):g} s)']
+            self.last_write_step, self.writes_stopped = k, False
+            return line
+        if self.last_write_step is not None and not self.writes_stopped and k - self.last_write_step > self.hb_steps:
+            self.writes_stopped = True
+            beat = 'lost too' if self.hb_lost else 'still on'
+            return [f'flight computer stopped its SDO requests (setpoints): none since step {self.last_write_step} '
+                    f'(t={self.step_time_s(self.last_write_step):g} s), named at step {k}; its heartbeat is {beat}']
+        return []
+
+    def _inject_fault(self, k: int, t_s: float) -> str:
+        """Start the scenario's bus fault at step k; the line that names it."""
+        self._fault_pending = False
+        c = self.cfg
+        dev = self.devices[c['fault_device']]
+        kind = c['fault']
+        if kind == 'stop_pdos':
+            dev.silenced = True
+        elif kind == 'sdo_lost':
+            dev.sdo_lost = True
+        elif kind == 'sdo_delay':
+            dev.sdo_delay_s = c['fault_delay']
+        else:
+            axes = (0, 1, 2) if kind == 'dead_sensor' else (c['fault_axis'],)
+            self._fault_sensor = (dev.name, c['fault_object'], axes)
+        what = {'stop_pdos': 'stops sending its TPDOs (heartbeat and SDO go on)', 'sdo_lost': 'drops its SDO replies',
+                'sdo_delay': f'replies to SDO {c["fault_delay"] * 1e3:g} ms late (wall)',
+                'zero_axis': f'object 0x{c["fault_object"]:04X} reads 0 on axis {c["fault_axis"]}',
+                'stuck_axis': f'object 0x{c["fault_object"]:04X} holds its axis {c["fault_axis"]} value',
+                'dead_sensor': f'object 0x{c["fault_object"]:04X} reads 0 on every axis'}[kind]
+        return f'bus fault at step {k} (t={t_s:g} s): device {dev.name} {what}'
 
     def _objects(self, quantity: str) -> list[tuple[EmulatedDevice, ObjectMap]]:
         return [(self.devices[m.name], o) for m in self.maps for o in m.objects if o.quantity == quantity]
@@ -288,8 +326,11 @@ class CardsStep(Stepper):
                                                strict=True)]
             store = dev.node.data_store.setdefault(o.index, {})
             sent = []
-            for (lo, hi), sub, encode, v in zip(o.limits, o.subs, packers, value, strict=True):
+            fault = self._fault_sensor is not None and self._fault_sensor[:2] == (dev.name, o.index)
+            for axis, ((lo, hi), sub, encode, v) in enumerate(zip(o.limits, o.subs, packers, value, strict=True)):
                 counts = min(hi, max(lo, round(v / o.si_per_count)))
+                if fault and axis in self._fault_sensor[2]:
+                    counts = self._stuck.setdefault(axis, counts) if self.cfg['fault'] == 'stuck_axis' else 0
                 store[sub] = encode(counts)
                 sent.append(counts * o.si_per_count)
             acc = sums.setdefault(o.quantity, [0.0, 0.0, 0.0, 0])
@@ -315,6 +356,8 @@ class CardsStep(Stepper):
             'mode': 'on the bus' if self.on_bus else 'replay' if self.replay is not None else 'off the bus',
             'sdo_requests': sum(d.sdo.requests for d in self.devices.values()),
             'sdo_aborts': sum(sum(d.sdo.aborts.values()) for d in self.devices.values()),
+            'sdo_replies_dropped': sum(d.sdo_dropped for d in self.devices.values()),
+            'last_setpoint_request_step': self.last_write_step if self.last_write_step is not None else 'none',
             'setpoints_clamped': self.clamp_count,
             'late_steps': len(self.late_steps),
         }

@@ -95,7 +95,12 @@ class EmulatedDevice:
         self._tpdo_next = {p.number: 0.0 for p in self.tpdos}
         self._heartbeat_next = 0.0
         self.pending: list[tuple[float, int, bytes]] = []
+        #: Faults (spec §13, "Faults that flight software must survive"): no TPDOs; SDO replies dropped; SDO
+        #: replies sent this many wall seconds late (a timer thread, as a slow card's firmware would).
         self.silenced = False
+        self.sdo_lost = False
+        self.sdo_delay_s = 0.0
+        self.sdo_dropped = 0
         self.booted = False
 
     # -- frames in ------------------------------------------------------------------------------------------
@@ -115,10 +120,26 @@ class EmulatedDevice:
         return out
 
     def _emit(self, can_id: int, data: bytes) -> None:
-        if can_id == 0x580 + self.node_id and self._request_wall is not None:
-            self.sdo.latencies_s.append(self._wall() - self._request_wall)
-            self._request_wall = None
+        if can_id == 0x580 + self.node_id:
+            if self.sdo_lost:
+                self.sdo_dropped += 1
+                return
+            if self.sdo_delay_s > 0:
+                timer = threading.Timer(self.sdo_delay_s, self._reply_late, (can_id, data))
+                timer.daemon = True
+                timer.start()
+                return
+            if self._request_wall is not None:
+                self.sdo.latencies_s.append(self._wall() - self._request_wall)
+                self._request_wall = None
         self._send(can_id, data)
+
+    def _reply_late(self, can_id: int, data: bytes) -> None:
+        with self.lock:
+            if self._request_wall is not None:
+                self.sdo.latencies_s.append(self._wall() - self._request_wall)
+                self._request_wall = None
+            self._send(can_id, data)
 
     def _abort(self, abort_code: int = 0x08000000) -> None:
         self.sdo.aborts[abort_code] = self.sdo.aborts.get(abort_code, 0) + 1

@@ -44,6 +44,18 @@ SECTIONS: dict[str, dict[str, Field]] = {
         'can_log': Field('str', 'CAN log to write (set by acds run: RUN_DIR/can.asc)', ''),
         'replay_can': Field('str', 'CAN log whose frames are applied at their recorded steps instead of a bus '
                             '(acds run --replay-can)', ''),
+        'fault': Field('str', 'bus fault injected at fault_time: a card stops its TPDOs (stop_pdos), its SDO replies are '
+                       'lost (sdo_lost) or late by fault_delay (sdo_delay), a sensor object reads 0 on fault_axis '
+                       '(zero_axis), holds its value (stuck_axis) or reads 0 on every axis (dead_sensor)', 'none',
+                       choices=('none', 'stop_pdos', 'sdo_lost', 'sdo_delay', 'zero_axis', 'stuck_axis', 'dead_sensor')),
+        'fault_device': Field('str', 'the device of the fault (a mapping device name)', 'adcs'),
+        'fault_object': Field('int', 'zero_axis/stuck_axis/dead_sensor: the sensor object (index, e.g. 0x4003)', 0x4003,
+                              lo=0, hi=0xFFFF),
+        'fault_axis': Field('int', 'zero_axis/stuck_axis: the axis (0, 1, 2 = the object\'s subs in mapping order)', 0,
+                            lo=0, hi=2),
+        'fault_time': quantity('when the fault appears (sim time)', 0.0, 's', TIME, lo=0.0, hi=1e7),
+        'fault_delay': quantity('sdo_delay: how late each SDO reply goes out (wall time)', 0.03, 's', TIME,
+                                lo=0.0, hi=60.0),
         'telemetry_every': Field('int', 'diagnostics telemetry every N steps (and at every event)', 10,
                                  lo=1, hi=10**6),
     },
@@ -76,9 +88,18 @@ def check_mapping(scenario: Any) -> str:
     if not path:
         return 'can_bus.mapping: the canopen_cards node needs a mapping file'
     try:
-        load_mapping(Path(path))
+        maps = load_mapping(Path(path))
     except DictionaryError as exc:
         return f'can_bus.mapping: {exc}'
+    c = scenario.values['can_bus']
+    if c['fault'] != 'none':
+        device = next((m for m in maps if m.name == c['fault_device']), None)
+        if device is None:
+            return f'can_bus.fault_device: {c["fault_device"]!r} is no device of the mapping ({", ".join(m.name for m in maps)})'
+        if c['fault'] in ('zero_axis', 'stuck_axis', 'dead_sensor') and not any(
+                o.index == c['fault_object'] and not o.command for o in device.objects):
+            return (f'can_bus.fault_object: 0x{c["fault_object"]:04X} is no sensor object of device {device.name} '
+                    f'(its sensor objects: {", ".join(f"0x{o.index:04X}" for o in device.objects if not o.command)})')
     return ''
 
 
