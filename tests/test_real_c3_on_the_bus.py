@@ -13,6 +13,12 @@ no:xdist tests/test_real_c3_on_the_bus.py``). It checks
   sampled each) is the current setpoint the cards applied at that step (``cards/current_setpoint``), held until the
   next, and the rods' moment command of that step is it, clamped at the driver's limit, × the coil's A·m²/A;
 
+* a fault it must survive: at t = 320 s (some 30 s into its detumble) the ADCS card's SDO replies are lost
+  (``can_bus.fault: sdo_lost``); the C3's SDO client gives up (``SdoCommunicationError``), its ADCS service stops
+  for good (``olaf/common/service.py`` ``_loop``: any exception of ``on_loop`` ends the service), and the run's
+  account of the flight computer (:mod:`canopen_bus.flight_report`) says it stopped writing setpoints within a
+  second of the fault while its heartbeat went on to the end;
+
 and prints what the C3's detumble does to the spacecraft: |ω| over time, its setpoints, the rods' energy.
 """
 
@@ -31,9 +37,10 @@ from pathlib import Path
 import canopen
 import numpy as np
 import pytest
+import yaml
 from acds_common import topics
 from acds_common.cdr import Codec
-from acds_common.scenario import load_scenario
+from acds_common.scenario import SCENARIO_DIR, load_scenario
 from canopen_bus.c3_cli import detumble_orbit, operate_detumble
 from canopen_bus.c3_commands import connect, stored_adcs
 from canopen_bus.c3_runner import C3_SOCKETCAND_PORT, C3Process, c3_python
@@ -42,8 +49,10 @@ from canopen_bus.flight_report import report
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = 'oresat_c3_detumble'
-#: 300 s of the C3's IDLE sleep from its start, its start and the heartbeat wait, and ~45 s of its detumble.
+#: 300 s of the C3's IDLE sleep from its start, its start and the heartbeat wait, and ~70 s of its detumble.
 STEPS = 3700
+#: The fault: the ADCS card's SDO replies lost from this sim time on.
+FAULT_TIME_S = 320.0
 SETPOINTS = {(0x38, 0x4007, sub): name for sub, name in ((4, 'x'), (5, 'y'), (6, 'z'))}
 CARD_GYRO_PDO, C3_ADCS_GYRO = 0x1B8, ('gyroscope_pitch_rate', 'gyroscope_yaw_rate', 'gyroscope_roll_rate')
 
@@ -81,12 +90,15 @@ def test_the_real_c3_detumbles_the_emulated_cards(tmp_path: Path) -> None:
     with socket.socket() as s:
         s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         s.bind(('127.0.0.1', C3_SOCKETCAND_PORT))  # the C3's one port must be free (fails loudly naming it)
-    scenario = load_scenario(SCENARIO)
+    path = tmp_path / 'oresat_c3_detumble_sdo_lost.yaml'
+    path.write_text(yaml.safe_dump({'extends': str(SCENARIO_DIR / f'{SCENARIO}.yaml'), 'name': path.stem,
+                                    'can_bus': {'fault': 'sdo_lost', 'fault_time_s': FAULT_TIME_S}}))
+    scenario = load_scenario(str(path))
     dt = scenario.control_period_s
     run_dir = tmp_path / 'run'
     err = tmp_path / 'acds_run.err'
     with open(err, 'w') as fh:
-        run = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'run', SCENARIO, '--can-port', str(C3_SOCKETCAND_PORT),
+        run = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'run', str(path), '--can-port', str(C3_SOCKETCAND_PORT),
                                 '--steps', str(STEPS), '--run-dir', str(run_dir), '--quiet'],
                                stdout=subprocess.DEVNULL, stderr=fh, stdin=subprocess.DEVNULL, cwd=ROOT,
                                env={**os.environ, 'ACDS_WORKSPACE': str(ROOT)}, start_new_session=True)
@@ -114,6 +126,7 @@ def test_the_real_c3_detumbles_the_emulated_cards(tmp_path: Path) -> None:
         finally:
             net.disconnect()
         assert run.wait(STEPS * dt + 300) == 0, err.read_text()
+        c3_alive_at_the_end = c3.alive()
     finally:
         c3.stop()
         if run.poll() is None:
@@ -148,6 +161,14 @@ def test_the_real_c3_detumbles_the_emulated_cards(tmp_path: Path) -> None:
                 held[axis] = ua * 1e-6
         assert np.array_equal(np.array(applied[k]), held), (k, applied[k], held)
         assert np.allclose(command[k], np.clip(held, -limit, limit) * per_amp, rtol=1e-12, atol=0.0), k
+
+    # The fault: the setpoints stop within a second of it (the C3's SDO client: 0.3 s, one retry), the heartbeat goes on.
+    fault_k = round(FAULT_TIME_S / dt)
+    last_k = max(w.last_step for w in fc.setpoints.values())
+    assert fault_k <= last_k <= fault_k + round(1.0 / dt), (fault_k, last_k)
+    assert fc.heartbeat_steps[1] >= STEPS - round(2.0 / dt) and c3_alive_at_the_end
+    assert fc.stopped_line(dt, round(10.0 / dt)), fc.as_dict()
+    assert 'SdoCommunicationError' in (run_dir / 'c3' / 'c3.log').read_text()
 
     odometry = _series(run_dir / 'bag', topics.TRUTH_ODOMETRY, dt, topics.type_of(topics.TRUTH_ODOMETRY))
     first = min(written)
