@@ -92,6 +92,7 @@ def test_the_real_c3_detumbles_the_emulated_cards(tmp_path: Path) -> None:
         s.bind(('127.0.0.1', C3_SOCKETCAND_PORT))  # the C3's one port must be free (fails loudly naming it)
     path = tmp_path / 'oresat_c3_detumble_sdo_lost.yaml'
     path.write_text(yaml.safe_dump({'extends': str(SCENARIO_DIR / f'{SCENARIO}.yaml'), 'name': path.stem,
+                                    'input_timeout_s': 120.0,  # the C3's start (scipy, skyfield) on a loaded machine
                                     'can_bus': {'fault': 'sdo_lost', 'fault_time_s': FAULT_TIME_S}}))
     scenario = load_scenario(str(path))
     dt = scenario.control_period_s
