@@ -163,7 +163,7 @@ def test_the_real_c3_detumbles_the_emulated_cards(tmp_path: Path) -> None:
         assert np.array_equal(np.array(applied[k]), held), (k, applied[k], held)
         assert np.allclose(command[k], np.clip(held, -limit, limit) * per_amp, rtol=1e-12, atol=0.0), k
 
-    # The fault: the setpoints stop within a second of it (the C3's SDO client: 0.3 s, one retry), the heartbeat goes on.
+    # The fault: the setpoints stop within a second of it (the C3's SDO client waits 0.3 s once), the heartbeat goes on.
     fault_k = round(FAULT_TIME_S / dt)
     last_k = max(w.last_step for w in fc.setpoints.values())
     assert fault_k <= last_k <= fault_k + round(1.0 / dt), (fault_k, last_k)
