@@ -5,7 +5,8 @@ From ``can.asc`` and its step sidecar (:mod:`canopen_bus.canlog`): the flight co
 0x700 + its node id: first and last step, count), the setpoints it wrote (SDO download requests to a card,
 COB-ID 0x600 + the card's id, to the ``setpoint`` objects the mapping names: per object how many, the first and
 last step, the smallest and largest value), every other SDO request to a card, the aborts the cards answered, and,
-when the setpoints stop while the heartbeat goes on, the line saying so: "stopped writing setpoints at step K
+when the setpoints stop while the heartbeat goes on, the line saying so (frames logged after the last step's
+sample, step −1, are left out): "stopped writing setpoints at step K
 (t = …) while its heartbeat went on to step H".
 """
 
@@ -108,6 +109,8 @@ def report(can_log: Path, fc_node_id: int, setpoint_objects: dict[tuple[int, int
     cards = {node for node, _, _ in setpoint_objects}
     hb_first = hb_last = None
     for step, _wall, rx, can_id, data in rows:
+        if step < 0:  # after the last step's sample: applied at no step
+            continue
         if rx and can_id == 0x700 + fc_node_id:
             out.heartbeats += 1
             hb_first = step if hb_first is None else hb_first

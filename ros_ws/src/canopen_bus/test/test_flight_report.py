@@ -27,6 +27,7 @@ def _frames(last_setpoint_step: int, steps: int) -> list[tuple[int, float, bool,
             out += [(k, k * 0.1, False, 0x5B8, struct.pack('<BHBI', 0x60, 0x4007, sub, 0)) for sub in (4, 5, 6)]
     out.append((7, 0.7, True, 0x638, struct.pack('<BHBi', 0x40, 0x4000, 1, 0)))  # an upload: another SDO
     out.append((7, 0.7, False, 0x5B8, struct.pack('<BHBI', 0x80, 0x4000, 1, 0x06010002)))  # answered by an abort
+    out.append((-1, steps * 0.1, True, 0x701, b'\x05'))  # after the last step's sample: no step
     return out
 
 
