@@ -118,12 +118,14 @@ def test_the_real_c3_detumbles_the_emulated_cards(tmp_path: Path) -> None:
         _wait_line(err, r'flight computer heartbeat after', run, 60)
         net = canopen.Network()
         net.connect(interface='socketcand', channel='vcan0', host='127.0.0.1', port=C3_SOCKETCAND_PORT)
-        try:  # until the C3 holds a gyro PDO of the card (its 1 s period), at most 30 s
+        try:  # until the C3 holds a gyro PDO of the card on all three axes (its 1 s period), at most 30 s; then once
+            # more, so the triple read is one the C3 stored whole (an upload of 15 objects may straddle a PDO)
             node, t_end = connect(net), time.monotonic() + 30.0
-            while not any(stored.get(n) for n in C3_ADCS_GYRO):
+            while not all(stored.get(n) for n in C3_ADCS_GYRO):
                 assert time.monotonic() < t_end, f'the C3 stored no gyro PDO of the card in 30 s: {stored}'
-                upload_wall = time.time()
                 stored = stored_adcs(node)
+            upload_wall = time.time()
+            stored = stored_adcs(node)
         finally:
             net.disconnect()
         assert run.wait(STEPS * dt + 300) == 0, err.read_text()
@@ -134,7 +136,12 @@ def test_the_real_c3_detumbles_the_emulated_cards(tmp_path: Path) -> None:
             os.killpg(run.pid, signal.SIGTERM)
             run.wait(30)
     assert not c3.alive()
+    _check_run(run_dir, scenario, stored, upload_wall, c3_alive_at_the_end)
 
+
+def _check_run(run_dir: Path, scenario, stored: dict[str, int], upload_wall: float, c3_alive_at_the_end: bool) -> None:
+    """The C3's stored PDOs against the card's, every setpoint against the rods, the fault's account."""
+    dt = scenario.control_period_s
     frames = read_frames(run_dir / 'can.asc')
     # The C3 stored integers the card sent: the gyro triple of one of the card's gyro PDOs before the upload.
     sent = [struct_triple(d) for _k, wall, rx, cid, d in frames if not rx and cid == CARD_GYRO_PDO and wall <= upload_wall]
