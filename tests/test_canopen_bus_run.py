@@ -50,11 +50,15 @@ class Master:
         self.writes = 0
         self.timeouts = 0
         self.rates: list[tuple[int, int, int]] = []
-        self.net.subscribe(0x1B8, lambda _id, data, _t: self.rates.append(
-            tuple(int.from_bytes(data[i:i + 2], 'little', signed=True) for i in (0, 2, 4))))
+        self.first_pdo = threading.Event()
+        self.net.subscribe(0x1B8, self._gyro)
         self.threads = [threading.Thread(target=self._heartbeat), threading.Thread(target=self._law)]
         for t in self.threads:
             t.start()
+
+    def _gyro(self, _id: int, data: bytes, _t: float) -> None:
+        self.rates.append(tuple(int.from_bytes(data[i:i + 2], 'little', signed=True) for i in (0, 2, 4)))
+        self.first_pdo.set()
 
     def _heartbeat(self) -> None:
         while not self.stop.wait(0.1):
@@ -108,10 +112,18 @@ def test_a_scripted_master_flies_the_cards_and_the_replay_gives_the_same_truth(t
     reader.start()
     assert waiting.wait(60), 'the run never said it waits for the heartbeat:\n' + ''.join(lines)
     master = Master(port)
+    # Bad input on the live bus: a malformed line (the hub names it), a frame for a COB-ID the ADCS card does not
+    # serve (0x238: an RPDO it has not), a frame in the ADCS card's own heartbeat COB-ID (a node id claimed twice).
+    # Sent once the cards are on the bus (the master has their first gyro TPDO).
+    rogue = socket.create_connection(('127.0.0.1', port), timeout=5.0)
+    rogue.sendall(b'< open vcan0 >< rawmode >')
+    assert master.first_pdo.wait(60), 'no gyro TPDO from the cards:\n' + ''.join(lines)
+    rogue.sendall(b'< send 7FF 9 0 >< send 238 1 1 >< send 738 1 5 >')
     try:
         run.wait(timeout=120)
     finally:
         master.close()
+        rogue.close()
         reader.join()
     out = ''.join(lines)
     assert run.returncode == 0, out
@@ -121,6 +133,8 @@ def test_a_scripted_master_flies_the_cards_and_the_replay_gives_the_same_truth(t
     assert master.writes > 20 and live['can_setpoint_changes'] > 0, (master.writes, master.timeouts, out)
     assert live['can_peak_setpoint_ma'] == pytest.approx(69.44, abs=1e-6)
     assert 'clamped at the limit' in out
+    assert "bad line '< send 7FF 9 0 >' (length 9 outside 0..8)" in out
+    assert 'COB-ID 0x238 is addressed to emulated device adcs' in out and 'COB-ID 0x738, which is emulated' in out
     assert live['peak_current_ma'] > 10.0
     assert live['can_sensor_lateness_ms']['p50'] < 1e3 * 0.1 / RTF
     assert live['can_sdo_latency_ms'] is not None and live['can_setpoint_age_ms'] is not None
@@ -142,10 +156,58 @@ def test_a_scripted_master_flies_the_cards_and_the_replay_gives_the_same_truth(t
 
 def test_bad_bus_options_are_one_line_and_exit_2(tmp_path):
     env = {**os.environ, 'ACDS_WORKSPACE': str(tmp_path)}
+    kernel = tmp_path / 'kernel_can.yaml'
+    kernel.write_text(f'extends: {ROOT / "scenarios" / "oresat_c3_detumble.yaml"}\nname: kernel_can\n'
+                      'can_bus:\n  interface: socketcan\n  channel: nosuchcan7\n')
+    (tmp_path / 'map.yaml').write_text('devices:\n  adcs:\n    dictionary: oresat1/adcs\n    objects:\n      - {index: 0x4000, '
+                                       'subs: [1, 2, 3], quantity: body_rate, si_per_count: 1.0e-4, unit: rad/s, '
+                                       'full_scale: 8.73}\n')
+    misfit = tmp_path / 'misfit.yaml'
+    misfit.write_text(f'extends: {ROOT / "scenarios" / "oresat_c3_detumble.yaml"}\nname: misfit\n'
+                      'can_bus:\n  mapping: map.yaml\n')
     for args, needle in ((['heao_b_acquisition_short', '--can-port', '1234'], 'has no CAN bus'),
+                         ([str(kernel)], 'this machine has no network interface nosuchcan7'),
+                         ([str(misfit)], '0x4000:1 holds -32768..32767 counts; full_scale 8.73 rad/s'),
                          (['oresat_c3_detumble', '--replay-can', str(tmp_path / 'none.asc')], 'no such file'),
                          (['oresat_c3_detumble', '--can-port', '70000'], 'not a TCP port')):
         r = subprocess.run([*ACDS, 'run', *args, '--engine', 'direct', '--no-record'], env=env, capture_output=True,
                            text=True, timeout=60)
         assert r.returncode == 2 and needle in r.stderr, r.stderr
         assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+
+
+@pytest.mark.skipif(not Path('/sys/class/net/vcan0').exists(),
+                    reason='no SocketCAN interface vcan0 on this machine (ip link add dev vcan0 type vcan is refused here)')
+def test_the_cards_on_a_kernel_can_interface(tmp_path):
+    kernel = tmp_path / 'kernel_can.yaml'
+    kernel.write_text(f'extends: {ROOT / "scenarios" / "oresat_c3_detumble.yaml"}\nname: kernel_can\n'
+                      'input_timeout_s: 5\ncan_bus:\n  interface: socketcan\n  channel: vcan0\n')
+    bus = can.Bus(interface='socketcan', channel='vcan0')
+    stop = threading.Event()
+    beat = threading.Thread(target=lambda: [bus.send(can.Message(arbitration_id=0x701, data=[5], is_extended_id=False))
+                                            for _ in iter(lambda: stop.wait(0.1), True)])
+    beat.start()
+    try:
+        r = subprocess.run([*ACDS, 'run', str(kernel), '--engine', 'direct', '--steps', '30', '--rtf', '10',
+                            '--no-record', '--run-dir', str(tmp_path / 'run')], capture_output=True, text=True,
+                           timeout=120, env={**os.environ, 'ACDS_WORKSPACE': str(tmp_path)})
+    finally:
+        stop.set()
+        beat.join()
+        bus.shutdown()
+    assert r.returncode == 0, r.stderr
+    assert 'the kernel interface vcan0' in r.stderr and 'flight computer heartbeat after' in r.stderr
+    assert any(f.arbitration_id == 0x1B8 for f in can.LogReader(str(tmp_path / 'run' / 'can.asc')))
+
+
+def test_a_flight_computer_that_never_comes_fails_the_run_in_one_line_when_the_scenario_says_so(tmp_path):
+    never = tmp_path / 'never.yaml'
+    never.write_text(f'extends: {ROOT / "scenarios" / "oresat_c3_detumble.yaml"}\nname: never\ninput_timeout_s: 0.5\n'
+                     'can_bus:\n  on_heartbeat_loss: fail\n')
+    r = subprocess.run([*ACDS, 'run', str(never), '--engine', 'direct', '--steps', '5', '--no-record', '--can-port', '0',
+                        '--run-dir', str(tmp_path / 'run')], capture_output=True, text=True, timeout=120,
+                       env={**os.environ, 'ACDS_WORKSPACE': str(tmp_path)})
+    assert r.returncode == 1, r.stderr
+    failed = [line for line in r.stderr.splitlines() if 'run failed' in line]
+    assert len(failed) == 1 and 'no heartbeat from the flight computer (node 0x01, COB-ID 0x701) within 0.5 s' in failed[0]
+    assert 'clients on the bus: none' in failed[0]

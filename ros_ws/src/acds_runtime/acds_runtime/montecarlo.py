@@ -122,9 +122,12 @@ class Execution:
 
 def run_samples(texts: Sequence[str], *, engine: str = 'direct', steps: int | None = None, jobs: int = 1,
                 scheduler: str | None = None, progress: bool = True,
-                on_result: Callable[[int, dict[str, Any]], None] | None = None
-                ) -> tuple[list[dict[str, Any]], Execution]:
+                on_result: Callable[[int, dict[str, Any]], None] | None = None,
+                task: Callable[[str], dict[str, Any]] | None = None) -> tuple[list[dict[str, Any]], Execution]:
     """Run every sample; its summaries in the order of ``texts``, and where they ran.
+
+    ``task(text)`` runs one sample (default :func:`run_sample` on ``engine`` for ``steps``; a flight-software
+    study's, :func:`acds_runtime.flight_software.run_fsw_sample`, picklable for the Dask workers).
 
     ``on_result(i, summary)`` is called as each sample finishes (``i`` its position in ``texts``), in the
     order they finish. On the graph engine, what killed studies left behind is removed first
@@ -147,12 +150,12 @@ def run_samples(texts: Sequence[str], *, engine: str = 'direct', steps: int | No
         if scheduler is None and jobs == 1:
             results = []
             for i, text in enumerate(texts):
-                results.append(run_sample(text, engine, steps))
+                results.append(run_sample(text, engine, steps) if task is None else task(text))
                 bar.update(1)
                 if on_result is not None:
                     on_result(i, results[-1])
             return results, Execution('in-process', 1, 1)
-        return _run_dask(texts, engine, steps, jobs, scheduler, bar, on_result)
+        return _run_dask(texts, engine, steps, jobs, scheduler, bar, on_result, task)
     finally:
         bar.close()
         if before is not None:  # the zombies of runs this study's end interrupted (live or young ones: next start)
@@ -274,7 +277,8 @@ def _check_workers(client: Any, notes: list[str]) -> None:
 
 
 def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, scheduler: str | None, bar: Any,
-              on_result: Callable[[int, dict[str, Any]], None] | None) -> tuple[list[dict[str, Any]], Execution]:
+              on_result: Callable[[int, dict[str, Any]], None] | None,
+              task: Callable[[str], dict[str, Any]] | None = None) -> tuple[list[dict[str, Any]], Execution]:
     from dask.distributed import as_completed
 
     client, cluster = _connect(jobs, scheduler)
@@ -286,10 +290,11 @@ def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, s
                               notes)
         indices: dict[str, list[int]] = {}
         for i, text in enumerate(texts):
-            indices.setdefault(task_key(text, engine, steps), []).append(i)
+            indices.setdefault(task_key(text, engine if task is None else repr(task), steps), []).append(i)
         pending = as_completed(loop=client.loop)
         for key, ix in indices.items():
-            pending.add(client.submit(run_sample, texts[ix[0]], engine, steps, key=key, pure=False))
+            pending.add(client.submit(run_sample, texts[ix[0]], engine, steps, key=key, pure=False) if task is None
+                        else client.submit(task, texts[ix[0]], key=key, pure=False))
         results: list[dict[str, Any] | None] = [None] * len(texts)
         for future in pending:
             try:

@@ -30,14 +30,14 @@ from typing import Any
 
 import numpy as np
 from acds_common import units
-from acds_common.messages import ERROR, OK, WARN, diagnostic
+from acds_common.messages import ERROR, OK, WALL_CLOCK_PREFIX, WARN, diagnostic
 from acds_common.stepper import StepError, Stepper
+from acds_common.timing import StepTimes
 
 from canopen_bus.canlog import CanLog, CanLogError, read_replay
 from canopen_bus.device import EmulatedDevice
 from canopen_bus.dictionary import DictionaryError
 from canopen_bus.mapping import IDENTITY, DeviceMap, ObjectMap, load_mapping
-from canopen_bus.timing import Percentiles
 
 NAN3 = (math.nan, math.nan, math.nan)
 
@@ -75,6 +75,7 @@ class CardsStep(Stepper):
         for m in self.maps:
             dev = EmulatedDevice(m.name, m.od, m.node_id, self._send, m.tpdo_period_s)
             dev.lock = self.lock
+            dev.on_malformed = self._malformed
             self.devices[m.name] = dev
         self.own_ids = {cid: name for name, d in self.devices.items()
                         for cid in (0x580 + d.node_id, 0x700 + d.node_id, *(p.cob_id for p in d.tpdos))}
@@ -98,24 +99,34 @@ class CardsStep(Stepper):
         self.clamped: set[int] = set()
         self.clamp_count = 0
         self.claimed: set[int] = set()
-        self.lateness = Percentiles()
-        self.sdo_latency = Percentiles()
-        self.setpoint_age = Percentiles()
+        self.lateness = StepTimes()
+        self.sdo_latency = StepTimes()
+        self.setpoint_age = StepTimes()
         self.late_steps: list[int] = []
-        self._sdo_rx = {0x600 + d.node_id for d in self.devices.values()}
+        #: COB-IDs that carry the flight computer's commands to the cards: SDO requests and RPDOs.
+        self._command_rx = {cid for d in self.devices.values() for cid in (0x600 + d.node_id, *(p.cob_id for p in d.rpdos))}
+        self._node_ids = {d.node_id: name for name, d in self.devices.items()}
+        self.unknown: set[int] = set()
+        self.unknown_frames = 0
         self.last_write_step: int | None = None
         self.writes_stopped = False
         self._fault_pending = cfg['fault'] != 'none'
         self._fault_sensor: tuple[str, int, tuple[int, ...]] | None = None  # (device, index, axes) once active
         self._stuck: dict[int, int] = {}
+        if self.on_bus:  # on the bus before the first step (its handshake is not the first step's time)
+            self._connect()
 
     # -- the bus ----------------------------------------------------------------------------------------
     def _connect(self) -> None:
         import can
-        host, _, port = self.cfg['endpoint'].rpartition(':')
+        kind, _, where = self.cfg['endpoint'].partition(':')
         try:
-            self.bus = can.Bus(interface='socketcand', channel='vcan0', host=host, port=int(port))
-        except (OSError, can.CanError, TimeoutError) as exc:
+            if kind == 'socketcan':  # a kernel interface (can_bus.interface: socketcan)
+                self.bus = can.Bus(interface='socketcan', channel=where)
+            else:
+                host, _, port = where.rpartition(':')
+                self.bus = can.Bus(interface='socketcand', channel='vcan0', host=host, port=int(port))
+        except (OSError, ValueError, can.CanError, TimeoutError) as exc:
             raise StepError(f'canopen_cards: cannot join the CAN bus at {self.cfg["endpoint"]}: {exc}') from None
         self.notifier = can.Notifier(self.bus, [self._on_message], timeout=0.1)
 
@@ -130,8 +141,19 @@ class CardsStep(Stepper):
                 self.claimed.add(cid)
                 self.log('warn', f'another client sends COB-ID 0x{cid:03X}, which is emulated device '
                                  f'{self.own_ids[cid]}\'s (a node id claimed twice), first near step {self.step_now}')
+            elif cid not in self.own_ids and cid not in self._command_rx and cid & 0x7F in self._node_ids \
+                    and cid > 0x80:
+                self.unknown_frames += 1
+                if cid not in self.unknown:
+                    self.unknown.add(cid)
+                    self.log('warn', f'COB-ID 0x{cid:03X} is addressed to emulated device '
+                                     f'{self._node_ids[cid & 0x7F]} (node 0x{cid & 0x7F:02X}), which serves no such '
+                                     f'object: ignored and counted, first near step {self.step_now}')
             for dev in self.devices.values():
                 dev.receive(cid, data, msg.timestamp)
+
+    def _malformed(self, line: str) -> None:
+        self.log('warn', f'{line} (near step {self.step_now})')
 
     def _send(self, can_id: int, data: bytes) -> None:
         """A frame from a device (with :attr:`lock` held): journaled; on the bus when there is one."""
@@ -146,8 +168,7 @@ class CardsStep(Stepper):
         events: list[str] = []
         target = None
         if self.on_bus:
-            if self.bus is None:
-                self._connect()
+            if self.wall0 is None:
                 self.wall0 = time.time()
             target = self.wall0 + t_s / self.rtf
             delay = target - time.time()
@@ -169,9 +190,9 @@ class CardsStep(Stepper):
                     entry[4] = k
             events += self._heartbeat(k, taken)
             events += self._writes(k, taken)
-            ages = [sample_wall - w for w, cid, _d in taken if cid in self._sdo_rx] if self.on_bus else []
+            ages = [sample_wall - w for w, cid, _d in taken if cid in self._command_rx] if self.on_bus else []
             for age in ages:
-                self.setpoint_age.add(age)
+                self.setpoint_age.add(k, age)
             if self._fault_pending and t_s >= self.cfg['fault_time']:
                 events.append(self._inject_fault(k, t_s))
             setpoint = self._setpoints(events)
@@ -192,11 +213,11 @@ class CardsStep(Stepper):
         lateness = math.nan
         if target is not None:
             lateness = sample_wall - target
-            self.lateness.add(lateness)
+            self.lateness.add(k, lateness)
             if lateness > self.control_period_s / self.rtf:
                 self.late_steps.append(k)
         for v in lat_sdo:
-            self.sdo_latency.add(v)
+            self.sdo_latency.add(k, v)
         moment = tuple(self.k_am2_per_a[i] * setpoint[i] for i in range(3))
         out: dict[str, Any] = {
             'command': moment,
@@ -236,7 +257,7 @@ class CardsStep(Stepper):
 
     def _writes(self, k: int, taken: list) -> list[str]:
         """Whether the flight computer stopped (or resumed) its SDO requests to the cards, named with the step."""
-        if any(cid in self._sdo_rx for _w, cid, _d in taken):
+        if any(cid in self._command_rx for _w, cid, _d in taken):
             line = [] if self.last_write_step is None or not self.writes_stopped else [
                 f'flight computer resumed its SDO requests at step {k} (t={self.step_time_s(k):g} s)']
             self.last_write_step, self.writes_stopped = k, False
@@ -359,11 +380,15 @@ class CardsStep(Stepper):
             'sdo_replies_dropped': sum(d.sdo_dropped for d in self.devices.values()),
             'last_setpoint_request_step': self.last_write_step if self.last_write_step is not None else 'none',
             'setpoints_clamped': self.clamp_count,
-            'late_steps': len(self.late_steps),
+            'unknown_cob_id_frames': self.unknown_frames,
+            'malformed_frames': sum(d.malformed for d in self.devices.values()),
+            f'{WALL_CLOCK_PREFIX}late_steps': len(self.late_steps),
         }
-        for name, p in (('sensor_lateness', self.lateness), ('sdo_latency', self.sdo_latency),
-                        ('setpoint_age', self.setpoint_age)):
-            values.update({f'{name}_{q}_ms': f'{v * 1e3:.3f}' for q, v in p.summary().items()})
+        for name, times in (('sensor_lateness', self.lateness), ('sdo_latency', self.sdo_latency),
+                            ('setpoint_age', self.setpoint_age)):
+            if times.count:  # wall-clock keys: the machine's, not the data's (digests and compare leave them out)
+                values.update({f'{WALL_CLOCK_PREFIX}{name}_{q}': f'{v:.3f}' for q, v in times.report().items()
+                               if q != 'steps'})
         values.update({f'event_{i}': e for i, e in enumerate(events)})
         return diagnostic(self.node, values, message, level)
 
@@ -373,5 +398,10 @@ class CardsStep(Stepper):
             self.notifier.stop()
         if self.bus is not None:
             self.bus.shutdown()
+        with self.lock:  # frames that came after the last step's sample: logged, applied at no step (-1)
+            for entry in self.journal:
+                if entry[4] is None:
+                    entry[4] = -1
+            self._flush()
         if self.canlog is not None:
             self.canlog.close()

@@ -90,6 +90,10 @@ class EmulatedDevice:
         self.sdo = SdoStats()
         self._request_wall: float | None = None
         self.tpdos: list[Pdo] = pdos(od, name, 'tpdo')
+        self.rpdos: list[Pdo] = pdos(od, name, 'rpdo')
+        for pdo in self.rpdos:
+            self.network.subscribe(pdo.cob_id, self._on_rpdo)
+        self.rpdo_errors = 0
         overrides = tpdo_period_s or {}
         self.tpdo_period_s = {p.number: overrides.get(p.number, p.event_timer_ms / 1000.0) for p in self.tpdos}
         self._tpdo_next = {p.number: 0.0 for p in self.tpdos}
@@ -101,6 +105,12 @@ class EmulatedDevice:
         self.sdo_lost = False
         self.sdo_delay_s = 0.0
         self.sdo_dropped = 0
+        #: Frames addressed to the device that its CANopen services cannot read (an NMT command of one byte, an
+        #: empty SDO request): counted, each reported through ``on_malformed`` (one line), ignored; the SDO aborts
+        #: too (once per object and abort code).
+        self.malformed = 0
+        self.on_malformed: Callable[[str], None] | None = None
+        self._aborts_named: set[tuple[int, tuple]] = set()
         self.booted = False
 
     # -- frames in ------------------------------------------------------------------------------------------
@@ -112,7 +122,28 @@ class EmulatedDevice:
             if can_id == 0x600 + self.node_id:
                 self.sdo.requests += 1
                 self._request_wall = wall_time
-            self.network.notify(can_id, bytearray(data), wall_time)
+            try:
+                self.network.notify(can_id, bytearray(data), wall_time)
+            except Exception as exc:  # noqa: BLE001 (canopen's services unpack without a length check)
+                self.malformed += 1
+                if self.on_malformed is not None:
+                    self.on_malformed(f'device {self.name}: frame 0x{can_id:03X} [{bytes(data).hex() or "empty"}] is '
+                                      f'not a valid CANopen message for it ({type(exc).__name__}: {exc}); ignored')
+
+    def _on_rpdo(self, can_id: int, data: bytearray, _timestamp: float) -> None:
+        """An RPDO (OPERATIONAL only): its bytes into the mapped objects, in mapping order; a frame shorter than the
+        mapping is counted and left out."""
+        if self.nmt_state != 'OPERATIONAL':
+            return
+        pdo = next(p for p in self.rpdos if p.cob_id == can_id)
+        if len(data) * 8 < pdo.bits:
+            self.rpdo_errors += 1
+            return
+        offset = 0
+        for index, sub, bits in pdo.mapped:
+            store = self.node.data_store.setdefault(index, {})
+            store[sub] = bytes(data[offset:offset + bits // 8])
+            offset += bits // 8
 
     def take_pending(self) -> list[tuple[float, int, bytes]]:
         """The frames applied since the last call (call with :attr:`lock` held, at the step that samples them)."""
@@ -143,6 +174,13 @@ class EmulatedDevice:
 
     def _abort(self, abort_code: int = 0x08000000) -> None:
         self.sdo.aborts[abort_code] = self.sdo.aborts.get(abort_code, 0) + 1
+        where = (self.node.sdo._index, self.node.sdo._subindex)
+        if (abort_code, where) not in self._aborts_named and self.on_malformed is not None:
+            self._aborts_named.add((abort_code, where))
+            obj = 'an unread object' if where[0] is None else f'0x{where[0]:04X}:{where[1]}'
+            self.on_malformed(f'device {self.name}: SDO abort 0x{abort_code:08X} '
+                              f'({ABORT_CODES.get(abort_code, "other")}) for {obj} (named once per object and code; '
+                              f'counted)')
         self._server_abort(abort_code)
 
     # -- the dictionary ---------------------------------------------------------------------------------

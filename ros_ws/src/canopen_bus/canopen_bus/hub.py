@@ -39,6 +39,8 @@ DEFAULT_HOST = '127.0.0.1'
 RAWMODE_HOLDOFF_S = 0.05
 #: A line longer than this without its closing ``>`` is malformed (the longest valid line is ~40 characters).
 MAX_LINE = 200
+#: Bytes a client may leave unread before the hub drops it (one line): ~100,000 frames, minutes of a busy bus.
+MAX_BACKLOG = 4 << 20
 MAX_STD_ID = 0x7FF
 MAX_EXT_ID = 0x1FFFFFFF
 
@@ -365,6 +367,9 @@ class Hub:
             self._drop(client, 'disconnected')
             return
         del client.outbuf[:sent]
+        if len(client.outbuf) > MAX_BACKLOG:
+            self._drop(client, f'reads nothing ({len(client.outbuf):,} bytes unread): dropped')
+            return
         events = selectors.EVENT_READ | (selectors.EVENT_WRITE if client.outbuf else 0)
         try:
             self._sel.modify(client.sock, events, client)

@@ -40,7 +40,12 @@ SECTIONS: dict[str, dict[str, Field]] = {
                                    [1.0, 1.0, 1.0], 'am2_per_a', {'am2_per_a': 1.0}, length=3, lo=1e-6, hi=1e4),
         'setpoint_limit': quantity('per-axis current the driver can deliver; a setpoint beyond it is clamped',
                                    [1.0, 1.0, 1.0], 'a', CURRENT, length=3, lo=0.0, hi=100.0),
-        'endpoint': Field('str', 'HOST:PORT of the bus (set by acds run; empty: the cards run off the bus)', ''),
+        'interface': Field('str', 'the bus: socketcand (the built-in hub over TCP, no kernel CAN needed) or socketcan (a '
+                           'kernel CAN interface such as vcan0, where this machine has one)', 'socketcand',
+                           choices=('socketcand', 'socketcan')),
+        'channel': Field('str', 'socketcan: the kernel interface (e.g. vcan0, can0)', 'vcan0'),
+        'endpoint': Field('str', 'socketcand:HOST:PORT or socketcan:CHANNEL (set by acds run; empty: the cards run '
+                          'off the bus)', ''),
         'can_log': Field('str', 'CAN log to write (set by acds run: RUN_DIR/can.asc)', ''),
         'replay_can': Field('str', 'CAN log whose frames are applied at their recorded steps instead of a bus '
                             '(acds run --replay-can)', ''),

@@ -48,7 +48,7 @@ def _with_bus(scenario: Any, **values: Any) -> Any:
     return dataclasses.replace(scenario, values=new)
 
 
-def prepare(scenario: Any, args: argparse.Namespace, run_dir: Path, echo: Any) -> BusSession | None:
+def prepare(scenario: Any, args: argparse.Namespace, run_dir: Path) -> BusSession | None:
     """The bus session of this run (None: the scenario has no CAN cards); ValueError (one line) for an option that
     does not fit."""
     given = [f'--{n.replace("_", "-")}' for n in ('can_port', 'can_host', 'replay_can') if getattr(args, n) is not None]
@@ -68,10 +68,18 @@ def prepare(scenario: Any, args: argparse.Namespace, run_dir: Path, echo: Any) -
             read_replay(log)
         except CanLogError as exc:
             raise ValueError(str(exc)) from None
-        return BusSession(_with_bus(scenario, rtf=rtf, replay_can=str(log)), None, echo)
+        return BusSession(_with_bus(scenario, rtf=rtf, replay_can=str(log)), None)
+    if scenario.get('can_bus', 'interface') == 'socketcan':
+        channel = scenario.get('can_bus', 'channel')
+        if given:
+            raise ValueError(f'{given[0]}: can_bus.interface is socketcan ({channel}): there is no hub to place')
+        if not Path('/sys/class/net', channel).exists():
+            raise ValueError(f'can_bus.interface socketcan: this machine has no network interface {channel} (create '
+                             f'one: ip link add dev {channel} type vcan && ip link set up {channel}; or use socketcand)')
+        return BusSession(_with_bus(scenario, rtf=rtf, can_log=str(run_dir / 'can.asc')), ('socketcan', channel))
     host = args.can_host or DEFAULT_HOST
     port = DEFAULT_PORT if args.can_port is None else args.can_port
-    return BusSession(_with_bus(scenario, rtf=rtf, can_log=str(run_dir / 'can.asc')), (host, port), echo)
+    return BusSession(_with_bus(scenario, rtf=rtf, can_log=str(run_dir / 'can.asc')), (host, port))
 
 
 class BusSession:
@@ -80,9 +88,11 @@ class BusSession:
     #: It paces the run itself (``acds run --rtf`` is its real-time factor, on either engine).
     paces = True
 
-    def __init__(self, scenario: Any, endpoint: tuple[str, int] | None, echo: Any) -> None:
-        self.scenario, self.endpoint, self.echo = scenario, endpoint, echo
+    def __init__(self, scenario: Any, endpoint: tuple[str, Any] | None) -> None:
+        self.scenario, self.endpoint = scenario, endpoint
         self.hub: Hub | None = None
+        self.listener: Any = None
+        self.notifier: Any = None
 
     def __enter__(self) -> Any:
         sc = self.scenario
@@ -90,25 +100,36 @@ class BusSession:
             print(f'[acds] replaying the CAN log {sc.get("can_bus", "replay_can")}: no bus, no flight computer',
                   file=sys.stderr, flush=True)
             return sc
-        host, port = self.endpoint
-        self.hub = Hub(host, port, report=lambda line: print(f'[acds] {line}', file=sys.stderr, flush=True))
-        self.hub.start()
         fc = sc.get('can_bus', 'flight_computer_node_id')
         heartbeat = threading.Event()
-        self.hub.observe(lambda f: heartbeat.set() if f.can_id == 0x700 + fc else None)
+        cards = ', '.join(f'{m["name"]} 0x{m["node_id"]:02X}' for m in _devices(sc))
+        host, port = self.endpoint
+        if host == 'socketcan':
+            import can
+            self.listener = can.Bus(interface='socketcan', channel=port)
+            self.notifier = can.Notifier(self.listener, [lambda m: heartbeat.set() if m.arbitration_id == 0x700 + fc
+                                                         else None])
+            endpoint = f'socketcan:{port}'
+            print(f'[acds] CAN bus: the kernel interface {port} (SocketCAN); the cards: {cards}', file=sys.stderr,
+                  flush=True)
+        else:
+            self.hub = Hub(host, port, report=lambda line: print(f'[acds] {line}', file=sys.stderr, flush=True))
+            self.hub.start()
+            self.hub.observe(lambda f: heartbeat.set() if f.can_id == 0x700 + fc else None)
+            endpoint = f'socketcand:{host}:{self.hub.port}'
+            print(f'[acds] CAN bus (socketcand protocol) on {host}:{self.hub.port}, channel vcan0; the cards: {cards}',
+                  file=sys.stderr, flush=True)
+            c3 = C3_COMMAND.format(host=host, port=self.hub.port, run_dir=Path(sc.get('can_bus', 'can_log')).parent,
+                                   scenario=sc.name)
+            print(f'[acds] start the flight computer against it, e.g. the OreSat C3: {c3}', file=sys.stderr, flush=True)
         timeout = sc.get('', 'input_timeout')
-        print(f'[acds] CAN bus (socketcand protocol) on {host}:{self.hub.port}, channel vcan0; the cards: '
-              + ', '.join(f'{m["name"]} 0x{m["node_id"]:02X}' for m in _devices(sc)), file=sys.stderr, flush=True)
-        c3 = C3_COMMAND.format(host=host, port=self.hub.port, run_dir=Path(sc.get('can_bus', 'can_log')).parent,
-                               scenario=sc.name)
-        print(f'[acds] start the flight computer against it, e.g. the OreSat C3: {c3}', file=sys.stderr, flush=True)
         print(f'[acds] waiting up to {timeout:g} s (input_timeout) for the flight computer\'s heartbeat '
               f'(node 0x{fc:02X}, COB-ID 0x{0x700 + fc:03X})', file=sys.stderr, flush=True)
         t0 = time.monotonic()
         if not heartbeat.wait(timeout):
-            clients = self.hub.clients()
+            clients = (', '.join(self.hub.clients()) or 'none') if self.hub is not None else 'not known (SocketCAN)'
             line = (f'no heartbeat from the flight computer (node 0x{fc:02X}, COB-ID 0x{0x700 + fc:03X}) within '
-                    f'{timeout:g} s on {host}:{self.hub.port}; clients on the bus: {", ".join(clients) or "none"}')
+                    f'{timeout:g} s on {endpoint}; clients on the bus: {clients}')
             if sc.get('can_bus', 'on_heartbeat_loss') == 'fail':
                 self.__exit__(None, None, None)
                 raise RuntimeError(line)
@@ -116,16 +137,25 @@ class BusSession:
         else:
             print(f'[acds] flight computer heartbeat after {time.monotonic() - t0:.1f} s; running at real-time factor '
                   f'{sc.get("can_bus", "rtf"):g}', file=sys.stderr, flush=True)
-        self.scenario = _with_bus(sc, endpoint=f'{host}:{self.hub.port}')
+        if self.notifier is not None:  # the cards open their own socket on the interface
+            self.notifier.stop()
+            self.listener.shutdown()
+            self.notifier = None
+        self.scenario = _with_bus(sc, endpoint=endpoint)
         return self.scenario
 
     def __exit__(self, *exc: Any) -> None:
+        if self.notifier is not None:
+            self.notifier.stop()
+            self.listener.shutdown()
+            self.notifier = None
         if self.hub is not None:
             c = self.hub.counters
             print(f'[acds] CAN bus: {c.frames} frames relayed, {c.bad_lines} bad lines, {c.clients_connected} clients '
                   f'connected', file=sys.stderr, flush=True)
             self.hub.stop()
             self.hub = None
+        if self.endpoint is not None:
             self._report_flight_computer()
 
     def _report_flight_computer(self) -> None:

@@ -3,8 +3,9 @@
 Declared in the entry-point group ``acds.summaries``. Per step k, from ``cards/timing`` (the sensors' wall
 lateness against the step's schedule t_wall(0) + t_k / R, the step's largest SDO request→reply time, the
 largest age of a setpoint frame when the step sampled it) and ``cards/current_setpoint`` (the held setpoints
-applied at k): p50/p99/max of each (ms), the steps whose sensors went out more than one step (Δt / R) late,
-counted and the first ones named, the steps at which the applied setpoints changed, and the largest |setpoint|.
+applied at k): p50/p99/max of each in ms (:class:`acds_common.timing.StepTimes`: quantiles to one log bin,
+≤ 6 % high; the maximum exact), the steps whose sensors went out more than one step (Δt / R) late, counted and
+the first ones named, the steps at which the applied setpoints changed, and the largest |setpoint|.
 """
 
 from __future__ import annotations
@@ -13,9 +14,9 @@ import math
 from typing import Any
 
 from acds_common import topics
+from acds_common.timing import StepTimes
 
 from canopen_bus.nodes import SETPOINT, TIMING
-from canopen_bus.timing import Percentiles
 
 TIMING_TOPIC, SETPOINT_TOPIC = topics.resolve(TIMING), topics.resolve(SETPOINT)
 #: Late steps named in the summary (the count covers them all).
@@ -37,7 +38,7 @@ class Accumulator:
 
     def __init__(self, scenario: Any) -> None:
         self.step_wall_s = scenario.control_period_s / scenario.get('can_bus', 'rtf')
-        self.series = (Percentiles(), Percentiles(), Percentiles())
+        self.series = (StepTimes(), StepTimes(), StepTimes())
         self.late: list[int] = []
         self.late_count = 0
         self.changes = 0
@@ -49,7 +50,8 @@ class Accumulator:
         timing = values.get(TIMING_TOPIC)
         if timing is not None:
             for series, v in zip(self.series, timing, strict=True):
-                series.add(v)
+                if not math.isnan(v):
+                    series.add(k, v)
             if not math.isnan(timing[0]) and timing[0] > self.step_wall_s:
                 self.late_count += 1
                 if len(self.late) < NAMED_LATE_STEPS:
@@ -65,7 +67,7 @@ class Accumulator:
             self.peak_a = max(self.peak_a, *(abs(v) for v in sp))
 
     def contribute(self, summary: dict[str, Any]) -> None:
-        ms = [{q: v * 1e3 for q, v in s.summary().items()} or None for s in self.series]
+        ms = [{q: t.report()[f'{q}_ms'] for q in ('p50', 'p99', 'max')} if t.count else None for t in self.series]
         summary.update(dict(zip(KEYS, (*ms, self.late_count, self.late, self.changes, self.first_k,
                                        self.peak_a * 1e3), strict=True)))
 

@@ -48,6 +48,12 @@ def test_sdo_expedited_and_the_standard_abort_codes():
     assert _abort_code(w.request(bytes([0x2B, 0x07, 0x40, 0x04, 1, 0, 0, 0]))) == 0x06070010   # 2 bytes into int32
     assert w.dev.sdo.aborts == {0x06020000: 1, 0x06090011: 1, 0x06010002: 1, 0x06070010: 1}
     assert w.dev.sdo.requests == 6
+    lines = []
+    w.dev.on_malformed = lines.append
+    for _ in range(3):
+        w.request(bytes([0x2B, 0x00, 0x40, 0x01, 1, 0, 0, 0]))
+    assert lines == ['device adcs: SDO abort 0x06010002 (read-only object) for 0x4000:1 (named once per object and '
+                     'code; counted)']
 
 
 def test_sdo_segmented_upload_of_a_long_object():
@@ -214,3 +220,38 @@ def test_a_zero_axis_fault_reaches_the_bus_at_its_step():
     run.run()
     adcs = run.steppers['canopen_cards'].devices['adcs']
     assert adcs.get_raw(0x4004, 3) == 0 and adcs.get_raw(0x4003, 3) != 0 and adcs.get_raw(0x4004, 1) != 0
+
+
+def test_an_rpdo_writes_its_mapped_objects(tmp_path):
+    od = load_dictionary('oresat1/adcs')
+    buf = io.StringIO()
+    canopen.export_od(od, buf, doc_type='eds')
+    rpdo = ('\n[1400]\nParameterName=rpdo_1_communication\nObjectType=0x9\nSubNumber=3\n'
+            '\n[1400sub0]\nParameterName=highest\nObjectType=0x7\nDataType=0x0005\nAccessType=const\nDefaultValue=2\n'
+            '\n[1400sub1]\nParameterName=cob_id\nObjectType=0x7\nDataType=0x0007\nAccessType=rw\nDefaultValue=0x220\n'
+            '\n[1400sub2]\nParameterName=transmission_type\nObjectType=0x7\nDataType=0x0005\nAccessType=rw\n'
+            'DefaultValue=254\n'
+            '\n[1600]\nParameterName=rpdo_1_mapping\nObjectType=0x9\nSubNumber=3\n'
+            '\n[1600sub0]\nParameterName=highest\nObjectType=0x7\nDataType=0x0005\nAccessType=const\nDefaultValue=2\n'
+            '\n[1600sub1]\nParameterName=m1\nObjectType=0x7\nDataType=0x0007\nAccessType=rw\nDefaultValue=0x40070420\n'
+            '\n[1600sub2]\nParameterName=m2\nObjectType=0x7\nDataType=0x0007\nAccessType=rw\nDefaultValue=0x40070520\n')
+    (tmp_path / 'rx.eds').write_text(buf.getvalue() + rpdo)
+    dev = EmulatedDevice('rx', load_dictionary('rx.eds', tmp_path), 0x20, lambda i, d: None)
+    dev.receive(0x220, struct.pack('<ii', 1000, -2000), 0.0)
+    assert dev.get_raw(0x4007, 4) == 0  # not OPERATIONAL yet
+    dev.boot()
+    dev.receive(0x220, struct.pack('<ii', 1000, -2000), 0.0)
+    assert (dev.get_raw(0x4007, 4), dev.get_raw(0x4007, 5)) == (1000, -2000)
+    dev.receive(0x220, b'\x01', 0.0)
+    assert dev.rpdo_errors == 1
+
+
+def test_a_frame_the_canopen_services_cannot_read_is_one_line_and_the_device_goes_on():
+    lines = []
+    w = Wire()
+    w.dev.on_malformed = lines.append
+    for cid, data in ((0x000, b'\x01'), (0x638, b''), (0x638, b'\x40\x00')):
+        w.dev.receive(cid, data, 0.0)
+    assert w.dev.malformed == 3 and 'frame 0x000 [01] is not a valid CANopen message' in lines[0]
+    assert sum('is not a valid CANopen message' in line for line in lines) == 3
+    assert w.request(bytes([0x40, 0x07, 0x40, 0x04, 0, 0, 0, 0]))[0] == 0x43  # still serving

@@ -159,3 +159,23 @@ def test_a_taken_port_is_named():
     with Hub('127.0.0.1', 0) as first:
         with pytest.raises(OSError, match=f'cannot listen on 127.0.0.1:{first.port}'):
             Hub('127.0.0.1', first.port).start()
+
+
+def test_a_client_that_reads_nothing_is_dropped_and_the_others_are_served(hub, monkeypatch):
+    """A client that never reads would make the hub buffer forever: past MAX_BACKLOG unread it is dropped."""
+    import canopen_bus.hub as hub_module
+    monkeypatch.setattr(hub_module, 'MAX_BACKLOG', 64 << 10)
+    deaf = _raw(hub)
+    port = hub.local_port('card')
+    try:
+        for i in range(250_000):  # ~10 MB: more than the loopback socket buffers hold
+            port.send(0x1B8, bytes([i % 256] * 8))
+            if i % 10_000 == 0 and any('reads nothing' in line for line in hub.lines):
+                break
+        _wait(lambda: any('reads nothing' in line for line in hub.lines), 'the deaf client dropped', timeout=30.0)
+        good = _client(hub)
+        port.send(0x701, b'\x05')
+        assert _recv(good).arbitration_id == 0x701
+        good.shutdown()
+    finally:
+        deaf.close()

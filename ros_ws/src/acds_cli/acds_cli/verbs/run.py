@@ -29,7 +29,7 @@ DEFAULT_SCENARIO = 'heao_b_acquisition'
 #: Entry-point group of run plug-ins: a package's own ``acds run`` options and what the run holds for its nodes while
 #: it goes (a bus, a device). Each entry names a module with
 #:   ``add_arguments(parser)``: its options (they default to None);
-#:   ``prepare(scenario, args, run_dir, echo)``: before anything starts, None when the scenario is not its own, else
+#:   ``prepare(scenario, args, run_dir)``: before anything starts, None when the scenario is not its own, else
 #:   a context manager the run is entered into: ``__enter__`` returns the scenario the engine runs (its values set
 #:   from the options) and ``__exit__`` releases what it holds; ``paces`` (bool) says it paces the run to the wall
 #:   clock itself, so ``--rtf`` applies on the direct engine too. A ValueError from ``prepare`` is a usage error
@@ -110,7 +110,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     # The default folder is created exclusively (a run started in the same second gets its own).
     run_dir = Path(args.run_dir) if args.run_dir else new_run_dir(scenario.name)
     try:
-        sessions = [x for x in (plugin.prepare(scenario, args, run_dir, None) for plugin in run_plugins()) if x is not None]
+        sessions = [x for x in (plugin.prepare(scenario, args, run_dir) for plugin in run_plugins()) if x is not None]
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     if direct and args.rtf and not any(x.paces for x in sessions):
