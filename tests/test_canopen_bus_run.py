@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import socket
 import subprocess
 import sys
@@ -30,12 +31,6 @@ STEPS = 300
 RTF = 10.0
 #: Damping gain of the test master, µA per mrad/s.
 GAIN_UA_PER_MRAD_S = 1000
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(('127.0.0.1', 0))
-        return s.getsockname()[1]
 
 
 class Master:
@@ -98,8 +93,7 @@ def _run(tmp: Path, name: str, *extra: str) -> subprocess.Popen:
 
 
 def test_a_scripted_master_flies_the_cards_and_the_replay_gives_the_same_truth(tmp_path):
-    port = _free_port()
-    run = _run(tmp_path, 'live', '--rtf', str(RTF), '--can-port', str(port))
+    run = _run(tmp_path, 'live', '--rtf', str(RTF), '--can-port', '0')  # a free port, read from what the run prints
     lines: list[str] = []
     waiting = threading.Event()
 
@@ -111,6 +105,7 @@ def test_a_scripted_master_flies_the_cards_and_the_replay_gives_the_same_truth(t
     reader = threading.Thread(target=read)
     reader.start()
     assert waiting.wait(60), 'the run never said it waits for the heartbeat:\n' + ''.join(lines)
+    port = int(re.search(r'CAN bus \(socketcand protocol\) on 127\.0\.0\.1:(\d+)', ''.join(lines)).group(1))
     master = Master(port)
     # Bad input on the live bus: a malformed line (the hub names it), a frame for a COB-ID the ADCS card does not
     # serve (0x238: an RPDO it has not), a frame in the ADCS card's own heartbeat COB-ID (a node id claimed twice).
@@ -147,6 +142,7 @@ def test_a_scripted_master_flies_the_cards_and_the_replay_gives_the_same_truth(t
     replay = _run(tmp_path, 'replay', '--replay-can', str(log))
     out2, _ = replay.communicate(timeout=120)
     assert replay.returncode == 0, out2
+    assert f'heartbeat watched in the steps of R = {RTF:g}' in out2  # the recorded run's, from can.asc.run.json
     again = json.loads((tmp_path / 'replay.json').read_text())
     assert again['truth_digest'] == live['truth_digest']
     assert again['can_setpoint_changes'] == live['can_setpoint_changes']

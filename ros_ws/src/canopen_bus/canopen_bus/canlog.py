@@ -5,18 +5,21 @@ The frames go to a Vector ASC file (``can.asc``: python-can's ``ASCWriter``; ``c
 step of each frame, which ASC has no field for, goes to a sidecar in the same order (``can.asc.steps.csv``:
 ``frame,wall_time_s,step,direction,can_id``): for a frame from the bus the step whose sample took it in (sample
 and hold), for a frame the cards sent the step that sent it. :func:`read_replay` reads both back and checks
-they agree frame by frame.
+they agree frame by frame. ``can.asc.run.json`` keeps the real-time factor the run was paced at, which the
+cards' heartbeat watch counts its steps by (:func:`recorded_rtf`: a replay watches in the same steps).
 """
 
 from __future__ import annotations
 
 import csv
+import json
 from pathlib import Path
 
 import can
 
 SIDECAR_SUFFIX = '.steps.csv'
 SIDECAR_HEADER = ('frame', 'wall_time_s', 'step', 'direction', 'can_id')
+RUN_SUFFIX = '.run.json'
 
 
 class CanLogError(ValueError):
@@ -26,8 +29,9 @@ class CanLogError(ValueError):
 class CanLog:
     """Writes frames in step order: ``write(step, wall_time, can_id, data, rx)``."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, rtf: float) -> None:
         self.path = Path(path)
+        Path(str(self.path) + RUN_SUFFIX).write_text(json.dumps({'rtf': rtf}) + '\n')
         self._asc = can.ASCWriter(str(self.path))
         self._side = open(str(self.path) + SIDECAR_SUFFIX, 'w', newline='')  # noqa: SIM115 (closed in close())
         self._csv = csv.writer(self._side)
@@ -87,3 +91,12 @@ def read_replay(path: Path) -> dict[int, list[tuple[float, int, bytes]]]:
         if rx:
             out.setdefault(step, []).append((wall, can_id, data))
     return out
+
+
+def recorded_rtf(path: Path) -> float | None:
+    """The real-time factor a logged run was paced at (None: the log has no ``.run.json`` beside it)."""
+    run = Path(str(path) + RUN_SUFFIX)
+    try:
+        return float(json.loads(run.read_text())['rtf'])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None

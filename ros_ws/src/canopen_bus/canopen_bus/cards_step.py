@@ -91,7 +91,7 @@ class CardsStep(Stepper):
         self.journal: list[list] = []
         self.bus = None
         self.notifier = None
-        self.canlog = CanLog(Path(cfg['can_log'])) if cfg['can_log'] and self.on_bus else None
+        self.canlog = CanLog(Path(cfg['can_log']), self.rtf) if cfg['can_log'] and self.on_bus else None
         self.wall0: float | None = None
         self.step_now = -1
         self.last_hb_step: int | None = None
@@ -318,6 +318,8 @@ class CardsStep(Stepper):
             return None if odom is None else tuple(odom.angular)
         if quantity == 'magnetic_field':
             return None if inp.get('b_true') is None else tuple(inp['b_true'][0])
+        if quantity == 'sensed_magnetic_field':  # magnetometer_sim's, its faults included
+            return None if inp.get('sensed_field') is None else tuple(inp['sensed_field'][0])
         if quantity in ('ecef_position', 'ecef_velocity'):
             if odom is None:
                 return None

@@ -14,7 +14,9 @@ A YAML file::
 
 Each object is three subindices of one record, a body-axis (or ECEF) vector. ``si_per_count``: the SI value of
 one count (the firmware's scale: a count is rounded to the nearest and saturates at the object's limits,
-the dictionary's LowLimit/HighLimit or its type's). Quantities (:data:`SENSORS`: the device sends them;
+the dictionary's LowLimit/HighLimit or its type's). ``magnetic_field`` is the truth field at the spacecraft;
+``sensed_magnetic_field`` the field magnetometer_sim reports (with its faults: a stuck axis, a dead unit), when
+that node is in the graph. Quantities (:data:`SENSORS`: the device sends them;
 :data:`COMMANDS`: the flight computer writes them) and their SI units are fixed here; ``unit`` must name
 that unit, so a file cannot scale a value it means in another. ``full_scale``: the largest |SI value| the
 object must carry; a type that cannot hold it (full_scale / si_per_count beyond its limits) is refused.
@@ -33,8 +35,8 @@ from canopen import objectdictionary as odict
 from canopen_bus.dictionary import DictionaryError, load_dictionary, pdos, type_limits, variable
 
 #: Quantities a device sends (from the graph), by SI unit.
-SENSORS = {'body_rate': 'rad/s', 'magnetic_field': 'T', 'ecef_position': 'm', 'ecef_velocity': 'm/s',
-           'coil_current': 'A', 'coil_duty': '1'}
+SENSORS = {'body_rate': 'rad/s', 'magnetic_field': 'T', 'sensed_magnetic_field': 'T', 'ecef_position': 'm',
+           'ecef_velocity': 'm/s', 'coil_current': 'A', 'coil_duty': '1'}
 #: Quantities the flight computer writes (to the graph), by SI unit.
 COMMANDS = {'coil_current_setpoint': 'A'}
 IDENTITY = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))

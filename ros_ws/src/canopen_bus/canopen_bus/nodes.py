@@ -73,6 +73,7 @@ PORTS = Ports(
         Input('b_true', topics.TRUTH_B_BODY, 'rigid_body'),
         Input('dipole', topics.DIPOLE_END, 'em_driver', lag=1),
         Input('duty', topics.COIL_DUTY, 'em_driver', lag=1),
+        Input('sensed_field', topics.MAG_FIELD, 'magnetometer_sim'),
     )),),
     (Output('command', topics.MOMENT_COMMAND, BODY),
      Output('setpoint', SETPOINT, BODY),

@@ -62,12 +62,13 @@ def prepare(scenario: Any, args: argparse.Namespace, run_dir: Path) -> BusSessio
     if args.replay_can is not None:
         if args.can_port is not None or args.can_host is not None:
             raise ValueError('--replay-can flies a recorded run without a bus: leave --can-port/--can-host out')
-        from canopen_bus.canlog import CanLogError, read_replay
+        from canopen_bus.canlog import CanLogError, read_replay, recorded_rtf
         log = Path(args.replay_can).resolve()
         try:
             read_replay(log)
         except CanLogError as exc:
             raise ValueError(str(exc)) from None
+        rtf = args.rtf or recorded_rtf(log) or rtf  # the heartbeat watch counts the recorded run's steps
         return BusSession(_with_bus(scenario, rtf=rtf, replay_can=str(log)), None)
     if scenario.get('can_bus', 'interface') == 'socketcan':
         channel = scenario.get('can_bus', 'channel')
@@ -97,8 +98,8 @@ class BusSession:
     def __enter__(self) -> Any:
         sc = self.scenario
         if self.endpoint is None:
-            print(f'[acds] replaying the CAN log {sc.get("can_bus", "replay_can")}: no bus, no flight computer',
-                  file=sys.stderr, flush=True)
+            print(f'[acds] replaying the CAN log {sc.get("can_bus", "replay_can")}: no bus, no flight computer; the '
+                  f'heartbeat watched in the steps of R = {sc.get("can_bus", "rtf"):g}', file=sys.stderr, flush=True)
             return sc
         fc = sc.get('can_bus', 'flight_computer_node_id')
         heartbeat = threading.Event()

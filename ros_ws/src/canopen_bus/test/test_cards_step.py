@@ -31,7 +31,7 @@ def _download(sub: int, microamps: int) -> can.Message:
 
 def test_a_setpoint_is_held_until_the_step_that_samples_it_and_logged_with_that_step(tmp_path):
     st = _cards()
-    st.canlog = CanLog(tmp_path / 'can.asc')
+    st.canlog = CanLog(tmp_path / 'can.asc', 10.0)
     outs = [st.exchange(k, k * 0.1, INPUTS) for k in range(3)]
     st._on_message(_download(4, 5000))  # arrives between step 2 and step 3
     outs += [st.exchange(k, k * 0.1, INPUTS) for k in range(3, 5)]
@@ -70,3 +70,27 @@ def test_the_heartbeat_watch_names_the_step_and_fails_when_the_scenario_says_so(
             for k in range(8):
                 st.exchange(k, k * 0.1, INPUTS)
             assert any('heartbeat lost at step 5' in line and 'flying on' in line for line in lines), lines
+
+
+def test_the_graphs_magnetometer_fault_reaches_the_bus(tmp_path):
+    """A card object mapped to magnetometer_sim's field carries that node's faults (here a dead unit at t = 0.5 s)."""
+    (tmp_path / 'm.yaml').write_text(
+        'devices:\n  adcs:\n    dictionary: oresat1/adcs\n    objects:\n'
+        '      - {index: 0x4003, subs: [1, 2, 3], quantity: sensed_magnetic_field, si_per_count: 1.0e-7, unit: T}\n'
+        '      - {index: 0x4004, subs: [1, 2, 3], quantity: magnetic_field, si_per_count: 1.0e-7, unit: T}\n')
+    sc = load_scenario('oresat_c3_detumble')
+    values = copy.deepcopy(sc.values)
+    values['']['nodes'] = ['rigid_body', 'magnetometer_sim', 'canopen_cards', 'em_driver']
+    values['can_bus']['mapping'] = str(tmp_path / 'm.yaml')
+    values['magnetometer'].update(fault='dead_unit', fault_unit='A', fault_time=0.5)
+    run = DirectRun(dataclasses.replace(sc, values=values), steps=3)
+    run.run()
+    adcs = run.steppers['canopen_cards'].devices['adcs']
+    early = [adcs.get_raw(0x4003, s) for s in (1, 2, 3)]
+    run = DirectRun(dataclasses.replace(sc, values=values), steps=10)
+    run.run()
+    adcs = run.steppers['canopen_cards'].devices['adcs']
+    late = [adcs.get_raw(0x4003, s) for s in (1, 2, 3)]
+    truth = [adcs.get_raw(0x4004, s) for s in (1, 2, 3)]
+    # a dead unit's 0 V reads as the fluxgate's −1 G full scale on every axis: −1,000 counts of 1 mG
+    assert any(early) and late == [-1000, -1000, -1000] and all(truth)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import canopen
 import pytest
-from canopen_bus.canlog import CanLog, CanLogError, read_replay
+from canopen_bus.canlog import CanLog, CanLogError, read_replay, recorded_rtf
 from canopen_bus.device import EmulatedDevice
 from canopen_bus.dictionary import DictionaryError, load_dictionary
 from canopen_bus.mapping import load_mapping
@@ -153,12 +153,13 @@ def test_the_shipped_mapping_fits_and_a_device_from_an_eds_serves(tmp_path):
 
 
 def test_the_can_log_reads_back_with_its_steps(tmp_path):
-    log = CanLog(tmp_path / 'can.asc')
+    log = CanLog(tmp_path / 'can.asc', 10.0)
     log.write(0, 100.0, 0x738, b'\x05', rx=False)
     log.write(3, 100.25, 0x638, bytes([0x23, 7, 0x40, 4, 1, 0, 0, 0]), rx=True)
     log.write(3, 100.26, 0x5B8, bytes([0x60, 7, 0x40, 4, 0, 0, 0, 0]), rx=False)
     log.close()
     assert read_replay(tmp_path / 'can.asc') == {3: [(100.25, 0x638, bytes([0x23, 7, 0x40, 4, 1, 0, 0, 0]))]}
+    assert recorded_rtf(tmp_path / 'can.asc') == 10.0
     side = tmp_path / 'can.asc.steps.csv'
     side.write_text('\n'.join(side.read_text().splitlines()[:-1]) + '\n')
     with pytest.raises(CanLogError, match='3 frames but 2 rows'):
