@@ -12,6 +12,22 @@ STAMP="$VENV/.acds_setup_stamp"
 PKGS=()
 for d in "$ROOT"/ros_ws/src/*/ "$ROOT"/examples/*/; do [[ -f "$d/setup.py" ]] && PKGS+=("${d%/}"); done
 
+# The OreSat C3 flight software (a user's outside program, never patched) in an environment of its own, .venv-c3,
+# pinned by requirements-c3.lock; the real-C3-in-the-loop test and `acds c3` run it from there. fastcrc goes in
+# first, alone: oresat-c3 asks for fastcrc~=0.3 and the pin has to hold before the resolver meets the rest.
+C3_VENV="$ROOT/.venv-c3"
+C3_STAMP="$C3_VENV/.acds_setup_stamp"
+c3_want=$(sha256sum "$ROOT/requirements-c3.lock" | cut -c1-16)
+if [[ ! -f "$C3_STAMP" || "$(cat "$C3_STAMP")" != "$c3_want" || ! -x "$C3_VENV/bin/python" ]]; then
+  echo "[setup] preparing $C3_VENV (the OreSat C3 flight software, ~40 s)" >&2
+  [[ -x "$C3_VENV/bin/python" ]] || "$PY" -m venv "$C3_VENV"
+  "$C3_VENV/bin/python" -m pip install --quiet --disable-pip-version-check "$(grep '^fastcrc==' "$ROOT/requirements-c3.lock")" \
+    2> >(grep -v "is ignored: it is neither" >&2)
+  "$C3_VENV/bin/python" -m pip install --quiet --disable-pip-version-check -r "$ROOT/requirements-c3.lock" \
+    2> >(grep -v "is ignored: it is neither" >&2)
+  echo "$c3_want" > "$C3_STAMP"
+fi
+
 want=$(cd "$ROOT" && cat requirements.lock ros_ws/src/*/setup.py ros_ws/src/*/setup.cfg examples/*/setup.py \
   examples/*/setup.cfg 2>/dev/null | sha256sum | cut -c1-16)
 # The SIMD pin where Python starts (README "Running it on a cluster"): a .pth file in the environment's

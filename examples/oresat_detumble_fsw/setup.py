@@ -17,6 +17,7 @@ setup(
     description="OreSat B-cross-omega detumble flight software (a user's node for the ACDS emulator)",
     license='Apache-2.0',
     entry_points={
-        'console_scripts': [f'{package_name} = {package_name}.detumble_node:main'],
+        'console_scripts': [f'{package_name} = {package_name}.detumble_node:main',
+                            f'oresat_detumble_canopen = {package_name}.canopen_master:main'],
     },
 )

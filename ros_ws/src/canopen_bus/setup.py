@@ -21,6 +21,8 @@ setup(
         'acds.run_options': [f'{package_name} = {package_name}.run_plugin'],
         'acds.summaries': [f'{package_name} = {package_name}.summary'],
         'acds.contract': [f'{package_name} = {package_name}.contract'],
+        'acds.verbs': ['c3 = canopen_bus.c3_cli'],
+        'acds.bench': ['canopen_bus = canopen_bus.bench'],
         'console_scripts': [
             'canopen_cards = canopen_bus.cards_node:main',
             'canopen_bus_hub = canopen_bus.hub:main',

@@ -80,14 +80,21 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Entry-point group of verbs a workspace package adds (each names a module with ``register(subparsers)``).
+VERB_ENTRY_POINTS = 'acds.verbs'
+
+
 def _verb_modules() -> list:
-    """Verb groups in ``acds_cli/verbs/`` (one module each, with ``register(subparsers)``)."""
+    """Verb groups in ``acds_cli/verbs/`` (one module each, with ``register(subparsers)``), then the modules
+    other packages declare in the entry-point group :data:`VERB_ENTRY_POINTS`, by name."""
     import importlib
     import pkgutil
+    from importlib.metadata import entry_points
 
     from . import verbs
     ordered = sorted(pkgutil.iter_modules(verbs.__path__), key=lambda m: (m.name != 'run', m.name))  # run first
-    return [importlib.import_module(f'{verbs.__name__}.{m.name}') for m in ordered]
+    own = [importlib.import_module(f'{verbs.__name__}.{m.name}') for m in ordered]
+    return own + [ep.load() for ep in sorted(entry_points(group=VERB_ENTRY_POINTS), key=lambda e: e.name)]
 
 
 class Stopped(KeyboardInterrupt):

@@ -214,6 +214,15 @@ def core_rate(steps: int) -> float:
     return steps / (time.perf_counter() - t0)
 
 
+#: Entry-point group of modules adding figures to the bench: each has ``bench(args) -> (JSON fields, printed lines)``.
+BENCH_ENTRY_POINTS = 'acds.bench'
+
+
+def _bench_modules() -> list:
+    from importlib.metadata import entry_points
+    return [ep.load() for ep in sorted(entry_points(group=BENCH_ENTRY_POINTS), key=lambda e: e.name)]
+
+
 def main(args: argparse.Namespace) -> int:
     """Run the measurements and print them (``--json``: last line one JSON object)."""
     graph = graph_rate(args.steps)
@@ -246,6 +255,11 @@ def main(args: argparse.Namespace) -> int:
           f'({dispersion_cpu:.3f} per CPU s)')
     print(f'flight-software sample ({FSW_SCENARIO}, the example node started per sample): {fsw_overhead:.2f} s '
           f'overhead per sample (graph + node started, joined, stopped), then {fsw_rate:.1f} steps/s')
+    for module in _bench_modules():  # other packages' figures (entry-point group acds.bench)
+        fields, lines = module.bench(args)
+        result.update(fields)
+        for line in lines:
+            print(line)
     print(f'machine: {os.cpu_count()} cores, load average {", ".join(f"{x:.2f}" for x in os.getloadavg())}')
     if args.json:
         print(json.dumps(result))

@@ -49,34 +49,47 @@ class CanLog:
         self._side.close()
 
 
-def read_replay(path: Path) -> dict[int, list[tuple[float, int, bytes]]]:
-    """{step: [(wall_time, can_id, data), …]} of the frames the bus brought in (Rx), from the log and its sidecar."""
+def read_frames(path: Path) -> list[tuple[int, float, bool, int, bytes]]:
+    """Every frame of the log with its step: [(step, wall_time, rx, can_id, data), …] in log order (the sidecar is
+    checked against the log frame by frame)."""
     path = Path(path)
     side = Path(str(path) + SIDECAR_SUFFIX)
     for p in (path, side):
         if not p.is_file():
-            raise CanLogError(f'--replay-can {path}: no such file {p}')
+            raise CanLogError(f'{path}: no such file {p}')
     with open(side, newline='') as fh:
         rows = list(csv.reader(fh))
     if not rows or tuple(rows[0]) != SIDECAR_HEADER:
-        raise CanLogError(f'--replay-can {path}: {side.name} does not start with {",".join(SIDECAR_HEADER)}')
+        raise CanLogError(f'{path}: {side.name} does not start with {",".join(SIDECAR_HEADER)}')
     try:
         frames = list(can.LogReader(str(path)))
     except Exception as exc:  # python-can's readers raise what the file holds; name the file
-        raise CanLogError(f'--replay-can {path}: not a CAN log python-can reads ({exc})') from None
+        raise CanLogError(f'{path}: not a CAN log python-can reads ({exc})') from None
     if len(frames) != len(rows) - 1:
-        raise CanLogError(f'--replay-can {path}: {len(frames)} frames but {len(rows) - 1} rows in {side.name}')
-    out: dict[int, list[tuple[float, int, bytes]]] = {}
+        raise CanLogError(f'{path}: {len(frames)} frames but {len(rows) - 1} rows in {side.name}')
+    out = []
     for i, (msg, row) in enumerate(zip(frames, rows[1:], strict=True)):
         try:
             step, direction, can_id, wall = int(row[2]), row[3], int(row[4], 16), float(row[1])
         except (ValueError, IndexError):
-            raise CanLogError(f'--replay-can {path}: {side.name} row {i + 1} is not frame,wall,step,dir,id') from None
+            raise CanLogError(f'{path}: {side.name} row {i + 1} is not frame,wall,step,dir,id') from None
         if can_id != msg.arbitration_id:
-            raise CanLogError(f'--replay-can {path}: frame {i} is 0x{msg.arbitration_id:03X} in the log, '
+            raise CanLogError(f'{path}: frame {i} is 0x{msg.arbitration_id:03X} in the log, '
                               f'0x{can_id:03X} in {side.name}')
-        if direction == 'Rx':
-            out.setdefault(step, []).append((wall, can_id, bytes(msg.data)))
+        out.append((step, wall, direction == 'Rx', can_id, bytes(msg.data)))
+    return out
+
+
+def read_replay(path: Path) -> dict[int, list[tuple[float, int, bytes]]]:
+    """{step: [(wall_time, can_id, data), …]} of the frames the bus brought in (Rx), from the log and its sidecar."""
+    try:
+        frames = read_frames(path)
+    except CanLogError as exc:
+        raise CanLogError(f'--replay-can {exc}') from None
+    out: dict[int, list[tuple[float, int, bytes]]] = {}
+    for step, wall, rx, can_id, data in frames:
+        if rx:
+            out.setdefault(step, []).append((wall, can_id, data))
     return out
 
 

@@ -26,7 +26,7 @@ from typing import Any
 from canopen_bus.hub import DEFAULT_HOST, DEFAULT_PORT, Hub
 
 #: The command the run prints for starting the OreSat C3 flight software against the bus.
-C3_COMMAND = './scripts/acds c3 --can-host {host} --can-port {port}'
+C3_COMMAND = './scripts/acds c3 --run-dir {run_dir} --can-host {host} --can-port {port} --detumble {scenario}'
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -120,8 +120,9 @@ class BusSession:
             endpoint = f'socketcand:{host}:{self.hub.port}'
             print(f'[acds] CAN bus (socketcand protocol) on {host}:{self.hub.port}, channel vcan0; the cards: {cards}',
                   file=sys.stderr, flush=True)
-            print(f'[acds] start the flight computer against it, e.g. the OreSat C3: '
-                  f'{C3_COMMAND.format(host=host, port=self.hub.port)}', file=sys.stderr, flush=True)
+            c3 = C3_COMMAND.format(host=host, port=self.hub.port, run_dir=Path(sc.get('can_bus', 'can_log')).parent,
+                                   scenario=sc.name)
+            print(f'[acds] start the flight computer against it, e.g. the OreSat C3: {c3}', file=sys.stderr, flush=True)
         timeout = sc.get('', 'input_timeout')
         print(f'[acds] waiting up to {timeout:g} s (input_timeout) for the flight computer\'s heartbeat '
               f'(node 0x{fc:02X}, COB-ID 0x{0x700 + fc:03X})', file=sys.stderr, flush=True)
@@ -155,6 +156,27 @@ class BusSession:
                   f'connected', file=sys.stderr, flush=True)
             self.hub.stop()
             self.hub = None
+        if self.endpoint is not None:
+            self._report_flight_computer()
+
+    def _report_flight_computer(self) -> None:
+        """What the flight computer did, from the CAN log: printed, and RUN_DIR/flight_computer.json."""
+        import json
+
+        from canopen_bus.canlog import CanLogError
+        from canopen_bus.flight_report import report, setpoint_objects
+        sc = self.scenario
+        log = Path(sc.get('can_bus', 'can_log'))
+        if not log.is_file():
+            return
+        try:
+            fc = report(log, sc.get('can_bus', 'flight_computer_node_id'), setpoint_objects(sc.get('can_bus', 'mapping')))
+        except CanLogError as exc:
+            print(f'[acds] flight computer report: {exc}', file=sys.stderr, flush=True)
+            return
+        for line in fc.lines(sc.control_period_s):
+            print(f'[acds] {line}', file=sys.stderr, flush=True)
+        (log.parent / 'flight_computer.json').write_text(json.dumps(fc.as_dict(), indent=1) + '\n')
 
 
 def _devices(scenario: Any) -> list[dict[str, Any]]:
