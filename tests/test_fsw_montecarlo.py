@@ -245,3 +245,14 @@ def test_a_bus_study_flown_by_the_canopen_master_keeps_each_sample_replayable(tm
                      str(summary))
     assert again.returncode == 0, again.stdout + again.stderr
     assert json.loads(summary.read_text())['truth_digest'] == rec['flight_software']['truth_digest']
+
+
+def test_a_flight_computer_that_dies_before_its_heartbeat_fails_its_sample_at_once(tmp_path):
+    out = tmp_path / 'study'
+    proc = run_acds('montecarlo', BUS_SCENARIO, '--runs', '1', '--until-min', UNTIL_MIN, '--rtf', RTF,
+                    '--fsw-command', "sh -c 'echo no bus for me at port $0; exit 3' {can_port}", '--max-failures', '0',
+                    '--out', str(out), '--quiet')
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    assert ('sample 0 failed: the flight computer exited (exit code 3) before its heartbeat (node 0x01) came on '
+            'socketcand:127.0.0.1:') in proc.stderr, proc.stderr
+    assert '| no bus for me at port ' in proc.stderr, proc.stderr

@@ -18,6 +18,7 @@ import contextlib
 import json
 import os
 import shutil
+import signal
 from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
@@ -92,10 +93,12 @@ def run_bus_sample(spec: BusSpec, text: str, steps: int | None = None) -> dict[s
     fsw: dict[str, Any] = {'run_dir': str(run_dir), 'log': str(log), 'can_log': str(run_dir / 'can.asc')}
     procs: list[Any] = []
 
-    def start(where: dict[str, str]) -> None:
+    def start(where: dict[str, str]) -> Any:
         argv = spec.command.argv({**where, 'run_dir': str(run_dir)})
         fsw['argv'] = argv
-        procs.append(start_process(argv, {**os.environ, 'PYTHONUNBUFFERED': '1'}, log))
+        proc = start_process(argv, {**os.environ, 'PYTHONUNBUFFERED': '1'}, log)
+        procs.append(proc)
+        return lambda: None if proc.poll() is None else f'the flight computer exited ({_how(proc.returncode)})'
 
     summary: dict[str, Any]
     try:
@@ -110,7 +113,7 @@ def run_bus_sample(spec: BusSpec, text: str, steps: int | None = None) -> dict[s
                 if procs:
                     fsw['stop'] = stop_process(procs[0], spec.grace_s)
         if fsw.get('stop', {}).get('how') == 'exited by itself':
-            raise RuntimeError(f'the flight computer exited (exit code {fsw["stop"]["exit_code"]}) before the sample '
+            raise RuntimeError(f'the flight computer exited ({_how(fsw["stop"]["exit_code"])}) before the sample '
                                'ended')
         fsw['timing'] = {key[4:-3]: {**{f'{q}_ms': figures[q] for q in ('p50', 'p99', 'max')}, 'what': what,
                                      'steps': summary.get('steps', steps)}
@@ -125,3 +128,7 @@ def run_bus_sample(spec: BusSpec, text: str, steps: int | None = None) -> dict[s
         fsw['last_lines'] = last_lines(log)
     summary['fsw'] = fsw
     return summary
+
+
+def _how(code: int) -> str:
+    return f'killed by signal {signal.Signals(-code).name}' if code < 0 else f'exit code {code}'

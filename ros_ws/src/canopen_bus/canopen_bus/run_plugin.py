@@ -13,8 +13,9 @@ no bus is served: the recorded frames are applied at their recorded steps.
 
 A session's ``served`` (None, or a callable a caller sets, e.g. a study that starts the flight computer for each
 sample) is called with where the bus is, ``{'can_host', 'can_port'}``, once the hub listens and before the wait for
-the heartbeat. :func:`built_in` is the scenario flown by the built-in law in place of the flight computer
-(``montecarlo --paired``).
+the heartbeat; what it returns, when not None, is polled during that wait (None: the flight computer is still there;
+else one line why it is not, which fails the run at once). :func:`built_in` is the scenario flown by the built-in
+law in place of the flight computer (``montecarlo --paired``).
 """
 
 from __future__ import annotations
@@ -110,6 +111,7 @@ class BusSession:
             return sc
         fc = sc.get('can_bus', 'flight_computer_node_id')
         heartbeat = threading.Event()
+        gone: Any = None
         cards = ', '.join(f'{m["name"]} 0x{m["node_id"]:02X}' for m in _devices(sc))
         host, port = self.endpoint
         if host == 'socketcan':
@@ -131,12 +133,18 @@ class BusSession:
                                    scenario=sc.name)
             print(f'[acds] start the flight computer against it, e.g. the OreSat C3: {c3}', file=sys.stderr, flush=True)
             if self.served is not None:
-                self.served({'can_host': host, 'can_port': str(self.hub.port)})
+                gone = self.served({'can_host': host, 'can_port': str(self.hub.port)})
         timeout = sc.get('', 'input_timeout')
         print(f'[acds] waiting up to {timeout:g} s (input_timeout) for the flight computer\'s heartbeat '
               f'(node 0x{fc:02X}, COB-ID 0x{0x700 + fc:03X})', file=sys.stderr, flush=True)
         t0 = time.monotonic()
-        if not heartbeat.wait(timeout):
+        while gone is not None and not heartbeat.is_set() and time.monotonic() < t0 + timeout:
+            why = gone()
+            if why is not None:
+                self.__exit__(None, None, None)
+                raise RuntimeError(f'{why} before its heartbeat (node 0x{fc:02X}) came on {endpoint}')
+            heartbeat.wait(min(0.2, max(0.0, t0 + timeout - time.monotonic())))
+        if not heartbeat.wait(0 if gone is not None else timeout):
             clients = (', '.join(self.hub.clients()) or 'none') if self.hub is not None else 'not known (SocketCAN)'
             line = (f'no heartbeat from the flight computer (node 0x{fc:02X}, COB-ID 0x{0x700 + fc:03X}) within '
                     f'{timeout:g} s on {endpoint}; clients on the bus: {clients}')
