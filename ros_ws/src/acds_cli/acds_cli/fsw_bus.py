@@ -6,10 +6,11 @@ Each sample is ``acds run SCENARIO --sample S:K --engine direct --can-port 0 --r
 started by the study: the run's plug-in session (entry-point group ``acds.run_options``) serves the sample's bus on
 a free port, the study starts the command with that port (``{can_host}``, ``{can_port}``, ``{run_dir}``) once it
 listens, the session waits for the flight computer's heartbeat and the cards pace the steps at R; after the sample
-(however it ends) the flight computer is stopped (SIGINT, SIGKILL after the grace period). The sample's folder
-keeps the CAN log (``can.asc``, ``can.asc.run.json``), the flight computer's account (``flight_computer.json``) and
-its output (``fsw.log``); ``acds run … --replay-can samples/<name>/can.asc`` flies the sample again from its log
-to the same truth digest. ``--paired``: the plug-in's ``built_in`` gives the same draws flown by the built-in law.
+(however it ends) the flight computer is stopped (SIGINT, SIGKILL after the grace period). The sample's folder keeps
+the CAN log (``can.asc``, ``can.asc.run.json``), the flight computer's account (``flight_computer.json``), its
+output (``fsw.log``) and the run's lines (``run.log``: the bus, the heartbeat, the account); ``acds run …
+--replay-can samples/<name>/can.asc`` flies the sample again from its log to the same truth digest. ``--paired``:
+the plug-in's ``built_in`` gives the same draws flown by the built-in law.
 """
 
 from __future__ import annotations
@@ -52,6 +53,12 @@ def bus_sessions(scenario: Scenario, run_dir: Path, rtf: float | None, replay: s
     ns = SimpleNamespace(can_port=None if replay else 0, can_host=None if replay else BUS_HOST, replay_can=replay,
                          rtf=rtf)
     return [s for s in (p.prepare(scenario, ns, run_dir) for p in run_plugins()) if s is not None]
+
+
+def serves_bus(scenario: Scenario) -> bool:
+    """Whether a run plug-in serves a bus for ``scenario`` (asked as ``acds run`` without any of their options)."""
+    ns = SimpleNamespace(can_port=None, can_host=None, replay_can=None, rtf=None)
+    return any(p.prepare(scenario, ns, Path('.')) is not None for p in run_plugins())
 
 
 def built_in_text(text: str) -> str:
@@ -104,6 +111,8 @@ def run_bus_sample(spec: BusSpec, text: str, steps: int | None = None) -> dict[s
     try:
         sessions = bus_sessions(scenario, run_dir, spec.rtf)
         with contextlib.ExitStack() as held:
+            # the run's own lines (the bus, the heartbeat, the flight computer's account) into the sample's folder
+            held.enter_context(contextlib.redirect_stderr(held.enter_context((run_dir / 'run.log').open('w'))))
             for session in sessions:
                 session.served = start
                 scenario = held.enter_context(session)

@@ -100,11 +100,11 @@ def _check(args: argparse.Namespace, base: Scenario) -> tuple[dict[str, str], An
 
     from acds_runtime.flight_software import BUS_PLACEHOLDERS, FswCommand, FswCommandError
 
-    from .fsw_bus import bus_sessions
+    from .fsw_bus import bus_sessions, serves_bus
     from .verbs.run import _deadlines
 
     try:
-        on_bus = bool(bus_sessions(base, Path('.'), args.rtf))
+        on_bus = serves_bus(base) and bool(bus_sessions(base, Path('.'), args.rtf))
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     if on_bus:
@@ -265,8 +265,9 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     (out / 'report.md').write_text('```\n' + '\n'.join(lines) + '\n```\n\nper sample:\n\n' + '\n'.join(
         _sample_line(r) for r in records) + '\n')
     mark_complete(out, study, True)
+    kept = 'fsw.log, can.asc, flight_computer.json, run.log' if on_bus else 'fsw.log, graph.log'
     print(f'[montecarlo] report.md, report.json, samples.json, samples.jsonl and each sample\'s run folder '
-          f'(samples/<name>: fsw.log, graph.log) in {out}', file=sys.stderr)
+          f'(samples/<name>: {kept}) in {out}', file=sys.stderr)
     return 1 if failed else 0
 
 
