@@ -167,7 +167,7 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     extra = [a for e in args.external for a in ('--external', e)]
     if args.fsw_command is not None:
         extra += ['--fsw-command', args.fsw_command]
-    extra += [a for a in ('--rtf', f'{args.rtf:g}') if args.rtf is not None]
+    extra += ['--rtf', f'{args.rtf:g}'] if args.rtf is not None else []
     extra += ['--paired'] * args.paired + [a for n, ms in args.deadline_ms or [] for a in ('--deadline-ms', f'{n}={ms:g}')]
     extra += ['--deadline-strict'] * args.deadline_strict
     command_line = study_command(['montecarlo', args.scenario], args) + ''.join(f' {shlex.quote(a)}' for a in extra)
