@@ -205,6 +205,8 @@ def master_command() -> str:
      'unknown placeholder {params}'),
     (['--fsw-command', 'oresat_detumble_canopen --port {can_port}', '--external', 'acds_controller'],
      'is flown by a flight computer on its CAN bus, not by a ROS node'),
+    (['--fsw-command', 'oresat_detumble_canopen --port {can_port}', '--can-port', '29536', '--jobs', '2'],
+     '--can-port 29536: one bus on one port serves one sample at a time; give --jobs 1'),
 ])
 def test_bad_input_on_the_bus_is_one_line_before_any_sample(tmp_path, extra, message):
     proc = run_acds('montecarlo', BUS_SCENARIO, '--runs', '2', '--out', str(tmp_path / 'study'), *extra)

@@ -47,11 +47,10 @@ BUS_TIMING = {'can_sensor_lateness_ms': "the cards' sensor frames' wall lateness
 BUS_HOST = '127.0.0.1'
 
 
-def bus_sessions(scenario: Scenario, run_dir: Path, rtf: float | None, replay: str | None = None) -> list[Any]:
-    """The run plug-ins' sessions of ``scenario`` as ``acds run --can-port 0 --rtf R`` (or ``--replay-can``) would
-    hold them; empty: the scenario serves no bus. A ValueError is the plug-in's one line."""
-    ns = SimpleNamespace(can_port=None if replay else 0, can_host=None if replay else BUS_HOST, replay_can=replay,
-                         rtf=rtf)
+def bus_sessions(scenario: Scenario, run_dir: Path, rtf: float | None, port: int = 0) -> list[Any]:
+    """The run plug-ins' sessions of ``scenario`` as ``acds run --can-port PORT --rtf R`` would hold them (port 0:
+    a free one); empty: the scenario serves no bus. A ValueError is the plug-in's one line."""
+    ns = SimpleNamespace(can_port=port, can_host=BUS_HOST, replay_can=None, rtf=rtf)
     return [s for s in (p.prepare(scenario, ns, run_dir) for p in run_plugins()) if s is not None]
 
 
@@ -82,6 +81,8 @@ class BusSpec:
     #: The real-time factor the cards pace the samples at (None: the scenario's).
     rtf: float | None
     grace_s: float = STOP_GRACE_S
+    #: The port every sample's bus listens on (0: a free one per sample; a fixed one: one sample at a time).
+    port: int = 0
 
 
 def run_bus_sample(spec: BusSpec, text: str, steps: int | None = None) -> dict[str, Any]:
@@ -109,7 +110,7 @@ def run_bus_sample(spec: BusSpec, text: str, steps: int | None = None) -> dict[s
 
     summary: dict[str, Any]
     try:
-        sessions = bus_sessions(scenario, run_dir, spec.rtf)
+        sessions = bus_sessions(scenario, run_dir, spec.rtf, spec.port)
         with contextlib.ExitStack() as held:
             # the run's own lines (the bus, the heartbeat, the flight computer's account) into the sample's folder
             held.enter_context(contextlib.redirect_stderr(held.enter_context((run_dir / 'run.log').open('w'))))

@@ -67,6 +67,10 @@ def add_fsw_options(p: argparse.ArgumentParser) -> None:
                    help="a study on a CAN bus: the real-time factor its samples are paced at (default the scenario's "
                         'can_bus.rtf); the command then takes {can_host} and {can_port} (the sample\'s bus) and '
                         '{run_dir}')
+    p.add_argument('--can-port', type=int, metavar='PORT',
+                   help='a study on a CAN bus: serve every sample\'s bus on this TCP port (default: a free one per '
+                        'sample), for a flight computer that connects to one port only, as the OreSat C3 (29536); '
+                        'one sample at a time (--jobs 1)')
     p.add_argument('--paired', action='store_true',
                    help='also run the same draws with the built-in node (direct engine) and report them side by side')
     p.add_argument('--deadline-ms', type=deadline, action='append', metavar='NODE=MS',
@@ -84,8 +88,8 @@ def flown_by_user(args: argparse.Namespace, base: Scenario) -> bool:
     without one: one line (UsageError)."""
     if args.external or args.fsw_command is not None or base.get('', 'external'):
         return True
-    given = [o for o, v in (('--paired', args.paired), ('--rtf', args.rtf), ('--deadline-ms', args.deadline_ms),
-                            ('--deadline-strict', args.deadline_strict),
+    given = [o for o, v in (('--paired', args.paired), ('--rtf', args.rtf), ('--can-port', args.can_port is not None),
+                            ('--deadline-ms', args.deadline_ms), ('--deadline-strict', args.deadline_strict),
                             ('--max-failures', args.max_failures != MAX_FAILURES)) if v]
     if given:
         raise UsageError(f'{given[0]}: an option of a study flown by your own node; give --external NODE and '
@@ -104,13 +108,16 @@ def _check(args: argparse.Namespace, base: Scenario) -> tuple[dict[str, str], An
     from .verbs.run import _deadlines
 
     try:
-        on_bus = serves_bus(base) and bool(bus_sessions(base, Path('.'), args.rtf))
+        on_bus = serves_bus(base) and bool(bus_sessions(base, Path('.'), args.rtf, args.can_port or 0))
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     if on_bus:
         if args.external:
             raise UsageError(f'--external: scenario {base.name} is flown by a flight computer on its CAN bus, not by a '
                              "ROS node; give its command alone: --fsw-command 'CMD ... {can_host} {can_port}'")
+        if args.can_port and (args.jobs > 1 or args.scheduler):
+            raise UsageError(f'--can-port {args.can_port}: one bus on one port serves one sample at a time; give '
+                             '--jobs 1 (or leave --can-port out: a free port per sample)')
         if args.deadline_ms or args.deadline_strict:
             raise UsageError('--deadline-ms: a ROS node\'s step budget; on the bus the cards report the flight '
                              "computer's timing (setpoint age, late steps) per sample")
@@ -119,8 +126,9 @@ def _check(args: argparse.Namespace, base: Scenario) -> tuple[dict[str, str], An
             return {}, FswCommand.parse(template, '--fsw-command', BUS_PLACEHOLDERS), {}, True
         except FswCommandError as exc:
             raise UsageError(str(exc)) from None
-    if args.rtf is not None:
-        raise UsageError(f'--rtf: scenario {base.name} has no CAN bus; a study flown by your ROS node runs unpaced')
+    for option, value in (('--rtf', args.rtf), ('--can-port', args.can_port)):
+        if value is not None:
+            raise UsageError(f'{option}: scenario {base.name} has no CAN bus; a study flown by your ROS node has none')
     if args.engine == 'direct':
         raise UsageError('--external: the direct engine runs every node in this process, so it cannot fly your node; '
                          'a study flown by your node runs the process graph (leave --engine out, or --engine graph)')
@@ -168,6 +176,7 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     if args.fsw_command is not None:
         extra += ['--fsw-command', args.fsw_command]
     extra += ['--rtf', f'{args.rtf:g}'] if args.rtf is not None else []
+    extra += ['--can-port', str(args.can_port)] if args.can_port is not None else []
     extra += ['--paired'] * args.paired + [a for n, ms in args.deadline_ms or [] for a in ('--deadline-ms', f'{n}={ms:g}')]
     extra += ['--deadline-strict'] * args.deadline_strict
     command_line = study_command(['montecarlo', args.scenario], args) + ''.join(f' {shlex.quote(a)}' for a in extra)
@@ -190,7 +199,8 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
           file=sys.stderr, flush=True)
     if on_bus:
         fly = functools.partial(fsw_bus.run_bus_sample, fsw_bus.BusSpec(command, str(out.resolve()), args.rtf,
-                                                                         args.fsw_grace_s), steps=steps)
+                                                                         args.fsw_grace_s, args.can_port or 0),
+                                steps=steps)
     else:
         fly = functools.partial(run_fsw_sample, FswSpec(command, tuple(args.external), str(out.resolve()),
                                                         args.fsw_grace_s, overrides), steps=steps)
