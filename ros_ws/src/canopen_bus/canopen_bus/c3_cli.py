@@ -79,9 +79,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.run_dir is None:
         args.run_dir = checkout_root() / 'runs' / time.strftime('c3_%Y%m%d_%H%M%S', time.gmtime())
-        args.run_dir.mkdir(parents=True)
-    if not args.run_dir.is_dir():
-        print(f'acds c3: error: --run-dir {args.run_dir}: no such folder', file=sys.stderr)
+    try:  # the run prints its folder before it has made it: made here if need be
+        args.run_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        print(f'acds c3: error: --run-dir {args.run_dir}: {exc.strerror}', file=sys.stderr)
         return 2
     orbit = detumble_orbit(args.detumble) if args.detumble else None
     c3 = C3Process(args.run_dir / 'c3', host=args.can_host, port=args.can_port, verbose=args.verbose)
