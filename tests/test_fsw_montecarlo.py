@@ -1,18 +1,21 @@
 """Monte Carlo flown by the user's flight software: a short study with the example node, paired with the built-in
 law (identical in N of N), each sample the same as ``acds run --sample S:K --external`` with the node started by
-hand; a failing node is one line with its last lines and ``--resume`` runs it again; a node that ignores SIGINT is
-killed after the grace period; bad input is one line, exit 2, before any sample."""
+hand; on the CAN bus, a study flown by a CANopen master whose samples replay from their CAN logs; a failing node is
+one line with its last lines and ``--resume`` runs it again; a node that ignores SIGINT is killed after the grace
+period; bad input is one line, exit 2, before any sample."""
 
 from __future__ import annotations
 
 import json
 import os
+import shlex
 import signal
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from acds_common.scenario import load_scenario
 from acds_runtime.flight_software import start_process, stop_process
 from acds_runtime.testing import read_until
 
@@ -175,3 +178,83 @@ def test_the_paired_report_counts_identical_pairs_and_names_the_samples_that_dif
     assert stats['quantities']['detumble_time_min']['one_sided'] == 1
     assert [(d['index'], d['key']) for d in stats['differ_most']] == [(4, 'detumble_time_min'), (2, 'energy_j')]
     assert paired_table(stats)[0].startswith('identical in 4 of 6')
+
+
+# On the CAN bus: oresat_c3_detumble flown by the project's own CANopen master (the example's
+# oresat_detumble_canopen, the seed 003 law), started for each sample on that sample's bus and stopped after it,
+# paced at a stated real-time factor, paired with the built-in law on the same draws; each sample's CAN log kept in
+# its folder, and --replay-can of it gives the sample's truth digest bit for bit.
+BUS_SCENARIO = 'oresat_c3_detumble'
+#: 300 steps of 0.1 s per sample, at 30× real time (1 s of wall per sample once the master's heartbeat came).
+UNTIL_MIN, RTF = '0.5', '30'
+
+
+def master_command() -> str:
+    """The master's command template: the law's parameters from the scenario, the bus from the sample."""
+    c = load_scenario(BUS_SCENARIO).get
+    return ('oresat_detumble_canopen --host {can_host} --port {can_port} '
+            f'--orbit-period {c("controller", "detumble_orbit_period")!r} '
+            f'--inclination {c("controller", "magnetic_inclination")!r} --j-min {c("controller", "detumble_j_min")!r} '
+            f'--max-moment {c("controller", "max_moment_am2")!r} --dipole-per-amp '
+            + ' '.join(repr(v) for v in c('can_bus', 'dipole_per_amp')))
+
+
+@pytest.mark.parametrize(('extra', 'message'), [
+    (['--fsw-command', 'oresat_detumble_canopen --host {can_host}'], 'the command must take it: put {can_port}'),
+    (['--fsw-command', 'oresat_detumble_canopen --port {can_port} --ros-args --params-file {params}'],
+     'unknown placeholder {params}'),
+    (['--fsw-command', 'oresat_detumble_canopen --port {can_port}', '--external', 'acds_controller'],
+     'is flown by a flight computer on its CAN bus, not by a ROS node'),
+    (['--fsw-command', 'oresat_detumble_canopen --port {can_port}', '--can-port', '29536', '--jobs', '2'],
+     '--can-port 29536: one bus on one port serves one sample at a time; give --jobs 1'),
+])
+def test_bad_input_on_the_bus_is_one_line_before_any_sample(tmp_path, extra, message):
+    proc = run_acds('montecarlo', BUS_SCENARIO, '--runs', '2', '--out', str(tmp_path / 'study'), *extra)
+    assert proc.returncode == 2, proc.stderr
+    assert message in proc.stderr, proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    assert not (tmp_path / 'study').exists(), 'a study folder before the input was checked'
+
+
+def test_a_bus_study_flown_by_the_canopen_master_keeps_each_sample_replayable(tmp_path):
+    out = tmp_path / 'study'
+    proc = run_acds('montecarlo', BUS_SCENARIO, '--runs', '2', '--until-min', UNTIL_MIN, '--rtf', RTF, '--paired',
+                    '--fsw-command', master_command(), '--out', str(out), '--quiet', '--jobs', '1')
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert f'paced at R = {float(RTF):g}' in proc.stderr, proc.stderr
+    records = json.loads((out / 'samples.json').read_text())
+    assert [r['index'] for r in records] == [0, 1]
+    for rec in records:
+        ours, fsw = rec['flight_software'], rec['flight_software']['fsw']
+        folder = Path(fsw['run_dir'])
+        assert folder.parent == out / 'samples'
+        assert fsw['stop']['how'] == 'stopped by SIGINT', fsw
+        assert (folder / 'can.asc').is_file() and (folder / 'can.asc.run.json').is_file()
+        written = sum(s['count'] for s in fsw['flight_computer']['setpoints'].values())
+        assert written > 0 and fsw['flight_computer']['heartbeats'] > 0, fsw['flight_computer']
+        assert ours['can_setpoint_changes'] > 0, ours
+        # The built-in law on the same draws: the same spacecraft and tumble, flown by the graph's own controller.
+        assert rec['built_in']['scenario'] == ours['scenario'] and 'error' not in rec['built_in']
+        assert rec['drawn'], rec
+    report = (out / 'report.md').read_text()
+    assert 'paired with the built-in node' in report, report
+    # A sample again from its CAN log, without the flight computer: the same truth, bit for bit.
+    rec = records[1]
+    argv = shlex.split(rec['replay'])
+    assert argv[:2] == ['./scripts/acds', 'run'] and '--replay-can' in argv, rec['replay']
+    summary = tmp_path / 'replay.json'
+    again = run_acds(*argv[1:], '--no-record', '--quiet', '--run-dir', str(tmp_path / 'replay'), '--summary-json',
+                     str(summary))
+    assert again.returncode == 0, again.stdout + again.stderr
+    assert json.loads(summary.read_text())['truth_digest'] == rec['flight_software']['truth_digest']
+
+
+def test_a_flight_computer_that_dies_before_its_heartbeat_fails_its_sample_at_once(tmp_path):
+    out = tmp_path / 'study'
+    proc = run_acds('montecarlo', BUS_SCENARIO, '--runs', '1', '--until-min', UNTIL_MIN, '--rtf', RTF,
+                    '--fsw-command', "sh -c 'echo no bus for me at port $0; exit 3' {can_port}", '--max-failures', '0',
+                    '--out', str(out), '--quiet')
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    assert ('sample 0 failed: the flight computer exited (exit code 3) before its heartbeat (node 0x01) came on '
+            'socketcand:127.0.0.1:') in proc.stderr, proc.stderr
+    assert '| no bus for me at port ' in proc.stderr, proc.stderr

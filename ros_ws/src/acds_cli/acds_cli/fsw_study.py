@@ -9,6 +9,9 @@ draws with the built-in node on the direct engine; the report sets them side by 
 node exits, never joins, stalls the lockstep) is one line naming why with the node's last lines; the study goes
 on up to ``--max-failures`` of them, and ``--resume`` runs again only the samples that did not finish (the
 failed ones included). The scenario keys ``external`` and ``fsw_command`` give the same as the options.
+
+A scenario whose cards serve a CAN bus is flown by a flight computer on that bus instead (no ``--external``; the
+command's placeholders ``{can_host}``, ``{can_port}``, ``{run_dir}``; paced at ``--rtf``): :mod:`.fsw_bus`.
 """
 
 from __future__ import annotations
@@ -60,6 +63,14 @@ def add_fsw_options(p: argparse.ArgumentParser) -> None:
                    help='the command that starts your node for a sample (scenario key fsw_command); placeholders '
                         '{domain} (its ROS_DOMAIN_ID, also in the environment), {params} (its parameters file for your '
                         'node) and {run_dir} (its run folder, where its output goes: fsw.log)')
+    p.add_argument('--rtf', type=positive_number, metavar='R',
+                   help="a study on a CAN bus: the real-time factor its samples are paced at (default the scenario's "
+                        'can_bus.rtf); the command then takes {can_host} and {can_port} (the sample\'s bus) and '
+                        '{run_dir}')
+    p.add_argument('--can-port', type=int, metavar='PORT',
+                   help='a study on a CAN bus: serve every sample\'s bus on this TCP port (default: a free one per '
+                        'sample), for a flight computer that connects to one port only, as the OreSat C3 (29536); '
+                        'one sample at a time (--jobs 1)')
     p.add_argument('--paired', action='store_true',
                    help='also run the same draws with the built-in node (direct engine) and report them side by side')
     p.add_argument('--deadline-ms', type=deadline, action='append', metavar='NODE=MS',
@@ -77,8 +88,8 @@ def flown_by_user(args: argparse.Namespace, base: Scenario) -> bool:
     without one: one line (UsageError)."""
     if args.external or args.fsw_command is not None or base.get('', 'external'):
         return True
-    given = [o for o, v in (('--paired', args.paired), ('--deadline-ms', args.deadline_ms),
-                            ('--deadline-strict', args.deadline_strict),
+    given = [o for o, v in (('--paired', args.paired), ('--rtf', args.rtf), ('--can-port', args.can_port is not None),
+                            ('--deadline-ms', args.deadline_ms), ('--deadline-strict', args.deadline_strict),
                             ('--max-failures', args.max_failures != MAX_FAILURES)) if v]
     if given:
         raise UsageError(f'{given[0]}: an option of a study flown by your own node; give --external NODE and '
@@ -86,12 +97,38 @@ def flown_by_user(args: argparse.Namespace, base: Scenario) -> bool:
     return False
 
 
-def _check(args: argparse.Namespace, base: Scenario) -> tuple[dict[str, str], Any, dict[str, Any]]:
-    """The external nodes, the command, the node parameter overrides; a bad one: UsageError, before any sample."""
-    from acds_runtime.flight_software import FswCommand, FswCommandError
+def _check(args: argparse.Namespace, base: Scenario) -> tuple[dict[str, str], Any, dict[str, Any], bool]:
+    """The external nodes, the command, the node parameter overrides, whether the flight computer is on a bus; a
+    bad one: UsageError, before any sample."""
+    from pathlib import Path
 
+    from acds_runtime.flight_software import BUS_PLACEHOLDERS, FswCommand, FswCommandError
+
+    from .fsw_bus import bus_sessions, serves_bus
     from .verbs.run import _deadlines
 
+    try:
+        on_bus = serves_bus(base) and bool(bus_sessions(base, Path('.'), args.rtf, args.can_port or 0))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    if on_bus:
+        if args.external:
+            raise UsageError(f'--external: scenario {base.name} is flown by a flight computer on its CAN bus, not by a '
+                             "ROS node; give its command alone: --fsw-command 'CMD ... {can_host} {can_port}'")
+        if args.can_port and (args.jobs > 1 or args.scheduler):
+            raise UsageError(f'--can-port {args.can_port}: one bus on one port serves one sample at a time; give '
+                             '--jobs 1 (or leave --can-port out: a free port per sample)')
+        if args.deadline_ms or args.deadline_strict:
+            raise UsageError('--deadline-ms: a ROS node\'s step budget; on the bus the cards report the flight '
+                             "computer's timing (setpoint age, late steps) per sample")
+        template = args.fsw_command if args.fsw_command is not None else base.get('', 'fsw_command')
+        try:
+            return {}, FswCommand.parse(template, '--fsw-command', BUS_PLACEHOLDERS), {}, True
+        except FswCommandError as exc:
+            raise UsageError(str(exc)) from None
+    for option, value in (('--rtf', args.rtf), ('--can-port', args.can_port)):
+        if value is not None:
+            raise UsageError(f'{option}: scenario {base.name} has no CAN bus; a study flown by your ROS node has none')
     if args.engine == 'direct':
         raise UsageError('--external: the direct engine runs every node in this process, so it cannot fly your node; '
                          'a study flown by your node runs the process graph (leave --engine out, or --engine graph)')
@@ -111,7 +148,7 @@ def _check(args: argparse.Namespace, base: Scenario) -> tuple[dict[str, str], An
         command = FswCommand.parse(template, option)
     except FswCommandError as exc:
         raise UsageError(str(exc)) from None
-    return external, command, _deadlines(args, base, False) or {}
+    return external, command, _deadlines(args, base, False) or {}, False
 
 
 def _replay(rerun: str, index: int, items: list[str]) -> str:
@@ -122,11 +159,13 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     """Draw, fly each sample with the user's node (and the built-in, ``--paired``), report (module doc)."""
     from acds_runtime import fsw_report
     from acds_runtime.dispersion_report import write_json
-    from acds_runtime.flight_software import FswSpec, built_in_text, run_fsw_sample
+    from acds_runtime.flight_software import FswSpec, built_in_text, run_fsw_sample, sample_dir
     from acds_runtime.montecarlo import run_sample
 
-    external, command, overrides = _check(args, base)
-    args.engine = 'graph'
+    from . import fsw_bus
+
+    external, command, overrides, on_bus = _check(args, base)
+    args.engine = 'direct' if on_bus else 'graph'
     out = study_folder('montecarlo', base.name, args)
     steps = _steps(base, args.until_min)
     rerun = rerun_command(args.scenario, args.seed, '{index}', args.vary, args.until_min)
@@ -136,26 +175,36 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     extra = [a for e in args.external for a in ('--external', e)]
     if args.fsw_command is not None:
         extra += ['--fsw-command', args.fsw_command]
+    extra += ['--rtf', f'{args.rtf:g}'] if args.rtf is not None else []
+    extra += ['--can-port', str(args.can_port)] if args.can_port is not None else []
     extra += ['--paired'] * args.paired + [a for n, ms in args.deadline_ms or [] for a in ('--deadline-ms', f'{n}={ms:g}')]
     extra += ['--deadline-strict'] * args.deadline_strict
     command_line = study_command(['montecarlo', args.scenario], args) + ''.join(f' {shlex.quote(a)}' for a in extra)
     keyed: dict[tuple[str, int], Any] = {(FSW, s.index): s for s in samples}
     if args.paired:  # the built-in side first (seconds per sample on the direct engine)
-        keyed = {**{(BUILT_IN, s.index): SimpleNamespace(text=built_in_text(s.text)) for s in samples}, **keyed}
+        pair = fsw_bus.built_in_text if on_bus else built_in_text
+        keyed = {**{(BUILT_IN, s.index): SimpleNamespace(text=pair(s.text)) for s in samples}, **keyed}
     journal = open_journal(out, {'verb': 'montecarlo', 'scenario': base.name, 'seed': args.seed, 'runs': args.runs,
-                                 'vary': args.vary, 'engine': 'graph', 'until_min': args.until_min, 'steps': steps,
+                                 'vary': args.vary, 'engine': args.engine, 'until_min': args.until_min, 'steps': steps,
                                  'external': external, 'fsw_command': command.template, 'paired': args.paired,
-                                 'overrides': overrides, 'command': command_line}, keyed, bool(args.resume))
+                                 'overrides': overrides, 'rtf': args.rtf, 'command': command_line}, keyed, bool(args.resume))
     retried = [key for key, summary in journal.done.items() if 'error' in summary]
     for key in retried:  # a failed sample did not finish: a resumed study runs it again
         del journal.done[key]
     print(f'[montecarlo] {base.name}: {args.runs} samples of seed {args.seed}, {run_length}, flown by '
-          f'`{command.template}` as {", ".join(items)} through the process graph'
+          f'`{command.template}` ' + (f'on each sample\'s CAN bus, paced at R = {args.rtf or base.get("can_bus", "rtf"):g}'
+                                      if on_bus else f'as {", ".join(items)} through the process graph')
           + (', paired with the built-in node on the direct engine' if args.paired else '')
           + f'; output {out}' + (f'; {len(retried)} failed sample(s) run again' if retried else ''),
           file=sys.stderr, flush=True)
-    spec = FswSpec(command, tuple(args.external), str(out.resolve()), args.fsw_grace_s, overrides)
-    tasks = {FSW: functools.partial(run_fsw_sample, spec, steps=steps),
+    if on_bus:
+        fly = functools.partial(fsw_bus.run_bus_sample, fsw_bus.BusSpec(command, str(out.resolve()), args.rtf,
+                                                                         args.fsw_grace_s, args.can_port or 0),
+                                steps=steps)
+    else:
+        fly = functools.partial(run_fsw_sample, FswSpec(command, tuple(args.external), str(out.resolve()),
+                                                        args.fsw_grace_s, overrides), steps=steps)
+    tasks = {FSW: fly,
              BUILT_IN: functools.partial(run_sample, engine='direct', steps=steps)}
     failures = [key for key, summary in journal.done.items() if 'error' in summary]
 
@@ -186,6 +235,9 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
         ours = journal.done[(FSW, s.index)]
         rec = {'index': s.index, 'name': s.scenario.name, 'drawn': s.drawn, 'flight_software': ours,
                'timing': ours.get('fsw', {}).get('timing'), 'replay': _replay(rerun, s.index, args.external)}
+        if on_bus:  # the sample again from its CAN log, without the flight computer: the same truth digest
+            rec['replay'] = (rerun.replace('{index}', str(s.index)) + ' --engine direct --replay-can '
+                             + shlex.quote(str(sample_dir(out, s.scenario.name) / 'can.asc')))
         if args.paired:
             rec['built_in'] = journal.done[(BUILT_IN, s.index)]
         records.append(rec)
@@ -193,7 +245,7 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     if kept:
         where += f'; {kept} sample(s) kept from an interrupted session'
     study = {'scenario': base.name, 'scenario_path': str(base.path.resolve()), 'seed': args.seed, 'runs': args.runs,
-             'user_vary': args.vary, 'engine': 'graph', 'until_min': args.until_min, 'steps': steps,
+             'user_vary': args.vary, 'engine': args.engine, 'until_min': args.until_min, 'steps': steps,
              'run_length': run_length, 'external': external, 'fsw_command': command.template, 'paired': args.paired,
              'execution': where, 'wall_seconds': wall, 'command': command_line, 'rerun': rerun}
     mark_complete(out, study, False)
@@ -202,7 +254,9 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     timing = fsw_report.timing(records)
     write_json(out / 'samples.json', records)
     write_json(out / 'report.json', {'paired': pairs, 'timing': timing})
-    lines = [f'== {base.name}: {args.runs} samples (seed {args.seed}) flown by {", ".join(items)}, {run_length}; '
+    flown = (f'the flight computer on the bus (R = {args.rtf or base.get("can_bus", "rtf"):g})' if on_bus
+             else ', '.join(items))
+    lines = [f'== {base.name}: {args.runs} samples (seed {args.seed}) flown by {flown}, {run_length}; '
              f'{where}; {wall:.0f} s wall ==']
     if pairs is not None:
         lines += ['', 'paired with the built-in node (same draws), percentiles over the samples:',
@@ -221,8 +275,9 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     (out / 'report.md').write_text('```\n' + '\n'.join(lines) + '\n```\n\nper sample:\n\n' + '\n'.join(
         _sample_line(r) for r in records) + '\n')
     mark_complete(out, study, True)
+    kept = 'fsw.log, can.asc, flight_computer.json, run.log' if on_bus else 'fsw.log, graph.log'
     print(f'[montecarlo] report.md, report.json, samples.json, samples.jsonl and each sample\'s run folder '
-          f'(samples/<name>: fsw.log, graph.log) in {out}', file=sys.stderr)
+          f'(samples/<name>: {kept}) in {out}', file=sys.stderr)
     return 1 if failed else 0
 
 

@@ -44,6 +44,10 @@ from .launcher import VENV_BIN, GraphRun, LaunchError
 #: The command template's placeholders and what each becomes (README "Monte Carlo with your own flight software").
 PLACEHOLDERS = {'domain': "the sample's ROS_DOMAIN_ID", 'params': "the sample's parameters file for your node",
                 'run_dir': "the sample's run folder"}
+#: The placeholders of a flight computer on a CAN bus (a scenario with the bus cards; README "Monte Carlo with your
+#: own flight software").
+BUS_PLACEHOLDERS = {'can_host': "the host of the sample's socketcand bus",
+                    'can_port': "its TCP port (a free one per sample)", 'run_dir': "the sample's run folder"}
 #: Launchers that start the node where this process's environment does not reach: the command needs ``{domain}``.
 NO_ENVIRONMENT = ('ssh', 'docker', 'podman', 'nerdctl', 'kubectl', 'sudo', 'doas', 'su', 'systemd-run', 'machinectl')
 #: ``env`` options that clear the environment (``env -i``): the command needs ``{domain}`` as well.
@@ -69,9 +73,12 @@ class FswCommand:
     words: tuple[str, ...]
 
     @classmethod
-    def parse(cls, template: str | None, option: str = '--fsw-command') -> FswCommand:
+    def parse(cls, template: str | None, option: str = '--fsw-command',
+              placeholders: dict[str, str] = PLACEHOLDERS) -> FswCommand:
         """Check the template (empty, no executable, an unknown placeholder, ``{domain}`` missing where the node
-        needs it: :class:`FswCommandError`, one line) before any sample starts."""
+        needs it, ``{can_port}`` missing from a flight computer's on the bus: :class:`FswCommandError`, one line)
+        before any sample starts. ``placeholders``: the study's (:data:`PLACEHOLDERS`, or on the bus
+        :data:`BUS_PLACEHOLDERS`)."""
         if template is None or not template.strip():
             raise FswCommandError(f'{option}: the command template is empty; give the command that starts your node, '
                                   f'e.g. {option} \'my_node --ros-args --params-file {{params}}\'')
@@ -80,9 +87,9 @@ class FswCommand:
         except ValueError as exc:
             raise FswCommandError(f'{option} {template!r}: {exc}') from None
         for name in _PLACEHOLDER.findall(template):
-            if name not in PLACEHOLDERS:
+            if name not in placeholders:
                 raise FswCommandError(f'{option}: unknown placeholder {{{name}}} (placeholders: '
-                                      + ', '.join(f'{{{k}}} {v}' for k, v in PLACEHOLDERS.items()) + ')')
+                                      + ', '.join(f'{{{k}}} {v}' for k, v in placeholders.items()) + ')')
         exe = words[0]
         if _PLACEHOLDER.search(exe):
             raise FswCommandError(f'{option}: the executable {exe!r} is a placeholder; the command must start with '
@@ -92,7 +99,11 @@ class FswCommand:
                                   f'{VENV_BIN})')
         base = Path(exe).name
         clears = base == 'env' and any(w in ENV_CLEARING for w in words[1:])
-        if (base in NO_ENVIRONMENT or clears) and '{domain}' not in template:
+        if 'can_port' in placeholders and '{can_port}' not in template:
+            raise FswCommandError(f'{option}: each sample serves its bus on a port of its own, so the command must '
+                                  'take it: put {can_port} (and {can_host}) where your flight computer is told its '
+                                  'socketcand bus')
+        if 'domain' in placeholders and (base in NO_ENVIRONMENT or clears) and '{domain}' not in template:
             raise FswCommandError(f'{option}: {base}{" -i" if clears else ""} starts your node without this '
                                   "study's environment, so the command must pass the sample's ROS domain itself: "
                                   'put {domain} where it goes (e.g. ROS_DOMAIN_ID={domain})')

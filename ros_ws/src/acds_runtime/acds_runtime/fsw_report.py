@@ -40,12 +40,13 @@ def _numeric(v: Any) -> bool:
 
 
 def compared_keys(pairs: Sequence[tuple[int, dict[str, Any], dict[str, Any]]]) -> list[str]:
-    """The quantities of the pairs (module doc), in the summary's order."""
+    """The quantities of the pairs (module doc), in the summary's order: the keys both kinds of run have (a bus run's
+    own figures, such as its late steps, are no quantity of the built-in's)."""
     keys: dict[str, set[Any]] = {}
     for _i, ours, theirs in pairs:
         for side in (ours, theirs):
             for k, v in side.items():
-                if k not in NOT_COMPARED and 'wall' not in k and (v is None or _numeric(v)):
+                if k in ours and k in theirs and k not in NOT_COMPARED and 'wall' not in k and (v is None or _numeric(v)):
                     keys.setdefault(k, set()).add(v)
     numeric = {k for k, vs in keys.items() if any(_numeric(v) for v in vs)}
     return [k for k in keys if k in numeric and len(keys[k]) > 1]
@@ -117,7 +118,8 @@ def paired_table(stats: dict[str, Any]) -> list[str]:
 
 def timing(records: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """Over the samples' ``{'index', 'timing': {instance: report}}``: per instance, the median, 90th percentile and
-    maximum over the samples of each of p50/p99/max ms, the overruns, and the slowest samples (module doc)."""
+    maximum over the samples of each of p50/p99/max ms, the overruns, and the slowest samples (module doc). A
+    report's ``what`` (a bus study's figures: the cards' timing, not a node's step time) names the figure."""
     out: dict[str, Any] = {}
     by_node: dict[str, list[tuple[int, dict[str, Any]]]] = {}
     for rec in records:
@@ -126,6 +128,8 @@ def timing(records: Sequence[dict[str, Any]]) -> dict[str, Any]:
                 by_node.setdefault(inst, []).append((rec['index'], rep))
     for inst, reps in by_node.items():
         node: dict[str, Any] = {'samples': len(reps), 'steps': sum(r['steps'] for _i, r in reps)}
+        if 'what' in reps[0][1]:
+            node['what'] = reps[0][1]['what']
         for figure in ('p50_ms', 'p99_ms', 'max_ms'):
             vals = np.array([r[figure] for _i, r in reps], dtype=float)
             node[figure] = {'median': percentile(vals, 50), 'p90': percentile(vals, 90), 'max': float(vals.max())}
@@ -144,8 +148,10 @@ def timing_table(stats: dict[str, Any]) -> list[str]:
     """The study's timing as text lines."""
     lines = []
     for inst, node in stats.items():
-        lines.append(f'{inst}: step time over {node["samples"]} samples ({node["steps"]:,} steps; run monitor: last '
-                     'input of step k → its outputs, DDS delivery included; this machine\'s, not the data\'s)')
+        what = node.get('what', 'step time')
+        how = ('' if 'what' in node else 'run monitor: last input of step k → its outputs, DDS delivery included; ')
+        lines.append(f'{inst}: {what} over {node["samples"]} samples ({node["steps"]:,} steps; {how}this machine\'s, '
+                     'not the data\'s)')
         lines.append(f'  {"per sample":<12}{"median":>10}{"p90":>10}{"max":>10}   (over the samples)')
         for figure in ('p50_ms', 'p99_ms', 'max_ms'):
             f = node[figure]

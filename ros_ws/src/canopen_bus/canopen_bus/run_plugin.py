@@ -10,6 +10,12 @@ On the bus, the session starts the hub (:mod:`canopen_bus.hub`) on HOST:PORT, pr
 command that starts the OreSat C3 against it, and waits (at most the scenario's ``input_timeout``) for the
 flight computer's heartbeat; the cards join the hub as a client when the run starts. With ``--replay-can LOG``
 no bus is served: the recorded frames are applied at their recorded steps.
+
+A session's ``served`` (None, or a callable a caller sets, e.g. a study that starts the flight computer for each
+sample) is called with where the bus is, ``{'can_host', 'can_port'}``, once the hub listens and before the wait for
+the heartbeat; what it returns, when not None, is polled during that wait (None: the flight computer is still there;
+else one line why it is not, which fails the run at once). :func:`built_in` is the scenario flown by the built-in
+law in place of the flight computer (``montecarlo --paired``).
 """
 
 from __future__ import annotations
@@ -92,6 +98,8 @@ class BusSession:
     def __init__(self, scenario: Any, endpoint: tuple[str, Any] | None) -> None:
         self.scenario, self.endpoint = scenario, endpoint
         self.hub: Hub | None = None
+        #: Called with ``{'can_host', 'can_port'}`` once the hub listens, before the heartbeat wait (module doc).
+        self.served: Any = None
         self.listener: Any = None
         self.notifier: Any = None
 
@@ -103,6 +111,7 @@ class BusSession:
             return sc
         fc = sc.get('can_bus', 'flight_computer_node_id')
         heartbeat = threading.Event()
+        gone: Any = None
         cards = ', '.join(f'{m["name"]} 0x{m["node_id"]:02X}' for m in _devices(sc))
         host, port = self.endpoint
         if host == 'socketcan':
@@ -123,11 +132,19 @@ class BusSession:
             c3 = C3_COMMAND.format(host=host, port=self.hub.port, run_dir=Path(sc.get('can_bus', 'can_log')).parent,
                                    scenario=sc.name)
             print(f'[acds] start the flight computer against it, e.g. the OreSat C3: {c3}', file=sys.stderr, flush=True)
+            if self.served is not None:
+                gone = self.served({'can_host': host, 'can_port': str(self.hub.port)})
         timeout = sc.get('', 'input_timeout')
         print(f'[acds] waiting up to {timeout:g} s (input_timeout) for the flight computer\'s heartbeat '
               f'(node 0x{fc:02X}, COB-ID 0x{0x700 + fc:03X})', file=sys.stderr, flush=True)
         t0 = time.monotonic()
-        if not heartbeat.wait(timeout):
+        while gone is not None and not heartbeat.is_set() and time.monotonic() < t0 + timeout:
+            why = gone()
+            if why is not None:
+                self.__exit__(None, None, None)
+                raise RuntimeError(f'{why} before its heartbeat (node 0x{fc:02X}) came on {endpoint}')
+            heartbeat.wait(min(0.2, max(0.0, t0 + timeout - time.monotonic())))
+        if not heartbeat.wait(0 if gone is not None else timeout):
             clients = (', '.join(self.hub.clients()) or 'none') if self.hub is not None else 'not known (SocketCAN)'
             line = (f'no heartbeat from the flight computer (node 0x{fc:02X}, COB-ID 0x{0x700 + fc:03X}) within '
                     f'{timeout:g} s on {endpoint}; clients on the bus: {clients}')
@@ -177,6 +194,21 @@ class BusSession:
         for line in fc.lines(sc.control_period_s):
             print(f'[acds] {line}', file=sys.stderr, flush=True)
         (log.parent / 'flight_computer.json').write_text(json.dumps(fc.as_dict(), indent=1) + '\n')
+
+
+def built_in(raw: dict[str, Any]) -> dict[str, Any] | None:
+    """A bus scenario's merged YAML (a Monte Carlo sample's) flown by the built-in law instead of the flight computer
+    on the bus: the cards give way to what they stand between, the magnetometer (magnetometer_sim) and the law
+    (acds_controller) whose moment command the em_driver follows; every other key (the draws, the control period,
+    the dynamics) as it is. None for a scenario without the cards."""
+    nodes = list(raw.get('nodes') or [])
+    if 'canopen_cards' not in nodes:
+        return None
+    at = nodes.index('canopen_cards')
+    out = {k: v for k, v in raw.items() if k != 'can_bus'}
+    out['nodes'] = nodes[:at] + ['magnetometer_sim'] + nodes[at + 1:] + ['acds_controller']
+    out['em_driver'] = {**raw.get('em_driver', {}), 'command_source': 'acds_controller'}
+    return out
 
 
 def _devices(scenario: Any) -> list[dict[str, Any]]:

@@ -34,6 +34,9 @@ DEFAULT_SCENARIO = 'heao_b_acquisition'
 #:   from the options) and ``__exit__`` releases what it holds; ``paces`` (bool) says it paces the run to the wall
 #:   clock itself, so ``--rtf`` applies on the direct engine too. A ValueError from ``prepare`` is a usage error
 #:   (one line, exit 2); a RuntimeError from ``__enter__`` fails the run (one line, exit 1).
+#:   A session that serves something an outside program joins (a bus) calls its ``served`` attribute, when one is
+#:   set, with the placeholders of where it is (``montecarlo --fsw-command`` starts the flight computer then);
+#:   ``built_in(raw)`` (optional) gives a sample's merged YAML flown by the built-in law instead (``--paired``).
 RUN_PLUGINS = 'acds.run_options'
 
 
