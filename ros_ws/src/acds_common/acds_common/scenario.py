@@ -236,7 +236,7 @@ class Scenario:
         own = self.vehicle(vehicle) if vehicle else {}
         params: dict[str, Any] = {}
         _pkg, decl = declared_node(node)
-        for section in decl.sections:
+        for section in decl.sections_in(inst for inst, _n, _v in self.instances()):
             values = own.get(section, self.values.get(section))
             for name, f in SCHEMA[section].items():
                 params[f.param_name(section, name)] = values[name]
