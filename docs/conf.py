@@ -1,0 +1,29 @@
+"""Sphinx configuration of the ACDS emulator's site (built by ``./scripts/acds docs``; MyST Markdown pages)."""
+
+project = 'ACDS emulator'
+author = 'ACDS emulator team'
+copyright = 'ACDS emulator team'  # noqa: A001 (Sphinx's name)
+extensions = ['myst_parser', 'sphinx.ext.autodoc', 'acds_cli.docs.figures']
+source_suffix = {'.md': 'markdown'}
+myst_enable_extensions = ['colon_fence', 'dollarmath']
+myst_heading_anchors = 4
+exclude_patterns = ['_build']
+html_theme = 'alabaster'
+html_title = 'ACDS emulator'
+html_theme_options = {'description': 'Spacecraft magnetic attitude control on ROS 2 Jazzy', 'fixed_sidebar': True,
+                      'page_width': '1180px', 'sidebar_width': '240px'}
+html_show_sourcelink = False
+autodoc_member_order = 'bysource'
+autodoc_typehints = 'none'
+# Offline: no intersphinx, no remote images; every link inside the site is checked by the build (-W).
+
+
+def _verbatim(_app, _what, _name, _obj, _options, lines):
+    """The docstrings are plain text with Unicode maths (the house style), not reStructuredText: shown as written."""
+    if lines:
+        lines[:] = ['::', '', *(f'   {line}' for line in lines), '']
+
+
+def setup(app):
+    """Docstrings verbatim."""
+    app.connect('autodoc-process-docstring', _verbatim)
