@@ -39,7 +39,7 @@ def write_api(src: Path, out: Path) -> None:
              'Generated from the docstrings of every module that does not import rclpy: the models, laws and '
              'numerics of each package, and the shared mechanism (`acds_common`). The node modules '
              '(`*_node.py`) and the lockstep host are the thin ROS edge and are described in '
-             '[Architecture](../architecture.md).', '',
+             '[Architecture](../../architecture.md).', '',
              '```{toctree}', ':maxdepth: 1', '', *modules, '```', '']
     (out / 'index.md').write_text('\n'.join(index))
     for pkg, mods in modules.items():

@@ -44,8 +44,12 @@ def generate(src: Path, root: Path) -> None:
     write_api(root / 'ros_ws' / 'src', src / 'reference' / 'api')
 
 
-def build_site(out: Path, cache: Path, rerun: bool = False, quiet: bool = True) -> BuildResult:
-    """Build the HTML site into ``out/html`` (warnings are errors); figure runs cached in ``cache``."""
+def build_site(out: Path, cache: Path, rerun: bool = False, quiet: bool = True, docs: Path | None = None,
+               generated: bool = True) -> BuildResult:
+    """Build the HTML site into ``out/html`` (warnings are errors); figure runs cached in ``cache``.
+
+    ``docs``: the pages (default the checkout's ``docs/``); ``generated``: add the generated reference pages.
+    """
     import os
 
     from sphinx.cmd.build import build_main
@@ -56,8 +60,9 @@ def build_site(out: Path, cache: Path, rerun: bool = False, quiet: bool = True) 
     src, html = out / 'src', out / 'html'
     shutil.rmtree(src, ignore_errors=True)
     shutil.rmtree(out / 'doctrees', ignore_errors=True)  # every page read again (its figures come from the cache)
-    shutil.copytree(root / 'docs', src)
-    generate(src, root)
+    shutil.copytree(docs or root / 'docs', src)
+    if generated:
+        generate(src, root)
     cache.mkdir(parents=True, exist_ok=True)
     figures.FAILURES.clear()
     buf = io.StringIO()

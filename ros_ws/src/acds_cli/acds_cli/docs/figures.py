@@ -149,7 +149,8 @@ class AcdsRun(SphinxDirective):
         if self.options.get('report', 'yes') != 'no':
             report = _report((folder / 'stdout.txt').read_text())
             command = f'acds run {scenario}{" " + " ".join(args) if args else ""} --engine direct'
-            out.append(nodes.paragraph('', 'What ', nodes.literal(text=command), ' printed for this page:'))
+            out.append(nodes.paragraph('', '', nodes.Text('What '), nodes.literal(text=command),
+                                       nodes.Text(' printed for this page:')))
             out.append(nodes.literal_block(report, report, language='text'))
         return out
 
@@ -176,7 +177,8 @@ class AcdsOutput(SphinxDirective):
         text = (folder / 'stdout.txt').read_text().rstrip()
         command = 'acds ' + ' '.join(argv).replace('{out}', 'OUT')
         return [*_figures(self, folder, made, wanted, command),
-                nodes.paragraph('', 'What ', nodes.literal(text=command), ' printed when this page was built:'),
+                nodes.paragraph('', '', nodes.Text('What '), nodes.literal(text=command),
+                                nodes.Text(' printed when this page was built:')),
                 nodes.literal_block(text, text, language='text')]
 
 

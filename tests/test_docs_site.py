@@ -1,0 +1,122 @@
+"""The documentation site builds clean and every link and figure in it resolves, offline.
+
+``acds docs``'s builder (:func:`acds_cli.docs.build.build_site`) runs Sphinx with warnings as errors over
+``docs/`` plus the generated pages (CLI reference, every shipped scenario's node contracts, the pure cores'
+API); the mission pages' figure runs are cached by scenario digest in the workspace's ``runs/docs/figures``
+(outside git), so only the first build of a checkout runs them. Then every ``href`` and ``src`` of every page
+that is not an outside address must name a file of the site, and its ``#fragment`` an id in that file.
+"""
+
+from __future__ import annotations
+
+import html.parser
+import re
+import shutil
+from pathlib import Path
+from urllib.parse import unquote, urlsplit
+
+import pytest
+from acds_cli.docs.build import build_site, checkout_root
+from acds_cli.docs.contracts import page_name
+from acds_cli.verbs.contract import markdown, node_contract
+
+ROOT = Path(__file__).resolve().parents[1]
+CACHE = ROOT / 'runs' / 'docs' / 'figures'
+ISSUE_NUMBER = re.compile(r'\bissues? \d+', re.I)
+
+
+class _Refs(html.parser.HTMLParser):
+    def __init__(self) -> None:
+        super().__init__()
+        self.refs: list[tuple[str, str]] = []
+        self.ids: set[str] = set()
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        a = dict(attrs)
+        if a.get('id'):
+            self.ids.add(a['id'] or '')
+        for key in ('href', 'src'):
+            if a.get(key) and not (tag == 'link' and key == 'href' and a.get('rel') not in ('stylesheet', None)):
+                self.refs.append((tag, a[key] or ''))
+
+
+def _parse(path: Path) -> _Refs:
+    p = _Refs()
+    p.feed(path.read_text())
+    return p
+
+
+@pytest.fixture(scope='module')
+def site(tmp_path_factory):
+    out = tmp_path_factory.mktemp('docs')
+    result = build_site(out, CACHE)
+    assert result.ok, '\n'.join(result.problems or result.log.splitlines()[-30:])
+    return out
+
+
+def test_every_internal_link_and_figure_of_the_site_resolves(site):
+    html_dir = site / 'html'
+    pages = sorted(html_dir.rglob('*.html'))
+    assert len(pages) > 40
+    parsed = {p: _parse(p) for p in pages}
+    broken = []
+    images = 0
+    for page, refs in parsed.items():
+        for tag, ref in refs.refs:
+            parts = urlsplit(ref)
+            if parts.scheme or ref.startswith('mailto:'):
+                continue
+            target = (page.parent / unquote(parts.path)).resolve() if parts.path else page
+            if not target.is_file():
+                broken.append(f'{page.relative_to(html_dir)}: {tag} {ref} (no such file)')
+                continue
+            images += tag == 'img'
+            if parts.fragment and target.suffix == '.html':
+                ids = parsed[target].ids if target in parsed else _parse(target).ids
+                if unquote(parts.fragment) not in ids:
+                    broken.append(f'{page.relative_to(html_dir)}: {ref} (no id {parts.fragment} there)')
+    assert not broken, '\n'.join(broken[:30])
+    assert images >= 12  # the mission pages' figures from real runs
+
+
+def test_the_site_has_every_guide_and_reference_page(site):
+    html_dir = site / 'html'
+    for page in ('index', 'getting_started', 'flight_software', 'studies', 'record_replay', 'architecture',
+                 'conventions', 'measurements', 'missions/heao', 'missions/sss', 'missions/aap', 'missions/oresat',
+                 'missions/emff', 'reference/cli', 'contracts/index', 'reference/api/index'):
+        assert (html_dir / f'{page}.html').is_file(), page
+    cli = (html_dir / 'reference' / 'cli.html').read_text()
+    for verb in ('run', 'montecarlo', 'contract', 'docs', 'sweep', 'plot'):
+        assert f'id="acds-{verb}"' in cli, verb
+
+
+def test_the_sites_contract_pages_are_what_acds_contract_prints(site):
+    from acds_common.scenario import load_scenario
+
+    for name, node in (('oresat_detumble', 'acds_controller'), ('emff_testbed_hold', 'a/em_driver')):
+        sc = load_scenario(name)
+        page = site / 'src' / 'contracts' / name / f'{page_name(node)}.md'
+        assert page.read_text() == markdown(node_contract(sc, node))
+
+
+def test_no_issue_numbers_in_the_readme_or_the_pages(site):
+    readme = (ROOT / 'README.md').read_text()
+    assert len(readme.splitlines()) <= 150
+    found = [f'{p.relative_to(site)}: {m}' for p in [ROOT / 'README.md', *sorted((site / 'src').rglob('*.md'))]
+             for m in ISSUE_NUMBER.findall(p.read_text())]
+    assert not found, found[:20]
+
+
+def test_a_figure_whose_run_fails_fails_the_build_naming_the_scenario_and_the_error(tmp_path):
+    docs = tmp_path / 'docs'
+    docs.mkdir()
+    shutil.copy(checkout_root() / 'docs' / 'conf.py', docs)
+    bad = tmp_path / 'broken_detumble.yaml'
+    bad.write_text('extends: oresat_detumble\nname: broken_detumble\ncontroller:\n  max_moment_am2: -1\n')
+    (docs / 'index.md').write_text(f'# Broken\n\n```{{acds-run}} {bad}\n:figures: torque_rod_detumble\n```\n')
+    result = build_site(tmp_path / 'out', tmp_path / 'cache', docs=docs, generated=False)
+    assert not result.ok
+    line = next(p for p in result.problems if 'figure run of scenario' in p)
+    assert line.startswith(f'index: figure run of scenario {bad} failed: acds run {bad} ')
+    assert 'max_moment_am2' in line, line
+    assert not (tmp_path / 'out' / 'html' / '_images').exists() or not list((tmp_path / 'out' / 'html' / '_images').iterdir())
