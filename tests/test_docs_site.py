@@ -15,7 +15,6 @@ import shutil
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
-import pytest
 from acds_cli.docs.build import build_site, checkout_root
 from acds_cli.docs.contracts import page_name
 from acds_cli.verbs.contract import markdown, node_contract
@@ -46,16 +45,17 @@ def _parse(path: Path) -> _Refs:
     return p
 
 
-@pytest.fixture(scope='module')
-def site(tmp_path_factory):
-    out = tmp_path_factory.mktemp('docs')
-    result = build_site(out, CACHE)
+def test_the_site_builds_clean_with_every_page_link_and_figure(tmp_path):
+    """One build (a second worker would build it again), every check of the built site."""
+    result = build_site(tmp_path, CACHE)
     assert result.ok, '\n'.join(result.problems or result.log.splitlines()[-30:])
-    return out
+    _every_internal_link_and_figure_resolves(tmp_path / 'html')
+    _every_guide_and_reference_page(tmp_path / 'html')
+    _contract_pages_are_what_acds_contract_prints(tmp_path / 'src')
+    _no_issue_numbers(tmp_path)
 
 
-def test_every_internal_link_and_figure_of_the_site_resolves(site):
-    html_dir = site / 'html'
+def _every_internal_link_and_figure_resolves(html_dir: Path) -> None:
     pages = sorted(html_dir.rglob('*.html'))
     assert len(pages) > 40
     parsed = {p: _parse(p) for p in pages}
@@ -79,8 +79,7 @@ def test_every_internal_link_and_figure_of_the_site_resolves(site):
     assert images >= 12  # the mission pages' figures from real runs
 
 
-def test_the_site_has_every_guide_and_reference_page(site):
-    html_dir = site / 'html'
+def _every_guide_and_reference_page(html_dir: Path) -> None:
     for page in ('index', 'getting_started', 'flight_software', 'studies', 'record_replay', 'architecture',
                  'conventions', 'measurements', 'missions/heao', 'missions/sss', 'missions/aap', 'missions/oresat',
                  'missions/emff', 'reference/cli', 'contracts/index', 'reference/api/index'):
@@ -90,20 +89,19 @@ def test_the_site_has_every_guide_and_reference_page(site):
         assert f'id="acds-{verb}"' in cli, verb
 
 
-def test_the_sites_contract_pages_are_what_acds_contract_prints(site):
+def _contract_pages_are_what_acds_contract_prints(src: Path) -> None:
     from acds_common.scenario import load_scenario
 
     for name, node in (('oresat_detumble', 'acds_controller'), ('emff_testbed_hold', 'a/em_driver')):
-        sc = load_scenario(name)
-        page = site / 'src' / 'contracts' / name / f'{page_name(node)}.md'
-        assert page.read_text() == markdown(node_contract(sc, node))
+        page = src / 'contracts' / name / f'{page_name(node)}.md'
+        assert page.read_text() == markdown(node_contract(load_scenario(name), node))
 
 
-def test_no_issue_numbers_in_the_readme_or_the_pages(site):
+def _no_issue_numbers(site: Path) -> None:
     readme = (ROOT / 'README.md').read_text()
     assert len(readme.splitlines()) <= 150
-    found = [f'{p.relative_to(site)}: {m}' for p in [ROOT / 'README.md', *sorted((site / 'src').rglob('*.md'))]
-             for m in ISSUE_NUMBER.findall(p.read_text())]
+    pages = [*sorted((site / 'src').rglob('*.md')), *sorted((site / 'html').rglob('*.html'))]
+    found = [f'{p}: {m}' for p in [ROOT / 'README.md', *pages] for m in ISSUE_NUMBER.findall(p.read_text())]
     assert not found, found[:20]
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io
 import shutil
+import warnings
 from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
@@ -53,6 +54,7 @@ def build_site(out: Path, cache: Path, rerun: bool = False, quiet: bool = True, 
     import os
 
     from sphinx.cmd.build import build_main
+    from sphinx.deprecation import RemovedInSphinx11Warning
 
     from . import figures
 
@@ -69,7 +71,8 @@ def build_site(out: Path, cache: Path, rerun: bool = False, quiet: bool = True, 
     argv = ['-b', 'html', '-W', '--keep-going', '-q', '-d', str(out / 'doctrees'), '-D', f'acds_run_cache={cache}',
             '-D', f'acds_rerun={int(rerun)}', '-j', '1', str(src), str(html)]
     os.environ.setdefault('COLUMNS', '110')  # the CLI reference's usage lines wrap at a fixed width
-    with redirect_stdout(buf), redirect_stderr(buf):
+    with redirect_stdout(buf), redirect_stderr(buf), warnings.catch_warnings():
+        warnings.simplefilter('ignore', RemovedInSphinx11Warning)  # myst-parser's use of Sphinx API on its way out
         code = build_main(argv)
     log = buf.getvalue()
     problems = list(figures.FAILURES) + [ln for ln in log.splitlines() if 'WARNING' in ln or 'ERROR' in ln]

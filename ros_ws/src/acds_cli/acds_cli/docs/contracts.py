@@ -16,10 +16,9 @@ def page_name(node: str) -> str:
 
 def write_contracts(out: Path) -> list[str]:
     """Write ``out/<scenario>/<node>.md`` and one index per scenario and for all; the scenario names."""
-    from acds_common.parameters import node_parameters
     from acds_common.scenario import list_scenarios, load_scenario
 
-    from ..verbs.contract import markdown, node_contract
+    from ..verbs.contract import markdown, scenario_contracts
 
     out.mkdir(parents=True, exist_ok=True)
     names = []
@@ -31,13 +30,12 @@ def write_contracts(out: Path) -> list[str]:
              '| scenario | nodes | description |', '| --- | --- | --- |']
     toc = []
     for name, description in list_scenarios():
-        scenario = load_scenario(name)
-        steps = scenario.total_steps()
-        nodes = list(node_parameters(scenario, steps))
+        contracts = scenario_contracts(load_scenario(name))
+        nodes = list(contracts)
         folder = out / name
         folder.mkdir(exist_ok=True)
-        for node in nodes:
-            (folder / f'{page_name(node)}.md').write_text(markdown(node_contract(scenario, node, steps)))
+        for node, contract in contracts.items():
+            (folder / f'{page_name(node)}.md').write_text(markdown(contract))
         links = ', '.join(f'[{n}]({name}/{page_name(n)}.md)' for n in nodes)
         index.append(f'| `{name}` | {links} | {description.replace("|", "/")} |')
         toc += [f'{name}/{page_name(n)}' for n in nodes]

@@ -69,18 +69,32 @@ def _transfer(name: str, source: str, graph: Any, params: dict[str, dict[str, An
     return decl.transfer(normalize(graph.nodes[source].name, params[source]))
 
 
+def scenario_contracts(scenario: Any) -> dict[str, dict[str, Any]]:
+    """The contract of every node of ``scenario``'s graph, by instance (its parameters and graph built once)."""
+    from acds_common.graph import build_graph
+    from acds_common.parameters import node_parameters
+
+    params = node_parameters(scenario, scenario.total_steps())
+    graph = build_graph(params)
+    return {node: _node_contract(scenario, node, params, graph) for node in params}
+
+
 def node_contract(scenario: Any, node: str, steps: int | None = None) -> dict[str, Any]:
     """The contract of instance ``node`` in ``scenario``'s graph (UsageError when the graph has no such node)."""
-    from acds_common import topics
     from acds_common.graph import build_graph
-    from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS
-    from acds_common.parameters import node_param_specs, node_parameters, parameters_yaml
+    from acds_common.parameters import node_parameters
 
-    steps = steps if steps is not None else scenario.total_steps()
-    params = node_parameters(scenario, steps)
+    params = node_parameters(scenario, steps if steps is not None else scenario.total_steps())
     if node not in params:
         raise UsageError(f'--node {node}: scenario {scenario.name} runs no such node (its nodes: {", ".join(params)})')
-    graph = build_graph(params)
+    return _node_contract(scenario, node, params, build_graph(params))
+
+
+def _node_contract(scenario: Any, node: str, params: dict[str, dict[str, Any]], graph: Any) -> dict[str, Any]:
+    from acds_common import topics
+    from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS
+    from acds_common.parameters import node_param_specs, parameters_yaml
+
     spec = graph.nodes[node]
     dt = scenario.control_period_s
     lockstep_qos, command_qos = _qos(LOCKSTEP_QOS), _qos(COMMAND_QOS)
