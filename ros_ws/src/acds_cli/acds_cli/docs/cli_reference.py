@@ -4,6 +4,13 @@ from __future__ import annotations
 
 import argparse
 import inspect
+import re
+
+
+def _value(value: object, name: str) -> str:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return name
+    return f'{value:,}' if isinstance(value, int) else f'{value:g}'
 
 
 def _limits(action: argparse.Action) -> str:
@@ -15,7 +22,9 @@ def _limits(action: argparse.Action) -> str:
         return '—' if action.nargs == 0 else 'text'
     doc = inspect.getdoc(kind) if callable(kind) and getattr(kind, '__module__', '') != 'builtins' else None
     if doc:
-        return doc.splitlines()[0].replace('|', '\\|')
+        names = getattr(kind, '__globals__', {})  # a limit the docstring names by its constant: its value
+        return re.sub(r'\b[A-Z][A-Z0-9_]{2,}\b', lambda m: _value(names.get(m.group()), m.group()),
+                      doc.splitlines()[0]).replace('|', '\\|')
     return getattr(kind, '__name__', str(kind))
 
 
