@@ -15,6 +15,7 @@ import shutil
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
+import pytest
 from acds_cli.docs.build import build_site, checkout_root
 from acds_cli.docs.contracts import page_name
 from acds_cli.verbs.contract import markdown, node_contract
@@ -45,6 +46,7 @@ def _parse(path: Path) -> _Refs:
     return p
 
 
+@pytest.mark.timeout(900)  # a fresh checkout's first build makes the figure runs (cached after)
 def test_the_site_builds_clean_with_every_page_link_and_figure(tmp_path):
     """One build (a second worker would build it again), every check of the built site."""
     result = build_site(tmp_path, CACHE)

@@ -70,7 +70,7 @@ def _cached(name: str, digest: str, argv: list[str], cache: Path, rerun: bool, o
         lines = [ln for ln in (proc.stderr + proc.stdout).splitlines() if ln.strip()]
         shown = ' '.join(a.replace(str(tmp), 'OUT') for a in argv)
         raise RuntimeError(f'acds {shown} exited {proc.returncode}: {lines[-1] if lines else "no output"}')
-    (tmp / 'stdout.txt').write_text(proc.stdout)
+    (tmp / 'stdout.txt').write_text(proc.stdout.replace(str(tmp), 'OUT'))
     tmp.rename(folder)
     return folder
 
