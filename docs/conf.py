@@ -13,6 +13,9 @@ html_title = 'ACDS emulator'
 html_theme_options = {'description': 'Spacecraft magnetic attitude control on ROS 2 Jazzy', 'fixed_sidebar': True,
                       'page_width': '1180px', 'sidebar_width': '240px'}
 html_show_sourcelink = False
+html_static_path = ['_static']
+html_css_files = ['acds.css']
+smartquotes = False  # option names keep their two hyphens (--external)
 html_copy_source = False
 autodoc_member_order = 'bysource'
 autodoc_typehints = 'none'
