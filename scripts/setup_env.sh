@@ -14,7 +14,19 @@ for d in "$ROOT"/ros_ws/src/*/ "$ROOT"/examples/*/; do [[ -f "$d/setup.py" ]] &&
 
 want=$(cd "$ROOT" && cat requirements.lock ros_ws/src/*/setup.py ros_ws/src/*/setup.cfg examples/*/setup.py \
   examples/*/setup.cfg 2>/dev/null | sha256sum | cut -c1-16)
+# The SIMD pin where Python starts (docs/studies.md, "Running it on a cluster"): a .pth file in the environment's
+# site-packages imports acds_common, whose import sets acds_common.SIMD_PIN (unless the user set the variables),
+# before any program run with this Python (a Dask scheduler or worker, pytest, a node, a user's script) imports
+# numpy. Sorted after the editable installs' own .pth files (site reads them in name order), so it finds acds_common.
+pin_hook() {
+  local site hook line='import acds_common  # the SIMD pin before numpy (acds_common.pin_simd_kernels), by scripts/setup_env.sh'
+  for site in "$VENV"/lib/python3*/site-packages; do
+    hook="$site/acds_simd_pin.pth"
+    [[ -f "$hook" && "$(cat "$hook")" == "$line" ]] || echo "$line" > "$hook"
+  done
+}
 if [[ -f "$STAMP" && "$(cat "$STAMP")" == "$want" && -x "$VENV/bin/python" ]]; then
+  pin_hook
   exit 0
 fi
 echo "[setup] preparing $VENV (first run takes ~2 min)" >&2
@@ -25,6 +37,7 @@ fi
 args=()
 for p in "${PKGS[@]}"; do args+=(-e "$p"); done
 "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation --use-pep517 "${args[@]}" 2> >(grep -v "is ignored: it is neither" >&2)
+pin_hook
 # The direct engine's compiled kernels into numba's disk cache, so no first run compiles them (issue 24).
 echo "[setup] compiling the direct engine's kernels (numba, once per checkout: ~40 s)" >&2
 "$VENV/bin/python" -m acds_runtime.warm_kernels

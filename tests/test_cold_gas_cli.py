@@ -11,13 +11,14 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 BASE = (ROOT / 'scenarios' / 'heao_b_acquisition_cold_gas_short.yaml').read_text()
 # T4 (−y) turned to fire like T3: the six thrusters give no torque about −y.
-NO_MINUS_Y = ('  thruster_positions_m: [0, 0, 1.2, 0, 0, -1.2, -2.4, 0, -1.2, -2.4, 0, -1.2, -2.4, 1.2, 0, -2.4, -1.2, 0]\n'
+NO_MINUS_Y = ('  thruster_layout: custom\n'
+              '  thruster_positions_m: [0, 0, 1.2, 0, 0, -1.2, -2.4, 0, -1.2, -2.4, 0, -1.2, -2.4, 1.2, 0, -2.4, -1.2, 0]\n'
               '  thruster_directions: [0, -1, 0, 0, -1, 0, 0, 0, 1, 0, 0, 1, 0, -1, 0, 0, 1, 0]\n')
 
 
 @pytest.mark.parametrize(('section', 'message'), [
-    (NO_MINUS_Y, 'cold_gas.thruster_positions_m / thruster_directions: no thruster gives a torque about -y '
-                 '(T3 and T4 torque +y)'),
+    (NO_MINUS_Y, 'cold_gas.thruster_positions_m / thruster_directions: no thruster, nor couple of two, gives a '
+                 'torque about -y alone'),
     ('  isp_s: -65\n', 'cold_gas.isp_s: -65 is out of range [1, 400]'),
     ('  load_mass_lb: 0.1\n', 'cold_gas: tank pressure at t0 76 psia (0.1 lb in 7533 cm³ at 293 K) is not above the '
                               'regulator set point 150 psia'),
@@ -42,8 +43,8 @@ def test_trade_gas_budget_counts_acquisitions_at_the_90th_percentile():
     from acds_cli.verbs.sweep import gas_budget, gas_table
     from acds_common.scenario import load_scenario
 
-    rows = [{'index': i, 'gas_used_lb': 0.9 + 0.01 * i, 'gas_valve_cycles': 250 + i, 'gas_handover_min': 5.0 + i}
-            for i in range(11)] + [{'index': 11, 'error': 'exit 1'}]
+    rows = [{'index': i, 'gas_used_lb': 0.9 + 0.01 * i, 'gas_valve_cycles': 250 + i, 'gas_handover_min': 5.0 + i,
+             'acquisition_time_min': 5.0 + i} for i in range(11)] + [{'index': 11, 'error': 'exit 1'}]
     g = gas_budget(rows, load_scenario('heao_b_acquisition_cold_gas'))
     assert g['n'] == 11 and g['gas_used_lb']['p90'] == 0.99 and g['gas_used_lb']['worst_index'] == 10
     assert g['gas_handover_min']['median'] == 10.0 and g['gas_valve_cycles']['worst'] == 260
@@ -52,6 +53,10 @@ def test_trade_gas_budget_counts_acquisitions_at_the_90th_percentile():
     assert g['acquisitions_at_p90_regulated'] == 4  # (4.6 − 0.198) // 0.99
     text = gas_table({'scenario': 'heao_b_acquisition_cold_gas', 'cold_gas': g})
     assert 'the 4.60 lb load supports 4 acquisitions at the 90th percentile' in text
+    w = g['within_study_time']  # captured within §2's ten minutes: 5…10 min, 6 of 11; Wilson 95 % 0.280–0.787
+    assert (w['count'], w['n']) == (6, 11) and w['interval'] == pytest.approx([0.2801, 0.7873], abs=1e-4)
+    assert 'captured within the study\'s 10 min (§2): 6 of 11 (Wilson 95 % interval 28.0–78.7 %)' in text
+    assert 'three acquisitions: 3.00 lb at the worst draw (sample 10), 2.97 lb at the 90th percentile' in text
 
 
 def test_a_gas_acquisition_row_has_no_magnetics_only_phase():
@@ -92,8 +97,12 @@ def test_budget_json_goes_into_a_folder_it_creates(tmp_path):
     out = tmp_path / 'new' / 'budget.json'
     env = {'PATH': '/usr/bin:/bin', 'ROS_LOG_DIR': str(tmp_path / 'ros_log')}
     proc = subprocess.run([sys.executable, '-m', 'acds_cli', 'cold-gas-budget', 'heao_b_acquisition_cold_gas_short',
-                           '--acquisitions', '1', '--json', str(out)],
+                           '--runs', '2', '--acquisitions', '1', '--json', str(out)],
                           capture_output=True, text=True, cwd=ROOT, env=env, timeout=300, check=False)
     assert proc.returncode == 0 and 'Traceback' not in proc.stderr, proc.stderr
     import json
-    assert len(json.loads(out.read_text())['acquisitions']) == 1
+    budget = json.loads(out.read_text())
+    assert len(budget['draws']) == 2 and [len(c['acquisitions']) for c in budget['chains']] == [1, 1]
+    worst = max(budget['draws'], key=lambda d: d['gas_used_lb'])
+    assert budget['chains'][0]['sample'] == worst['index']  # the chain flies the draw that used the most gas
+    assert budget['chains'][0]['acquisitions'][0]['truth_digest'] == worst['truth_digest']

@@ -44,21 +44,43 @@ def test_a_scenario_runs_with_the_direct_engine_and_takes_overrides(tmp_path, ca
     assert (tmp_path / 'run' / 'bag').is_dir() and (tmp_path / 'run' / 'dump_moment.png').is_file()
 
 
-def test_the_seed_k_prints_one_warning_and_the_json_says_the_loop_cannot_converge(tmp_path, capsys) -> None:
-    """Issue 21: with the memo's literal k (dump_gain_rule stated, 4e6) the loop gains leave (0, 2): one warning
-    line, ``loop_converges: false``; the shipped rule (loop gain) converges and warns nothing."""
-    literal, shipped = tmp_path / 'literal.json', tmp_path / 'shipped.json'
+def test_the_seed_k_read_in_amp_turn_m2_prints_one_warning_and_in_amp_turn_ft2_converges(tmp_path, capsys) -> None:
+    """The memo's k = 4e6 read as its text says (M in amp-turn-m²) gives loop gains that leave (0, 2): one warning
+    line, ``loop_converges: false``. Read in amp-turn-ft² (the reading its stated range 3–5e6 fits; the literal
+    case the scenarios ship) it is 3.716e5 in amp-turn-m² units and converges, as does the shipped loop-gain rule."""
+    literal, ft2, shipped = tmp_path / 'literal.json', tmp_path / 'ft2.json', tmp_path / 'shipped.json'
     assert main(['dump-report', 'aap_workshop_pop_test', '--steps', str(STEPS), '--out', str(tmp_path / 'a'),
-                 '--set', 'controller.dump_gain_rule=stated', '--json', str(literal)]) == 0
+                 '--set', 'controller.dump_gain_rule=stated', '--set', 'controller.dump_gain_am2_per_ftlbs_t=4e6',
+                 '--json', str(literal)]) == 0
     text = capsys.readouterr().out
     assert sum('WARNING' in line and 'cannot converge' in line for line in text.splitlines()) == 1, text
     report = json.loads(literal.read_text())
     assert report['loop_converges'] is False and report['loop_gain_max'] > 2.0 and report['k_seed'] == 4e6
+    gain_m2 = report['loop_gain_max']
+    assert main(['dump-report', 'aap_workshop_pop_test', '--steps', str(STEPS), '--out', str(tmp_path / 'c'),
+                 '--set', 'controller.dump_gain_rule=stated', '--json', str(ft2)]) == 0
+    assert 'WARNING' not in capsys.readouterr().out
+    report = json.loads(ft2.read_text())
+    assert abs(report['k_seed'] - 4e6 * 0.3048 ** 2) < 1e-6 and report['loop_converges'] is True
+    assert abs(report['loop_gain_max'] - gain_m2 * 0.3048 ** 2) < 1e-9  # the gains scale with k
     assert main(['dump-report', 'aap_workshop_pop_test', '--steps', str(STEPS), '--out', str(tmp_path / 'b'),
                  '--json', str(shipped)]) == 0
     assert 'WARNING' not in capsys.readouterr().out
     report = json.loads(shipped.read_text())
     assert report['loop_converges'] is True and 0.0 < report['loop_gain_min'] < report['loop_gain_max'] < 2.0
+
+
+def test_day_only_dumping_prints_no_loop_gains(tmp_path, capsys) -> None:
+    """§10's day-only law flies a constant |M| in daylight, not the linear k·H_s × B loop: the report's k·W gains
+    column is empty ('—') and says why, instead of the day-and-night loop's gains."""
+    out = tmp_path / 'day.json'
+    assert main(['dump-report', 'aap_workshop_pop_test', '--steps', str(STEPS), '--out', str(tmp_path / 'run'),
+                 '--set', 'controller.dump_day_only=true', '--json', str(out)]) == 0
+    text = capsys.readouterr().out
+    report = json.loads(out.read_text())
+    assert report['profile'] == 'day_constant' and 'loop_gains' not in report['per_orbit'][0]
+    assert 'no k·W gains: that law is not the linear k·H_s × B loop' in text
+    assert report['loop_converges'] is None and 'WARNING' not in text
 
 
 @pytest.mark.slow

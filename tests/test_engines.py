@@ -14,7 +14,7 @@ from acds_common.scenario import load_scenario
 from acds_runtime.direct import DirectRun
 
 CASES = [('heao_b_acquisition_short', None), ('heao_b_point_unloading', 200), ('sss_a_pass_test', 600),
-         ('oresat_detumble', 200), ('aap_workshop_pop_test', None)]
+         ('oresat_detumble', 200), ('aap_workshop_pop_test', None), ('oresat_c3_detumble', 100)]
 
 
 def _comparable(summary: dict) -> dict:

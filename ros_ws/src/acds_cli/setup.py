@@ -8,7 +8,7 @@ setup(
     packages=find_packages(exclude=['test']),
     # The shipped scenarios (acds_cli/scenarios links to the checkout's scenarios/ folder, where users read
     # and copy them): package data, found through the acds.scenarios entry point below.
-    package_data={package_name: ['scenarios/*.yaml', 'scenarios/*.json']},
+    package_data={package_name: ['scenarios/*.yaml', 'scenarios/*.json', 'scenarios/*/*.yaml']},
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),

@@ -52,6 +52,14 @@ def positive_int(text: str) -> int:
     return value
 
 
+def non_negative_int(text: str) -> int:
+    """An integer ≥ 0 (counts that may be none)."""
+    value = _whole(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f'must be a whole number >= 0, got {text}')
+    return value
+
+
 #: ROS domain ids DDS can map to ports (Fast DDS refuses a domain above 232; rclpy one below 0).
 ROS_DOMAINS = range(0, 233)
 

@@ -13,14 +13,21 @@
    the scenario's control period and substeps, with the attitude kernel compiled as the direct engine runs it;
 5. dispersion: a fixed 20-sample study of the same scenario (case 1), samples 0–19 of seed
    :data:`DISPERSION_SEED` with the default draws, each run to acquisition capture on the direct engine,
-   one after the other in this process (``montecarlo --jobs 1``): samples/s.
+   one after the other in this process (``montecarlo --jobs 1``): samples/s;
+6. flight-software sample: ``oresat_detumble`` with ``acds_controller`` left to the example node
+   (``examples/oresat_detumble_fsw``), started and stopped per sample as ``montecarlo --external ... --fsw-command``
+   does (:func:`acds_runtime.flight_software.run_fsw_sample`): the overhead of a sample (wall seconds of a
+   :data:`FSW_SHORT_STEPS`-step sample, the median of :data:`FSW_REPEATS`: the graph's processes and the user's node
+   started, joined, stopped) and the steps/s of a :data:`FSW_STEPS`-step sample beyond it.
 
 The direct engine and the dispersion are also given per second of this process's CPU time: on a machine
 shared with other work, the wall rate measures the load as much as the code.
 
 ``--json`` prints one object with the keys ``graph_steps_per_s``, ``bare_chain_steps_per_s``,
 ``ratio``, ``hops``, ``deliveries_per_step``, ``direct_steps_per_s``, ``direct_steps_per_cpu_s``,
-``direct_kernel_load_s``, ``core_steps_per_s``, ``dispersion_samples_per_s``, ``dispersion_samples_per_cpu_s``, ``cores`` (and
+``direct_kernel_load_s``, ``core_steps_per_s``, ``dispersion_samples_per_s``, ``dispersion_samples_per_cpu_s``,
+``fsw_sample_overhead_s``,
+``fsw_sample_steps_per_s``, ``cores`` (and
 ``cpu_ms_per_step``, ``load_average``).
 """
 
@@ -43,6 +50,11 @@ SCENARIO = 'heao_b_acquisition'
 MIN_STEPS = 500
 #: The dispersion line's study: samples 0…DISPERSION_SAMPLES − 1 of this seed.
 DISPERSION_SEED, DISPERSION_SAMPLES = 1, 20
+#: The flight-software sample line: its scenario, node and command (docs/flight_software.md's), the short sample's steps, how
+#: many short samples (their median is the overhead), the long sample's steps.
+FSW_SCENARIO, FSW_NODE = 'oresat_detumble', 'acds_controller=oresat_detumble_fsw'
+FSW_COMMAND = 'oresat_detumble_fsw --ros-args --params-file {params}'
+FSW_SHORT_STEPS, FSW_REPEATS, FSW_STEPS = 2, 3, 2000
 
 
 def bench_steps(text: str) -> int:
@@ -160,6 +172,29 @@ def dispersion_rate() -> tuple[float, float]:
     return DISPERSION_SAMPLES / (time.perf_counter() - wall0), DISPERSION_SAMPLES / (time.process_time() - cpu0)
 
 
+def fsw_sample_cost() -> tuple[float, float]:
+    """Overhead (s) of a flight-software sample and its steps/s beyond it (module doc, item 6)."""
+    import statistics
+
+    from acds_common.scenario import load_scenario
+    from acds_runtime.flight_software import FswCommand, FswSpec, run_fsw_sample
+    from acds_runtime.sampling import Sampler
+
+    text = Sampler(load_scenario(FSW_SCENARIO), DISPERSION_SEED).draw(0).text
+    with tempfile.TemporaryDirectory(prefix='acds_bench_fsw_') as folder:
+        spec = FswSpec(FswCommand.parse(FSW_COMMAND), (FSW_NODE,), folder)
+
+        def wall(steps: int) -> float:
+            t0 = time.perf_counter()
+            summary = run_fsw_sample(spec, text, steps)
+            if 'error' in summary:
+                raise RuntimeError(f'flight-software sample benchmark: the sample failed: {summary["error"]}')
+            return time.perf_counter() - t0
+        overhead = statistics.median(wall(FSW_SHORT_STEPS) for _ in range(FSW_REPEATS))
+        long = wall(FSW_STEPS)
+    return overhead, (FSW_STEPS - FSW_SHORT_STEPS) / max(1e-9, long - overhead)
+
+
 def core_rate(steps: int) -> float:
     """Steps/s of the rigid body + environment kernel alone (the scenario's body, orbit, field, substeps)."""
     import numpy as np
@@ -186,13 +221,16 @@ def main(args: argparse.Namespace) -> int:
     direct, direct_cpu, kernel_load = direct_rate(max(args.steps, 5000))
     core = core_rate(max(args.steps, 5000))
     dispersion, dispersion_cpu = dispersion_rate()
+    fsw_overhead, fsw_rate = fsw_sample_cost()
     result = {'graph_steps_per_s': round(graph['steps_per_s'], 1), 'bare_chain_steps_per_s': round(bare, 1),
               'ratio': round(graph['steps_per_s'] / bare, 3), 'hops': graph['hops'],
               'deliveries_per_step': round(graph['deliveries_per_step'], 2),
               'direct_steps_per_s': round(direct, 1), 'direct_steps_per_cpu_s': round(direct_cpu, 1),
               'direct_kernel_load_s': round(kernel_load, 3),
               'core_steps_per_s': round(core, 1), 'dispersion_samples_per_s': round(dispersion, 3),
-              'dispersion_samples_per_cpu_s': round(dispersion_cpu, 3), 'cores': os.cpu_count(),
+              'dispersion_samples_per_cpu_s': round(dispersion_cpu, 3),
+              'fsw_sample_overhead_s': round(fsw_overhead, 3), 'fsw_sample_steps_per_s': round(fsw_rate, 1),
+              'cores': os.cpu_count(),
               'cpu_ms_per_step': {k: round(v, 3) for k, v in graph['cpu_ms_per_step'].items()},
               'load_average': [round(x, 2) for x in os.getloadavg()]}
     print(f'six-node graph ({SCENARIO}, recording on):    {graph["steps_per_s"]:10.1f} steps/s')
@@ -206,6 +244,8 @@ def main(args: argparse.Namespace) -> int:
     print(f'rigid body + environment kernel:                  {core:10.1f} steps/s')
     print(f'dispersion ({DISPERSION_SAMPLES} case-1 samples to capture, direct): {dispersion:10.3f} samples/s '
           f'({dispersion_cpu:.3f} per CPU s)')
+    print(f'flight-software sample ({FSW_SCENARIO}, the example node started per sample): {fsw_overhead:.2f} s '
+          f'overhead per sample (graph + node started, joined, stopped), then {fsw_rate:.1f} steps/s')
     print(f'machine: {os.cpu_count()} cores, load average {", ".join(f"{x:.2f}" for x in os.getloadavg())}')
     if args.json:
         print(json.dumps(result))

@@ -1,7 +1,8 @@
 """Shared pieces every ACDS node needs: units, topic names, scenario loading, the lockstep base.
 
 Importing it pins numpy's SIMD kernels (:func:`pin_simd_kernels`), so a scenario gives the same bits on every
-x86-64 machine, whatever its vector units.
+x86-64 machine, whatever its vector units. The project's environment imports it where Python starts, before any
+program run with it imports numpy: ``scripts/setup_env.sh`` installs ``acds_simd_pin.pth`` in its site-packages.
 """
 
 import os
@@ -20,8 +21,11 @@ def pin_simd_kernels() -> None:
     """Set :data:`SIMD_PIN` in this process's environment (and so its children's), unless the user set them.
 
     It must run before numpy is first imported (its kernels are chosen then): this package's import does it, and
-    every node, the launcher and the CLI import this package first. A process that imported numpy before
-    may compute other last bits on an AVX-512 machine: it gets a warning. Only on x86-64 with AVX2 and FMA (an
+    the environment's startup hook (``acds_simd_pin.pth``, module doc) imports this package in every Python process
+    the environment starts (a ``dask worker`` too, which imports numpy before any task runs). A process that imported
+    numpy before (one started with ``python -S``, which skips the hook) may compute other last bits on an
+    AVX-512 machine: it gets a warning, and the numeric-configuration check (:mod:`acds_common.numeric_config`)
+    refuses it as a Dask worker or a node. Only on x86-64 with AVX2 and FMA (an
     older or other CPU keeps its own kernels).
     """
     if platform.machine() not in ('x86_64', 'AMD64') or not _has_avx2_fma():

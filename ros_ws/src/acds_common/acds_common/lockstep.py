@@ -50,7 +50,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from acds_common import topics
+from acds_common import numeric_config, topics
 from acds_common.cdr import Codec, stamp_ns
 from acds_common.graph import (
     MONITOR_LAG,
@@ -733,12 +733,26 @@ def _die_with_launcher() -> bool:
     return os.getppid() == launcher
 
 
+def numeric_mismatch() -> str | None:
+    """How this node process's numeric configuration differs from the launcher's (:mod:`acds_common.numeric_config`,
+    passed in its environment), as the node's failure line; None when they agree or no launcher started it."""
+    expected = numeric_config.from_env()
+    if expected is None:
+        return None
+    mine = numeric_config.numeric_configuration()
+    diff = numeric_config.differences(expected, mine, 'the launcher')
+    if not diff:
+        return None
+    return f'numeric configuration on host {mine["host"]} differs from the launcher\'s: {"; ".join(diff)}'
+
+
 def run_node(name: str, args: list[str] | None = None) -> int:
     """Entry-point body of every node (``name``, as its package declares it): init, spin, report, shut down
     cleanly, end the process. The stepper is the one the node's declaration names for its parameters.
 
     The exit code (returned before ROS is up, the process's own once it is): 0 on completion or
-    SIGINT/SIGTERM/SIGHUP, 2 on a configuration error, 3 on a lockstep failure, 4 when the launcher that
+    SIGINT/SIGTERM/SIGHUP, 2 on a configuration error (a numeric configuration other than the launcher's among
+    them: :func:`numeric_mismatch`, checked before ROS starts), 3 on a lockstep failure, 4 when the launcher that
     started it had died before the node came up (once up, the kernel kills it with its launcher).
     Errors are one line on stderr, prefixed by the node name, without a traceback.
     """
@@ -746,6 +760,10 @@ def run_node(name: str, args: list[str] | None = None) -> int:
         print(f'[{name}] STOPPED: the launcher that started it (pid {os.environ[LAUNCHER_PID_ENV]}) has died',
               file=sys.stderr, flush=True)
         return EXIT_ORPHANED
+    mismatch = numeric_mismatch()
+    if mismatch is not None:
+        print(f'[{name}] CONFIGURATION ERROR: {mismatch}', file=sys.stderr, flush=True)
+        return EXIT_CONFIG
     os.environ.setdefault('ROS_LOG_DIR', os.path.join(os.environ.get('TMPDIR', '/tmp'), 'acds_ros_log'))
     try:
         rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
@@ -785,6 +803,8 @@ def run_node(name: str, args: list[str] | None = None) -> int:
     except (KeyboardInterrupt, ExternalShutdownException):
         code = EXIT_OK
     finally:
+        if node is not None:
+            node.stepper.close()
         release_node(executor, node)
     # Leave without the interpreter's finalization: it deletes the DDS participant, which then talks to peers
     # that are leaving too (stalls of 2 s measured there; the likely place of a >10 s exit hang seen in suite

@@ -92,6 +92,9 @@ WORLD: dict[str, dict[str, Field]] = {
                                   'nodes included)', 30.0, 's', TIME, lo=0.5, hi=3600.0),
         'external': Field('strs', 'nodes the user runs, "NODE" or "NODE=ROS_NODE_NAME" (issue 20; the launcher '
                           'starts the others and waits for these; acds run --external adds to them)', [], unique=True),
+        'fsw_command': Field('str', 'montecarlo: the command that starts the external node for each sample, with '
+                             'placeholders {domain}, {params}, {run_dir} (acds montecarlo --fsw-command gives the same)',
+                             ''),
     },
     'spacecraft': {
         'inertia': quantity('inertia [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (Table 4-1; products Ixy = ∫xy dm, '

@@ -64,5 +64,7 @@ COUPLING = {'g_per_am2': u.GAUSS_T, 't_per_am2': 1.0}
 TIME = {'s': 1.0, 'min': 60.0}
 MOMENT_OF_INERTIA = {**INERTIA, 'g_mm2': u.G_MM2_KG_M2}
 TORQUE = {'ft_lb': u.FT_LB_NM, 'nm': 1.0}
-#: The seed-000 dump gain k: amp-turn-m² per (ft-lb-sec · Wb/m²), or SI A·m²/(N·m·s·T) = 1/(s·T²).
-DUMP_GAIN = {'am2_per_ftlbs_t': u.dump_gain_seed_to_si(1.0), 'per_s_t2': 1.0}
+#: The seed-000 dump gain k: amp-turn-m² per (ft-lb-sec · Wb/m²), amp-turn-ft² per (ft-lb-sec · Wb/m²) (the
+#: reading of the memo's k that fits its stated range, acds_controller.cmg_dump), or SI A·m²/(N·m·s·T) = 1/(s·T²).
+DUMP_GAIN = {'am2_per_ftlbs_t': u.dump_gain_seed_to_si(1.0), 'aft2_per_ftlbs_t': u.dump_gain_seed_to_si(u.FOOT_M ** 2),
+             'per_s_t2': 1.0}

@@ -86,6 +86,10 @@ class Stepper:
         """Outputs of step 0 published before any stage fires (the time owner's initial truth)."""
         return {}
 
+    def close(self) -> None:
+        """Release what the stepper holds outside the process (a socket, an open log): the host calls it once when
+        the run ends, however it ends. Nothing by default."""
+
     def receive_command(self, text: str) -> None:
         """A live ground command (nodes that declare ``ground_commands`` override this)."""
         raise NotImplementedError(f'{self.node} takes no ground commands')

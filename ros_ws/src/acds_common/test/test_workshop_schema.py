@@ -12,7 +12,8 @@ from acds_common.units import FT_LB_S_NMS
 
 def test_workshop_scenarios_convert_the_seed_units() -> None:
     sc = load_scenario('aap_workshop_iop')
-    assert sc.get('controller', 'dump_gain') == pytest.approx(4e6 / FT_LB_S_NMS, rel=1e-15)
+    # the memo's k = 4e6 in the amp-turn-ft² reading: M in A·ft² (0.3048² A·m²) per ft-lb-sec per Wb/m²
+    assert sc.get('controller', 'dump_gain') == pytest.approx(4e6 * 0.3048 ** 2 / FT_LB_S_NMS, rel=1e-15)
     assert sc.get('controller', 'dump_bias_momentum') == pytest.approx([575 * FT_LB_S_NMS, 160 * FT_LB_S_NMS,
                                                                         -160 * FT_LB_S_NMS])
     assert sc.get('wheels', 'cmg_capacity') == pytest.approx(12000 * FT_LB_S_NMS)

@@ -28,9 +28,12 @@ orbit (T = 5,562.8 s) with B_0 = 0.26e-4 Wb/m², T·B_0² = 3.761e-6 T²·s, and
 0.36–1.45 as the dipole turns with the Earth (η_E), so with k_SI = 2.950e6 the gains k·W are 4.0–16.1: the
 loop diverges for the whole of the seed's range 3e6–5e6. The field magnitude is the seed's (its own M_m =
 12.5 H_b, which depends on W but not on k, is reproduced), and the sampling is its once per orbit; what
-does not fit is k by a factor ≈ 10: the largest gain reaches 2 at k = 4.97e5 in the seed's units. The seed's
-range 3–5 × 10⁶ is the converging range 3–5 × 10⁵ (or the seed's M was in amp-turn-ft², ×10.76). The
-Workshop computer therefore may derive k from the loop-gain condition (:func:`loop_gain_k_seed`).
+does not fit is k by a factor ≈ 10: the largest gain reaches 2 at k = 4.97e5 in the seed's units. A slip of
+ten does not fit the memo's whole range (5e5: gains up to 2.04, no convergence); read with M in amp-turn-ft²
+(÷ 10.764) the range 3–5e6 is 2.79–4.65e5, gains up to 1.14–1.89, all converging within a few orbits as the
+memo says: the scenarios' literal case is 4e6 amp-turn-ft² per ft-lb-sec per Wb/m² (the unit
+``aft2_per_ftlbs_t`` of ``controller.dump_gain``). The Workshop computer may instead derive k from the
+loop-gain condition (:func:`loop_gain_k_seed`).
 
 Variants of the k law flown in the seed: |M| limited to a fraction of the unconstrained maximum, direction
 kept (§9, :func:`limit_magnitude`), and day-only dumping at a constant |M| in the direction of k H_s × B (§10,

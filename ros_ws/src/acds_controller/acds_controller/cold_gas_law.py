@@ -16,6 +16,17 @@ period Δt:
   t + t_open − t_close (the valve delays), at least the minimum on-time and at most what fits in the frame
   (Δt − t_close). The subsystem's driver then sequences the pulses two valves at a time.
 
+**Defaults derived from the study's requirement** (seed 002 §2: "the cold gas system selected will permit sun
+acquisition within ten minutes"; capture = z within 10° and every rate ≤ 0.01 deg/s, as for the magnetic
+acquisition). The hand-over to the wheels waits for every |ω_i| ≤ the capture rate (``modes.gas_handover_rate``
+0.01 deg/s): the gas finishes the acquisition, instead of leaving the last few hundredths of a deg/s to the slow
+Mode 1B wheel loop. The law holds each rate within ±δ of its reference (a pulse nulls the error; the minimum
+impulse bit's rate step, at most 0.0023 deg/s on HEAO-B's roll axis with the platform layout, is under 2δ, so a
+pulse cannot overshoot through the band), and the reference K·θ falls as z closes on the sun: the hand-over needs
+K·θ + δ ≤ 0.01 deg/s. δ = half the hand-over rate (0.005 deg/s) splits that band evenly between the law's ripple
+and the reference still to decay; a wider δ leaves no room, a narrower one spends pulses holding rates the
+capture test does not ask for.
+
 I_ii is the diagonal of the inertia tensor: the products of HEAO-B (Ixz = 359 of Ixx = 1520 slug-ft²) make the
 axes couple; the next frame's rate error corrects what a pulse sized on the diagonal missed.
 """

@@ -6,13 +6,16 @@ moments and wheel torques). The gain is the continuous LQR K = R⁻¹BᵀP for t
 control is u = u_nom − K x, held over the control period (the review simulates the same linear
 feedback on the nonlinear and the linearised equations, slide 45).
 
-Weights (``LqrWeights``, dimensionless, every one > 0): the review penalises Δr, Δφ, Δψ, "all Euler
-angles and their derivatives" and "all electromagnets, all reaction wheels" separately (slide 44) but
-does not give its units, so the states and inputs are normalised by their natural scales first
-(Bryson's rule): each relative position by its nominal length d_i, split into its radial (along the
-nominal baseline, the review's Δr), tangential (in the spin plane, d·Δφ) and normal (along the spin
-axis, d·Δψ) parts; attitude errors by 1 rad; relative velocities by Ω d_i and body rates by Ω; coil
-moments by the vehicle's nominal |μ|; wheel torques by Ω |h_nom|. Q = diag(q/scale²), R = diag(r/scale²).
+Weights (``LqrWeights``, dimensionless, every one > 0): slide 44 chooses "relative state and control
+penalties: Δr: 10 : 5, Δφ: 10⁻¹⁵ : 3, Δψ: 1 : 1 — all Euler angles and their derivatives: 1 — all
+electromagnets, all reaction wheels: 1", read as (coordinate : its rate) for each relative coordinate:
+radial 10, radial rate 5, tangential 10⁻¹⁵, tangential rate 3, normal 1, normal rate 1, attitude and
+attitude rate 1, coils and wheels 1 (the defaults of ``emff_two_vehicle_lqr``). The review does not give
+its units, so the states and inputs are normalised by their natural scales first (Bryson's rule): each
+relative position by its nominal length d_i, split into its radial (along the nominal baseline, the
+review's Δr), tangential (in the spin plane, d·Δφ) and normal (along the spin axis, d·Δψ) parts, its
+relative velocity likewise by Ω d_i; attitude errors by 1 rad and body rates by Ω; coil moments by the
+vehicle's nominal |μ|; wheel torques by Ω |h_nom|. Q = diag(q/scale²), R = diag(r/scale²).
 
 State from the measurements at t (the array's nominal turns at Ω from its places at t = 0, body axes
 along the frame's): σ_i = R_z(Ωt)ᵀ r_i, u_i = R_z(Ωt)ᵀ v_i − Ω ẑ × σ_i, δθ_i the rotation vector of
@@ -41,6 +44,11 @@ from acds_controller.magnetic_laws import ControllerError, as_vector3, check_gai
 _Z = np.array([0.0, 0.0, 1.0])
 
 
+#: The weights, in ``LqrWeights`` order (scenario keys ``formation.lqr_<name>_weight``).
+WEIGHT_NAMES = ("radial", "tangential", "normal", "radial_rate", "tangential_rate", "normal_rate", "attitude",
+                "attitude_rate", "coil", "wheel")
+
+
 @dataclass(frozen=True)
 class LqrWeights:
     """Dimensionless LQR weights (module docstring); each must be > 0."""
@@ -48,13 +56,16 @@ class LqrWeights:
     radial: float = 1.0
     tangential: float = 1.0
     normal: float = 1.0
+    radial_rate: float = 1.0
+    tangential_rate: float = 1.0
+    normal_rate: float = 1.0
     attitude: float = 1.0
-    rate: float = 1.0
+    attitude_rate: float = 1.0
     coil: float = 1.0
     wheel: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in ("radial", "tangential", "normal", "attitude", "rate", "coil", "wheel"):
+        for name in WEIGHT_NAMES:
             value = getattr(self, name)
             if not (isinstance(value, int | float) and math.isfinite(value) and value > 0.0):
                 raise ControllerError(f"LQR weight {name} must be a positive number, got {value!r}")
@@ -106,12 +117,14 @@ class LqrFormationController:
             e_r = np.array([rho[0], rho[1], 0.0]) / max(math.hypot(rho[0], rho[1]), 1e-300)
             e_t = np.cross(_Z, e_r)
             block = (w.radial * np.outer(e_r, e_r) + w.tangential * np.outer(e_t, e_t) + w.normal * np.outer(_Z, _Z))
+            rates = (w.radial_rate * np.outer(e_r, e_r) + w.tangential_rate * np.outer(e_t, e_t)
+                     + w.normal_rate * np.outer(_Z, _Z))
             at = 3 * (i - 1)
             q[at:at + 3, at:at + 3] = block / d ** 2
             at_v = m + 3 * n + at
-            q[at_v:at_v + 3, at_v:at_v + 3] = w.rate * np.eye(3) / (omega * d) ** 2
+            q[at_v:at_v + 3, at_v:at_v + 3] = rates / (omega * d) ** 2
         q[m:m + 3 * n, m:m + 3 * n] = w.attitude * np.eye(3 * n)
-        q[2 * m + 3 * n:, 2 * m + 3 * n:] = w.rate * np.eye(3 * n) / omega ** 2
+        q[2 * m + 3 * n:, 2 * m + 3 * n:] = w.attitude_rate * np.eye(3 * n) / omega ** 2
         scales = []
         for k, v in enumerate(self.vehicles):
             scales += [float(np.linalg.norm(nom.dipoles_am2[k])) / math.sqrt(w.coil)] * v.coil_axes_body.shape[1]

@@ -15,11 +15,8 @@ import numpy as np
 from acds_common.validation import scenario_key
 
 from acds_controller.formation_controller_step import ArrayMemberStep, controlled_vehicle
-from acds_controller.formation_lqr import LqrFormationController, LqrWeights
+from acds_controller.formation_lqr import WEIGHT_NAMES, LqrFormationController, LqrWeights
 from acds_controller.magnetic_laws import ControllerError
-
-#: The ``formation`` keys of the weights, in ``LqrWeights`` order.
-WEIGHT_KEYS = ('radial', 'tangential', 'normal', 'attitude', 'rate', 'coil', 'wheel')
 
 
 def lqr_controller(formation: dict[str, Any], names: list[str], section: Any) -> LqrFormationController:
@@ -30,7 +27,7 @@ def lqr_controller(formation: dict[str, Any], names: list[str], section: Any) ->
         axes = section('wheels', v)['torque_axes']
         wheel_axes.append(np.array(axes, dtype=float).reshape(len(axes) // 3, 3).T)
     with scenario_key('formation', ControllerError):
-        weights = LqrWeights(*(formation[f'lqr_{k}_weight'] for k in WEIGHT_KEYS))
+        weights = LqrWeights(*(formation[f'lqr_{k}_weight'] for k in WEIGHT_NAMES))
         return LqrFormationController(
             [controlled_vehicle(v, section('spacecraft', v), section('vehicle', v)) for v in names], wheel_axes,
             places, formation['spin_rate'], weights)

@@ -56,10 +56,12 @@ SECTIONS: dict[str, dict[str, Field]] = {
         'dump_law': Field('str', 'Workshop dump law: khb (M = k H_s × B), khb_shifted (k (H_s − H_0) × B), '
                           'min_energy (eq. 3 on the predicted field), none (CMG hold only)', 'khb',
                           choices=('khb', 'khb_shifted', 'min_energy', 'none')),
-        'dump_gain': quantity('dump gain k (seed 000 §5: 4e6 amp-turn-m² per ft-lb-sec per Wb/m²)',
-                        u.dump_gain_seed_to_si(4e6), 'per_s_t2', DUMP_GAIN, lo=0.0, hi=1e12),
-        'dump_gain_rule': Field('str', 'k of the khb laws: stated (dump_gain_* as given; the seed\'s 4e6 gives loop gains '
-                                '4–16, which diverge) or loop_gain (k such that the largest eigenvalue of k·W over '
+        'dump_gain': quantity('dump gain k (seed 000 §5: "k = 4 × 10⁶", read as amp-turn-ft² per ft-lb-sec per Wb/m², '
+                              'the reading its stated range 3–5 × 10⁶ fits; 3.716e5 amp-turn-m² per ft-lb-sec per Wb/m²)',
+                              u.dump_gain_seed_to_si(4e6 * u.FOOT_M ** 2), 'per_s_t2', DUMP_GAIN, lo=0.0, hi=1e12),
+        'dump_gain_rule': Field('str', 'k of the khb laws: stated (dump_gain_* as given; the memo\'s 4e6 read in '
+                                'amp-turn-ft² gives loop gains 0.37–1.51, read in amp-turn-m² 4–16, which diverge) or '
+                                'loop_gain (k such that the largest eigenvalue of k·W over '
                                 'one day of predicted orbits is dump_loop_gain)', 'stated', choices=('stated', 'loop_gain')),
         'dump_loop_gain': Field('float', 'dump_gain_rule loop_gain: the largest loop gain (eigenvalue of k·W) over the '
                                 'predicted orbits; the loop converges for gains in (0, 2)', 1.0, lo=1e-6, hi=2.0),
@@ -82,7 +84,9 @@ SECTIONS: dict[str, dict[str, Field]] = {
         'cmg_hold_damping': Field('float', 'CMG attitude-hold damping ratio ζ (not in the seed)', 0.7,
                                   lo=0.0, hi=10.0),
         # ---- cold-gas acquisition law (seed 002 §3.1; acds_controller.cold_gas_law), with node cold_gas
-        'gas_rate_deadband': quantity('gas law: no pulse while every |ω_i − ω_ref,i| is within this', 0.02 * DEG,
+        'gas_rate_deadband': quantity('gas law: no pulse while every |ω_i − ω_ref,i| is within this (half the hand-over '
+                                      'rate, modes.gas_handover_rate: the rates settle inside the capture test; '
+                                      'acds_controller.cold_gas_law)', 0.005 * DEG,
                                       'rad_s', RATE, lo=0.0, hi=0.1),
         'gas_position_gain': quantity('gas law: rate reference per radian of sun-line error, ω_ref = −K·θ', 0.02,
                                       'per_s', {'per_s': 1.0}, lo=0.0, hi=10.0),

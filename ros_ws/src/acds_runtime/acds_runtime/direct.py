@@ -139,6 +139,8 @@ class DirectRun:
         try:
             final = self._loop(t0)
         finally:
+            for stepper in self.steppers.values():
+                stepper.close()
             if self.live_sink is not None:
                 self.live_sink.close()
             if self._writer is not None:

@@ -305,6 +305,23 @@ def pick_sample(rows: Sequence[dict[str, Any]], key: str, p: float) -> tuple[int
     return best['index'], target
 
 
+def wilson_interval(k: int, n: int, confidence_pct: float = CONFIDENCE_PCT) -> tuple[float, float] | None:
+    """Wilson score interval of a proportion k/n at ``confidence_pct`` (None without draws).
+
+    (p̂ + z²/2n ± z·√(p̂(1 − p̂)/n + z²/4n²)) / (1 + z²/n), z the two-sided normal quantile: unlike the normal
+    approximation it stays within [0, 1] and is not empty at k = n.
+    """
+    if n <= 0:
+        return None
+    from statistics import NormalDist
+
+    z = NormalDist().inv_cdf(0.5 + confidence_pct / 200.0)
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
 # ----------------------------------------------------------------------------------------- output
 
 

@@ -109,7 +109,8 @@ class Journal:
             if self.hashes.get(key) != rec['scenario_hash']:
                 raise JournalError(f'--resume {self.path.parent}: sample {rec["index"]}{" of " + key[0] if key[0] else ""}'
                                    ' was run from another scenario text than the one drawn now')
-            self.done.setdefault(key, rec['summary'])
+            if key not in self.done or 'error' in self.done[key]:  # a sample run again after it failed: its last run
+                self.done[key] = rec['summary']
 
     def _append(self, obj: Any) -> None:
         data = _line(obj)

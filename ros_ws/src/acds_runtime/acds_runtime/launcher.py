@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import IO, Any
 
 import yaml
-from acds_common import topics
+from acds_common import numeric_config, topics
 from acds_common.graph import Graph, build_graph, monitor_allows
 from acds_common.lockstep import (
     EXIT_LOCKSTEP,
@@ -218,7 +218,9 @@ class GraphRun:
         self.stop()
 
     def env(self) -> dict[str, str]:
-        """Environment of every child: isolated domain, localhost discovery, plain log lines."""
+        """Environment of every child: isolated domain, localhost discovery, plain log lines, and this process's
+        numeric configuration, which each node process compares with its own before it starts
+        (:func:`acds_common.lockstep.numeric_mismatch`)."""
         assert self.lease is not None
         env = dict(os.environ)
         env.update(
@@ -229,7 +231,7 @@ class GraphRun:
             RCUTILS_CONSOLE_OUTPUT_FORMAT='[{severity}] {message}',
             RCUTILS_COLORIZED_OUTPUT='0',
             PYTHONUNBUFFERED='1',
-            **{LAUNCHER_PID_ENV: str(os.getpid())},
+            **{LAUNCHER_PID_ENV: str(os.getpid()), numeric_config.ENV: numeric_config.to_env()},
         )
         env.pop('ROS_LOCALHOST_ONLY', None)
         if self.peers:  # discovery stays off the subnet but reaches these hosts (an external node's, issue 20 §6)

@@ -9,6 +9,12 @@ tasks rescheduled by the Dask scheduler on the workers left (up to
 failed, never dropped); a sample's run is deterministic (lockstep, seeded), so a retried sample
 gives the result a single machine gives.
 
+Every worker's numeric configuration (:mod:`acds_common.numeric_config`: Python, numpy and its SIMD dispatch,
+OpenBLAS, the kernel compiler, the project's sources) is the client's, checked before samples are sent
+(:func:`_check_workers`) and by each sample's task (:func:`run_checked_sample`, for a worker that joins later): a
+worker that differs is refused in one line (:func:`refusal`), or accepted with ``allow_mixed`` and named in the
+execution's notes, which the report's header carries.
+
 ``jobs=1`` without a scheduler runs the samples one after the other in this process (no Dask);
 ``jobs>1`` starts a ``LocalCluster`` of that many single-threaded worker processes; ``scheduler``
 ("tcp://host:8786") uses the user's cluster (``dask scheduler`` / ``dask worker``; docs: Studies).
@@ -17,6 +23,7 @@ gives the result a single machine gives.
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import shutil
 import sys
@@ -97,12 +104,44 @@ def clean_zombies(before: set[str] | None = None) -> tuple[list[str], list[Path]
     return removed, folders
 
 
-def _environment() -> dict[str, str]:
-    """What a worker's results depend on besides the scenario: the interpreter and numpy versions."""
-    import numpy
+def worker_configuration(dask_worker: Any = None) -> dict[str, str]:
+    """This Dask worker's numeric configuration (:func:`acds_common.numeric_config.numeric_configuration`) and its
+    address (``worker``); ``dask_worker``: the worker ``Client.run`` passes, else the one running this task."""
+    from acds_common.numeric_config import numeric_configuration
+    from dask.distributed import get_worker
+    return {**numeric_configuration(), 'worker': (dask_worker or get_worker()).address}
 
-    import acds_runtime
-    return {'python': sys.version.split()[0], 'numpy': numpy.__version__, 'acds_runtime': acds_runtime.__file__}
+
+def mixed_worker(config: dict[str, str], expected: dict[str, str]) -> tuple[str, str] | None:
+    """How a worker's ``config`` differs from the client's ``expected``: (the worker and its host, the differences),
+    or None when they agree."""
+    from acds_common.numeric_config import differences
+
+    diff = differences(expected, config, 'the client')
+    return (f'worker {config["worker"]} on host {config["host"]}', '; '.join(diff)) if diff else None
+
+
+def run_checked_sample(task: Callable[[str], dict[str, Any]], text: str, expected: dict[str, str], allow_mixed: bool
+                       ) -> tuple[dict[str, Any] | None, tuple[str, str] | None]:
+    """A Dask worker's task: (``task(text)``, the sample's summary, None) on a worker whose numeric configuration
+    is the client's ``expected``; on another (:func:`mixed_worker`), (None, how it differs) without running the
+    sample, or with ``allow_mixed`` (the summary, how it differs). Every worker is checked before the study sends
+    samples (:func:`_check_workers`); this covers a worker that joined after that."""
+    mixed = mixed_worker(worker_configuration(), expected)
+    if mixed is not None and not allow_mixed:
+        return None, mixed
+    return task(text), mixed
+
+
+#: What the user passes to accept workers whose numeric configuration differs from the client's.
+ALLOW_MIXED_OPTION = '--allow-mixed-workers'
+
+
+def refusal(mixed: tuple[str, str]) -> str:
+    """The study's one line refusing a mixed worker (:func:`mixed_worker`)."""
+    who, diff = mixed
+    return (f'{who} differs from the client: {diff}; refused, its samples could differ in the last bits (start the '
+            f'worker from the project\'s .venv, set up as here, or pass {ALLOW_MIXED_OPTION} to accept it)')
 
 
 def task_key(text: str, engine: str, steps: int | None) -> str:
@@ -112,22 +151,39 @@ def task_key(text: str, engine: str, steps: int | None) -> str:
 
 @dataclass
 class Execution:
-    """Where the samples ran: ``where`` ('in-process', 'local cluster', or the scheduler), worker count."""
+    """Where the samples ran: ``where`` ('in-process', 'local cluster', or the scheduler), worker count, and the
+    workers accepted with another numeric configuration (``allow_mixed``): {how they differ: [worker on host]}."""
 
     where: str
     workers: int
     threads: int
-    notes: list[str] = field(default_factory=list)
+    mixed_workers: dict[str, list[str]] = field(default_factory=dict)
+
+    @property
+    def notes(self) -> list[str]:
+        """One line per difference among the accepted mixed workers, naming them."""
+        return [f'accepted ({ALLOW_MIXED_OPTION}): {", ".join(who)} differ(s) from the client: {diff}'
+                for diff, who in self.mixed_workers.items()]
+
+    def mixed(self) -> str:
+        """What a report's header adds for the mixed workers the user accepted: '' when there were none."""
+        return ''.join(f'; MIXED WORKERS {note}' for note in self.notes)
 
 
 def run_samples(texts: Sequence[str], *, engine: str = 'direct', steps: int | None = None, jobs: int = 1,
                 scheduler: str | None = None, progress: bool = True,
-                on_result: Callable[[int, dict[str, Any]], None] | None = None
+                on_result: Callable[[int, dict[str, Any]], None] | None = None,
+                task: Callable[[str], dict[str, Any]] | None = None, allow_mixed: bool = False
                 ) -> tuple[list[dict[str, Any]], Execution]:
     """Run every sample; its summaries in the order of ``texts``, and where they ran.
 
+    ``task(text)`` runs one sample (default :func:`run_sample` on ``engine`` for ``steps``; a flight-software
+    study's, :func:`acds_runtime.flight_software.run_fsw_sample`, picklable for the Dask workers).
+
     ``on_result(i, summary)`` is called as each sample finishes (``i`` its position in ``texts``), in the
-    order they finish. On the graph engine, what killed studies left behind is removed first
+    order they finish. A Dask worker whose numeric configuration differs from this process's is refused
+    (:class:`MonteCarloError`, one line) before any of its results is passed on, or with ``allow_mixed`` accepted
+    and named in the execution's notes. On the graph engine, what killed studies left behind is removed first
     (:func:`clean_zombies`) and what this one's runs leave (an interrupted one too) at its end.
     """
     if engine not in ENGINES:
@@ -147,12 +203,12 @@ def run_samples(texts: Sequence[str], *, engine: str = 'direct', steps: int | No
         if scheduler is None and jobs == 1:
             results = []
             for i, text in enumerate(texts):
-                results.append(run_sample(text, engine, steps))
+                results.append(run_sample(text, engine, steps) if task is None else task(text))
                 bar.update(1)
                 if on_result is not None:
                     on_result(i, results[-1])
             return results, Execution('in-process', 1, 1)
-        return _run_dask(texts, engine, steps, jobs, scheduler, bar, on_result)
+        return _run_dask(texts, engine, steps, jobs, scheduler, bar, on_result, task, allow_mixed)
     finally:
         bar.close()
         if before is not None:  # the zombies of runs this study's end interrupted (live or young ones: next start)
@@ -258,44 +314,59 @@ def _connect(jobs: int, scheduler: str | None) -> tuple[Any, Any]:
     return client, None
 
 
-def _check_workers(client: Any, notes: list[str]) -> None:
-    """Every worker can import the project, and says which numpy it runs (a different one may round differently)."""
+def _check_workers(client: Any, expected: dict[str, str], allow_mixed: bool, accepted: dict[str, list[str]]) -> None:
+    """Every worker can import the project and has the client's numeric configuration ``expected``; one that
+    differs is refused (:func:`_mixed`)."""
     try:
-        envs = client.run(_environment)
+        configs = client.run(worker_configuration)
     except Exception as exc:  # noqa: BLE001 (whatever a worker raises, the message is the report)
         raise MonteCarloError(f'a Dask worker cannot run samples ({type(exc).__name__}: {exc}); every worker host '
                               'needs the project set up (./scripts/acds setup) and the worker started from its '
                               '.venv') from None
-    here = _environment()
-    for address, env in sorted(envs.items()):
-        if (env['python'], env['numpy']) != (here['python'], here['numpy']):
-            notes.append(f'worker {address} runs Python {env["python"]} / numpy {env["numpy"]}, this machine '
-                         f'{here["python"]} / {here["numpy"]}: results may differ in the last bits')
+    for _address, config in sorted(configs.items()):
+        _mixed(mixed_worker(config, expected), allow_mixed, accepted)
+
+
+def _mixed(mixed: tuple[str, str] | None, allow_mixed: bool, accepted: dict[str, list[str]]) -> None:
+    """Refuse a mixed worker (:class:`MonteCarloError`, :func:`refusal`), or with ``allow_mixed`` add it to
+    ``accepted`` (:attr:`Execution.mixed_workers`)."""
+    if mixed is None:
+        return
+    if not allow_mixed:
+        raise MonteCarloError(refusal(mixed))
+    who, diff = mixed
+    if who not in accepted.setdefault(diff, []):
+        accepted[diff].append(who)
 
 
 def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, scheduler: str | None, bar: Any,
-              on_result: Callable[[int, dict[str, Any]], None] | None) -> tuple[list[dict[str, Any]], Execution]:
+              on_result: Callable[[int, dict[str, Any]], None] | None,
+              task: Callable[[str], dict[str, Any]] | None, allow_mixed: bool) -> tuple[list[dict[str, Any]], Execution]:
+    from acds_common.numeric_config import numeric_configuration
     from dask.distributed import as_completed
 
     client, cluster = _connect(jobs, scheduler)
     try:
-        notes: list[str] = []
-        _check_workers(client, notes)
+        accepted: dict[str, list[str]] = {}
+        expected = numeric_configuration()
+        _check_workers(client, expected, allow_mixed, accepted)
         info = client.scheduler_info()['workers']
         execution = Execution(scheduler or 'local cluster', len(info), sum(w.get('nthreads', 1) for w in info.values()),
-                              notes)
+                              accepted)
+        work = task if task is not None else functools.partial(run_sample, engine=engine, steps=steps)
         indices: dict[str, list[int]] = {}
         for i, text in enumerate(texts):
-            indices.setdefault(task_key(text, engine, steps), []).append(i)
+            indices.setdefault(task_key(text, engine if task is None else repr(task), steps), []).append(i)
         pending = as_completed(loop=client.loop)
         for key, ix in indices.items():
-            pending.add(client.submit(run_sample, texts[ix[0]], engine, steps, key=key, pure=False))
+            pending.add(client.submit(run_checked_sample, work, texts[ix[0]], expected, allow_mixed, key=key, pure=False))
         results: list[dict[str, Any] | None] = [None] * len(texts)
         for future in pending:
             try:
-                summary = future.result()
+                summary, mixed = future.result()
             except Exception as exc:  # noqa: BLE001 (a sample that failed on every try is reported, not dropped)
-                summary = {'error': f'{type(exc).__name__}: {exc}'}
+                summary, mixed = {'error': f'{type(exc).__name__}: {exc}'}, None
+            _mixed(mixed, allow_mixed, accepted)  # a worker that joined after the check: refused before its result is kept
             ix = indices[future.key]
             future.release()  # read: the scheduler may forget it (a lost worker then recomputes nothing read)
             for i in ix:

@@ -46,13 +46,21 @@ ODOMETRY, B_BODY, WHEEL_H, WHEEL_HDOT, TORQUE_MAG, TORQUE_GG = (topics.resolve(t
     topics.TRUTH_TORQUE_GG))
 
 
+#: Entry-point group of summary modules other packages contribute (the same protocol as ``summaries/``' modules:
+#: ``applies(scenario)``, ``Accumulator(scenario)``, ``null_keys(summary)``, ``print_tables(summary)``), in name order
+#: after this package's own.
+SUMMARY_PLUGINS = 'acds.summaries'
+
+
 def _summary_modules() -> list:
     import importlib
     import pkgutil
+    from importlib.metadata import entry_points
 
     from . import summaries
-    return [importlib.import_module(f'{summaries.__name__}.{m.name}')
-            for m in sorted(pkgutil.iter_modules(summaries.__path__), key=lambda m: m.name)]
+    return ([importlib.import_module(f'{summaries.__name__}.{m.name}')
+             for m in sorted(pkgutil.iter_modules(summaries.__path__), key=lambda m: m.name)]
+            + [ep.load() for ep in sorted(entry_points(group=SUMMARY_PLUGINS), key=lambda e: e.name)])
 
 
 class DynamicsSummary:

@@ -15,7 +15,6 @@ test ends). Installed with ``acds_runtime``, the fixtures need no ``conftest.py`
 from __future__ import annotations
 
 import os
-import signal
 import subprocess
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -26,6 +25,7 @@ import pytest
 from acds_common import topics
 from acds_common.scenario import Scenario, load_scenario
 
+from .flight_software import external_env, stop_process
 from .launcher import GraphRun
 
 
@@ -149,17 +149,6 @@ def launch_graph(tmp_path: Path) -> Callable[..., Any]:
     return factory
 
 
-def external_env(graph: GraphRun, extra: dict[str, str] | None = None) -> dict[str, str]:
-    """The environment of a user's node joining ``graph``: its ROS domain, discovery on this host, nothing else of
-    this project (the node needs plain ROS 2 only)."""
-    assert graph.lease is not None, 'start the graph first'
-    env = {k: v for k, v in os.environ.items() if k not in ('FASTRTPS_DEFAULT_PROFILES_FILE', 'ACDS_LAUNCHER_PID')}
-    env.update(ROS_DOMAIN_ID=str(graph.lease.domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
-               ROS_LOG_DIR=str(graph.run_dir / 'ros_log'), PYTHONUNBUFFERED='1')
-    env.update(extra or {})
-    return env
-
-
 @contextmanager
 def external_node(graph: GraphRun, argv: Sequence[str], env: dict[str, str] | None = None,
                   stop_timeout_s: float = 10.0) -> Iterator[subprocess.Popen[str]]:
@@ -175,13 +164,7 @@ def external_node(graph: GraphRun, argv: Sequence[str], env: dict[str, str] | No
         try:
             yield proc
         finally:
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGINT)
-                try:
-                    proc.wait(timeout=stop_timeout_s)
-                except subprocess.TimeoutExpired:
-                    os.killpg(proc.pid, signal.SIGKILL)
-                    proc.wait()
+            stop_process(proc, stop_timeout_s)
 
 
 def read_until(proc: subprocess.Popen[str], wanted: Callable[[str], bool]) -> str:

@@ -42,7 +42,9 @@ SECTIONS: dict[str, dict[str, Field]] = {
                                     'this', 0.05 * DEG, 'rad_s', RATE, lo=0.0, hi=0.1),
         'gas_handover_cone': quantity('heao_cold_gas: gas sun acquisition → Mode 1B (wheels) when z is within this of '
                                       'the sun line …', 5 * DEG, 'rad', ANGLE, lo=0.0, hi=math.pi),
-        'gas_handover_rate': quantity('heao_cold_gas: … and every |ω_i| is below this', 0.05 * DEG, 'rad_s', RATE,
+        'gas_handover_rate': quantity('heao_cold_gas: … and every |ω_i| is below this (the capture test\'s rate, '
+                                      'capture_rate: the gas finishes the acquisition, seed 002 §2 "within ten minutes")',
+                                      0.01 * DEG, 'rad_s', RATE,
                                       lo=0.0, hi=0.1),
     },
     'sss': {

@@ -17,7 +17,7 @@ from acds_common import units as u
 from acds_common.frames import BODY
 from acds_common.graph import Input, Node, Output, Package, Ports, Stage, Topic
 from acds_common.schema import TIME, Field, quantity
-from acds_common.thrusters import HEAO_B_DIRECTIONS, HEAO_B_POSITIONS_M, MAX_CROSS_COUPLING
+from acds_common.thrusters import DEFAULT_LAYOUT, LAYOUT_CHOICES, LAYOUTS, MAX_CROSS_COUPLING
 
 from cold_gas.rcs import COLD_GAS_FAULTS
 
@@ -56,12 +56,18 @@ SECTIONS: dict[str, dict[str, Field]] = {
                                         0.05e-6, 'm2', {'mm2': 1e-6, 'm2': 1.0}, lo=0.0, hi=1e-3),
         'isolation_close_delay': quantity('latching isolation valve closing time after the pressure switch trips',
                                           0.030, 's', MS, lo=0.0, hi=1.0),
-        'thruster_positions': quantity('T1…T6 positions from the centre of mass, body axes, (x, y, z) each (default: '
-                                       'the HEAO-B arrangement of acds_common.thrusters)', list(HEAO_B_POSITIONS_M),
-                                       'm', {'m': 1.0, 'ft': u.FOOT_M}, length=18, lo=-100.0, hi=100.0),
-        'thruster_directions': Field('floats', 'T1…T6 thrust directions (force on the spacecraft), body axes',
-                                     list(HEAO_B_DIRECTIONS), length=18, lo=-1.0, hi=1.0),
-        'max_cross_coupling': Field('float', 'largest off-axis torque of a thruster, fraction of its on-axis torque',
+        'thruster_layout': Field('str', 'thruster layout (acds_common.thrusters): platform, §6.2.5\'s six thrusters on '
+                                 'the equipment platform\'s lower surface (default); outriggers, roll thrusters in the '
+                                 'centre-of-mass station; custom, thruster_positions and thruster_directions',
+                                 DEFAULT_LAYOUT, choices=LAYOUT_CHOICES),
+        'thruster_positions': quantity('T1…T6 positions from the centre of mass, body axes, (x, y, z) each (read with '
+                                       'thruster_layout custom; default: the platform layout\'s)',
+                                       list(LAYOUTS[DEFAULT_LAYOUT][0]), 'm', {'m': 1.0, 'ft': u.FOOT_M, 'in': u.INCH_M},
+                                       length=18, lo=-100.0, hi=100.0),
+        'thruster_directions': Field('floats', 'T1…T6 thrust directions (force on the spacecraft), body axes (read with '
+                                     'thruster_layout custom)', list(LAYOUTS[DEFAULT_LAYOUT][1]), length=18,
+                                     lo=-1.0, hi=1.0),
+        'max_cross_coupling': Field('float', 'largest off-axis torque of a thruster or couple, fraction of its on-axis torque',
                                     MAX_CROSS_COUPLING, lo=0.0, hi=1.0),
         'isolation_valves_open': Field('bool', 'both isolation valves open at t0', True),
         'bank_power': Field('bool', 'thruster bank power on at t0', True),

@@ -22,7 +22,7 @@ F = F_nom·p_feed/p_set (F = C_F·A_t·p_c with fixed C_F and throat). Flow ṁ 
 used is exactly Σ F·t_thrust/(Isp·g0). Isp = 65 s from Table 5-3 itself: every flight-qualified tank's impulse
 over its gas capacity is 64.9–65.3 lbf·s/lb (150/2.3, …, 2850/43.8), and §5.3's 300 lbf·s for the 4.6 lb system
 is the same 65 s. Check against physics: the ideal infinite-expansion limit for N₂ at 293 K is
-√(2γ/(γ−1)·R·T)/g0 = 79.5 s (:func:`ideal_vacuum_isp_limit_s`); 65 s is 82 % of it, the usual delivered
+√(2γ/(γ−1)·R·T)/g0 = 79.6 s (:func:`ideal_vacuum_isp_limit_s`); 65 s is 82 % of it, the usual delivered
 fraction of a small cold-gas nozzle.
 
 **Valves.** A command of τ s starting at s opens the valve at s + t_open and closes it at s + τ + t_close
@@ -30,8 +30,9 @@ fraction of a small cold-gas nozzle.
 is raised to it (the minimum impulse bit F·(t_min − t_open + t_close)); a command ends t_close before the
 frame's end, so every valve is shut at the frame boundary. At most ``max_open_valves`` valves are powered
 at once (Table 5-2: 12 W each, "maximum of two valves operating at one time"): the driver sequences the
-requests, longest first, each in the first free slot once the previous valve of that slot has shut; a request
-that no longer fits in the frame (shorter than t_min) waits for the controller's next frame.
+requests, longest first, each in the first free slot once the previous valve of that slot has shut (a couple
+takes two slots from the same instant); a request that no longer fits in the frame (shorter than t_min) waits
+for the controller's next frame.
 
 **Regulators, switch, relief.** A working regulator holds the manifold at its set point while the tank is
 above it (regulated flow on demand), and drops out below it (the manifold follows the tank: blowdown thrust).
@@ -55,7 +56,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from acds_common.commands import GasCommand
-from acds_common.thrusters import AXIS_NAMES, Arrangement
+from acds_common.thrusters import Arrangement
 from acds_common.units import LB_KG, LBF_N, PSI_PA, STANDARD_GRAVITY_M_S2
 
 #: Faults the cold-gas subsystem can be given (scenario ``cold_gas.fault``).
@@ -196,25 +197,28 @@ class FrameResult:
     events: tuple[str, ...]
 
 
-def schedule(requests_s: Sequence[tuple[int, float]], dt: float, cfg: RcsConfig) -> tuple[list[Pulse], list[int]]:
-    """Sequence (thruster, on-time) requests into valve pulses in one frame; return the pulses and the deferred.
+def schedule(requests_s: Sequence[tuple[tuple[int, ...], float]], dt: float,
+             cfg: RcsConfig) -> tuple[list[Pulse], list[int]]:
+    """Sequence (thrusters, on-time) requests into valve pulses in one frame; return the pulses and the deferred.
 
+    A request is one thruster or a couple (fired together, one slot each, from the moment both slots are free).
     Longest request first (ties: thruster order), each in the first of ``max_open_valves`` slots to come
-    free; a request is raised to the minimum on-time and cut so its valve shuts by the frame's end; one that
+    free; a request is raised to the minimum on-time and cut so its valves shut by the frame's end; one that
     no longer fits (shorter than the minimum on-time) is deferred.
     """
     t_od, t_cd, t_min = cfg.valve_open_delay_s, cfg.valve_close_delay_s, cfg.min_on_time_s
     slots = [0.0] * cfg.max_open_valves
     pulses, deferred = [], []
-    for j, tau in sorted(requests_s, key=lambda r: (-r[1], r[0])):
-        k = min(range(len(slots)), key=lambda i: (slots[i], i))
-        start = slots[k]
+    for group, tau in sorted(requests_s, key=lambda r: (-r[1], r[0])):
+        ks = sorted(range(len(slots)), key=lambda i: (slots[i], i))[:len(group)]
+        start = max(slots[k] for k in ks)
         on = min(max(tau, t_min), dt - t_cd - start)
-        if on < t_min:
-            deferred.append(j)
+        if len(ks) < len(group) or on < t_min:
+            deferred.extend(group)
             continue
-        pulses.append(Pulse(j, start, on, start + t_od, on - t_od + t_cd))
-        slots[k] = start + on + t_cd
+        for j, k in zip(group, ks, strict=True):
+            pulses.append(Pulse(j, start, on, start + t_od, on - t_od + t_cd))
+            slots[k] = start + on + t_cd
     return pulses, deferred
 
 
@@ -298,7 +302,7 @@ class ColdGasRcs:
                 if not math.isfinite(r):
                     raise ColdGasError(f'on-time request {list(request_xyz)} is not finite')
                 if r != 0.0:
-                    requests.append((arr.thruster_of_axis[2 * i + (0 if r > 0.0 else 1)], abs(r)))
+                    requests.append((arr.thrusters_of_axis[2 * i + (0 if r > 0.0 else 1)], abs(r)))
         pulses, deferred = schedule(requests, dt, cfg)
         command = [0.0] * 6
         thrust_time = [0.0] * 6
@@ -348,8 +352,8 @@ class ColdGasRcs:
             events.append(f'fault at t={t_s:.1f} s: regulator {f.index + 1} failed open')
         else:
             self.stuck[f.index] = 'open' if f.kind == 'thruster_stuck_open' else 'closed'
-            axis = AXIS_NAMES[self.cfg.arrangement.axis_of(f.index)]
-            events.append(f'fault at t={t_s:.1f} s: thruster T{f.index + 1} ({axis}) valve stuck {self.stuck[f.index]}')
+            axes = self.cfg.arrangement.axis_names(f.index)
+            events.append(f'fault at t={t_s:.1f} s: thruster T{f.index + 1} ({axes}) valve stuck {self.stuck[f.index]}')
 
     def _pneumatics(self, t_s: float, dt: float, used: float, events: list[str]) -> float:
         """Tank → regulators → manifold over the frame with the thrusters drawing ``used``; returns the vented kg."""

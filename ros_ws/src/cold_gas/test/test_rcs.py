@@ -7,7 +7,7 @@ import random
 
 import pytest
 from acds_common.commands import CommandError, GasCommand
-from acds_common.thrusters import HEAO_B_DIRECTIONS, HEAO_B_POSITIONS_M, ArrangementError, arrangement
+from acds_common.thrusters import LAYOUTS, ArrangementError, arrangement, arrangement_from_section
 from acds_common.units import LB_KG, LBF_N, PSI_PA, STANDARD_GRAVITY_M_S2
 from cold_gas.rcs import (
     ColdGasError,
@@ -18,7 +18,10 @@ from cold_gas.rcs import (
     table_5_3_isp_s,
 )
 
-ARR = arrangement(HEAO_B_POSITIONS_M, HEAO_B_DIRECTIONS)
+ARR = arrangement(*LAYOUTS['platform'])
+OUT = arrangement(*LAYOUTS['outriggers'])
+#: §6.2.5's platform: 95.94 in aft of the mass centre, the two places at ±40.25 in on the z centre line (m).
+AFT_M, SIDE_M = 95.94 * 0.0254, 40.25 * 0.0254
 DT = 0.5
 
 
@@ -29,41 +32,67 @@ def _gas(text: str) -> GasCommand:
 
 def rcs(**kw) -> ColdGasRcs:
     fault = kw.pop('fault', Fault())
-    return ColdGasRcs(RcsConfig(ARR, **kw), fault)
+    return ColdGasRcs(RcsConfig(kw.pop('arrangement', ARR), **kw), fault)
 
 
-def test_each_thruster_torques_one_signed_axis_with_the_stated_arm_and_force():
-    """One thruster per signed axis (six cannot make six pure couples, acds_common.thrusters): its torque lies along
-    its axis only, with arm 1.2 m (roll) or 2.4 m (pitch, yaw); its net force is its thrust along its direction."""
-    assert ARR.arm_m == (1.2, 1.2, 2.4, 2.4, 2.4, 2.4)
+def test_the_platform_layout_pitches_alone_and_rolls_and_yaws_with_couples():
+    """§6.2.5: all six on the platform's lower surface, 95.94 in aft of the mass centre: no single thruster can roll
+    (r × d along x needs r in the centre-of-mass station), so roll is a couple across the two places (arm 2 × 40.25
+    in, the mass centre's 0.7 in z offset cancels), yaw a couple on one tangential pair (2 × 95.94 in), pitch one
+    radial thruster (95.94 in). The mass centre's offsets couple pitch (0.5 in) and yaw (2 × 0.7 in) under 1 % into
+    roll. A roll couple's net force is zero."""
+    assert [len(g) for g in ARR.thrusters_of_axis] == [2, 2, 1, 1, 2, 2]
+    assert ARR.arm_m == pytest.approx((2 * SIDE_M, 2 * SIDE_M, AFT_M, AFT_M, 2 * AFT_M, 2 * AFT_M), rel=1e-12)
     for a in range(6):
-        j = ARR.thruster_of_axis[a]
         axis, sign = divmod(a, 2)
-        tau = ARR.torque_per_thrust[j]
+        tau = [sum(ARR.torque_per_thrust[j][i] for j in ARR.thrusters_of_axis[a]) for i in range(3)]
         assert tau[axis] == pytest.approx((1.0 if sign == 0 else -1.0) * ARR.arm_m[a])
+        assert max(abs(tau[i]) for i in range(3) if i != axis) <= 0.008 * ARR.arm_m[a]
+    assert sorted(j for g in ARR.thrusters_of_axis for j in g) == [0, 0, 1, 1, 2, 2, 3, 3, 4, 5]
+    assert ARR.axis_names(0) == '+x +z'
+    frame = rcs().frame(0.0, DT, (0.1, 0.0, 0.0))  # +x roll: both valves of the couple, from the same instant
+    i, j = ARR.thrusters_of_axis[0]
+    assert frame.thrust_time_s[i] == frame.thrust_time_s[j] > 0.0 and frame.max_open == 2
+    impulse = frame.thrust_n * frame.thrust_time_s[i]
+    assert frame.torque_nm == pytest.approx((2 * SIDE_M * impulse / DT, 0.0, 0.0), abs=1e-12)
+    assert frame.force_n == pytest.approx((0.0, 0.0, 0.0), abs=1e-15)
+
+
+def test_the_outrigger_layout_gives_each_axis_one_thruster_with_the_stated_arm_and_force():
+    """The named alternative: one thruster per signed axis, arm 1.2 m (roll) or 2.4 m (pitch, yaw); its net force is
+    its thrust along its direction; chosen by cold_gas.thruster_layout."""
+    assert OUT.arm_m == (1.2, 1.2, 2.4, 2.4, 2.4, 2.4)
+    for a in range(6):
+        (j,) = OUT.thrusters_of_axis[a]
+        axis, sign = divmod(a, 2)
+        tau = OUT.torque_per_thrust[j]
+        assert tau[axis] == pytest.approx((1.0 if sign == 0 else -1.0) * OUT.arm_m[a])
         assert all(tau[i] == 0.0 for i in range(3) if i != axis)
-    for axis in range(3):  # fired together, the two thrusters of an axis: no net torque about it
-        plus, minus = (ARR.thruster_of_axis[2 * axis + s] for s in (0, 1))
-        assert ARR.torque_per_thrust[plus][axis] + ARR.torque_per_thrust[minus][axis] == pytest.approx(0.0)
-    sys_ = rcs()
-    frame = sys_.frame(0.0, DT, (0.1, 0.0, 0.0))  # +x roll
-    j = ARR.thruster_of_axis[0]
+    frame = rcs(arrangement=OUT).frame(0.0, DT, (0.1, 0.0, 0.0))  # +x roll
+    (j,) = OUT.thrusters_of_axis[0]
     impulse = frame.thrust_n * frame.thrust_time_s[j]
     assert frame.torque_nm == pytest.approx((1.2 * impulse / DT, 0.0, 0.0), abs=1e-15)
-    assert frame.force_n == pytest.approx(tuple(d * impulse / DT for d in ARR.force_per_thrust[j]), abs=1e-15)
+    assert frame.force_n == pytest.approx(tuple(d * impulse / DT for d in OUT.force_per_thrust[j]), abs=1e-15)
+    section = {'thruster_layout': 'outriggers', 'max_cross_coupling': 0.05,
+               'thruster_positions': LAYOUTS['platform'][0], 'thruster_directions': LAYOUTS['platform'][1]}
+    assert arrangement_from_section(section) == OUT
+    with pytest.raises(ArrangementError, match='read only with thruster_layout: custom'):
+        arrangement_from_section({**section, 'thruster_positions': LAYOUTS['outriggers'][0]})
 
 
 def test_an_arrangement_without_a_torque_about_an_axis_is_refused_naming_it():
-    positions = list(HEAO_B_POSITIONS_M)
-    directions = list(HEAO_B_DIRECTIONS)
+    positions, directions = list(LAYOUTS['outriggers'][0]), list(LAYOUTS['outriggers'][1])
     directions[9:12] = [0.0, 0.0, 1.0]  # T4 turned to fire like T3: +y twice, −y never
     positions[9:12] = [-2.4, 0.0, -1.2]
-    with pytest.raises(ArrangementError, match=r'no thruster gives a torque about -y \(T3 and T4 torque \+y\)'):
+    with pytest.raises(ArrangementError, match=r'no thruster, nor couple of two, gives a torque about -y alone'):
         arrangement(positions, directions)
-    directions = list(HEAO_B_DIRECTIONS)
-    positions = list(HEAO_B_POSITIONS_M)
+    positions, directions = list(LAYOUTS['outriggers'][0]), list(LAYOUTS['outriggers'][1])
     positions[0:3] = [0.5, 0.0, 1.2]  # the +x thruster off the centre-of-mass station: yaw coupling 42 %
-    with pytest.raises(ArrangementError, match='T1: .* is not about one axis'):
+    with pytest.raises(ArrangementError, match=r'about \+x alone .*T1 torque \[1.2, 0.0, -0.5\]'):
+        arrangement(positions, directions)
+    positions, directions = list(LAYOUTS['platform'][0]), list(LAYOUTS['platform'][1])
+    directions[12:15] = [0.0, 1.0, 0.0]  # T5 turned tangential: pitch +y lost
+    with pytest.raises(ArrangementError, match=r'about \+y alone'):
         arrangement(positions, directions)
 
 
@@ -88,7 +117,7 @@ def test_minimum_impulse_bit_is_honoured():
     cfg = RcsConfig(ARR)
     sys_ = ColdGasRcs(cfg)
     frame = sys_.frame(0.0, DT, (0.0, 0.001, 0.0))  # 1 ms asked: raised to the 20 ms minimum on-time
-    j = ARR.thruster_of_axis[2]
+    (j,) = ARR.thrusters_of_axis[2]
     assert frame.command_s[j] == cfg.min_on_time_s
     assert frame.thrust_time_s[j] == pytest.approx(0.020 - 0.005 + 0.003)
     assert frame.thrust_n * frame.thrust_time_s[j] == pytest.approx(cfg.minimum_impulse_bit_ns)
@@ -97,17 +126,28 @@ def test_minimum_impulse_bit_is_honoured():
 
 
 def test_at_most_two_valves_open_and_the_third_waits_its_turn():
-    sys_ = rcs()
+    sys_ = rcs(arrangement=OUT)
     frame = sys_.frame(0.0, DT, (0.3, -0.2, 0.1))
     assert frame.max_open == 2
     by_thruster = {p.thruster: p for p in frame.pulses}
     assert len(by_thruster) == 3
-    third = by_thruster[ARR.thruster_of_axis[4]]  # the shortest (+z, 0.1 s) goes when the −y valve has shut
-    second = by_thruster[ARR.thruster_of_axis[3]]
+    third = by_thruster[OUT.thrusters_of_axis[4][0]]  # the shortest (+z, 0.1 s) goes when the −y valve has shut
+    second = by_thruster[OUT.thrusters_of_axis[3][0]]
     assert third.command_start_s == pytest.approx(second.command_s + 0.003)
     frame = sys_.frame(DT, DT, (0.5, 0.5, 0.5))  # three full-frame requests: two fly, the third is deferred
-    assert frame.max_open == 2 and len(frame.pulses) == 2 and frame.deferred == (ARR.thruster_of_axis[4],)
+    assert frame.max_open == 2 and len(frame.pulses) == 2 and frame.deferred == OUT.thrusters_of_axis[4]
     assert all(p.command_start_s + p.command_s + 0.003 <= DT + 1e-12 for p in frame.pulses)
+
+
+def test_a_couple_opens_both_valves_together_and_a_single_waits_for_one():
+    """Platform layout: roll (a couple, 0.3 s) takes both valves from t = 0; pitch (one thruster, 0.25 s) starts when
+    they shut, cut to the frame; yaw (a couple) no longer fits and waits for the next frame, both its thrusters."""
+    frame = rcs().frame(0.0, DT, (0.3, 0.25, -0.1))
+    starts = {p.thruster: p.command_start_s for p in frame.pulses}
+    i, j = ARR.thrusters_of_axis[0]
+    (k,) = ARR.thrusters_of_axis[2]
+    assert starts[i] == starts[j] == 0.0 and starts[k] == pytest.approx(0.3 + 0.003)
+    assert frame.max_open == 2 and sorted(frame.deferred) == sorted(ARR.thrusters_of_axis[5])
 
 
 def test_blowdown_is_isothermal_and_the_regulator_drops_out_below_its_set_point():
@@ -157,14 +197,14 @@ def test_the_switch_acts_below_the_relief_valve():
 
 
 def test_stuck_thruster_valves():
-    sys_ = rcs(fault=Fault('thruster_stuck_closed', ARR.thruster_of_axis[2], 0.0))
+    (j,) = ARR.thrusters_of_axis[2]
+    sys_ = rcs(fault=Fault('thruster_stuck_closed', j, 0.0))
     frame = sys_.frame(0.0, DT, (0.0, 0.2, 0.0))
-    j = ARR.thruster_of_axis[2]
     assert frame.command_s[j] > 0.0 and frame.thrust_time_s[j] == 0.0 and frame.torque_nm == (0.0, 0.0, 0.0)
-    sys_ = rcs(fault=Fault('thruster_stuck_open', ARR.thruster_of_axis[5], 0.0))
+    (j,) = ARR.thrusters_of_axis[3]
+    sys_ = rcs(fault=Fault('thruster_stuck_open', j, 0.0))
     frame = sys_.frame(0.0, DT, (0.0, 0.0, 0.0))
-    j = ARR.thruster_of_axis[5]
-    assert frame.thrust_time_s[j] == DT and frame.torque_nm[2] == pytest.approx(-2.4 * 0.5 * LBF_N)
+    assert frame.thrust_time_s[j] == DT and frame.torque_nm[1] == pytest.approx(-AFT_M * 0.5 * LBF_N)
     assert not sys_.switch_actuated  # the regulator holds the feed: the switch does not see a stuck thruster
     assert sys_.apply(_gas('isolation 1 close'))[0] and sys_.apply(_gas('isolation 2 close'))[0]
     for k in range(1, 40):
@@ -174,10 +214,10 @@ def test_stuck_thruster_valves():
 
 def test_isp_65_s_is_table_5_3():
     """Every Table 5-3 tank's impulse over its capacity is 65 s (±0.3); §5.3's 300 lbf·s for the 4.6 lb system too;
-    below the ideal infinite-expansion limit of N₂ at 293 K (79.5 s)."""
+    below the ideal infinite-expansion limit of N₂ at 293 K (79.6 s)."""
     assert all(abs(isp - 65.0) <= 0.3 for isp in table_5_3_isp_s())
     assert 300.0 / 4.6 == pytest.approx(65.2, abs=0.1)
-    assert ideal_vacuum_isp_limit_s(293.0) == pytest.approx(79.5, abs=0.1)
+    assert ideal_vacuum_isp_limit_s(293.0) == pytest.approx(79.56, abs=0.005)
     sys_ = rcs()
     sys_.frame(0.0, DT, (0.47, 0.0, 0.0))
     total = sys_.cfg.load_mass_kg * 65.0 * STANDARD_GRAVITY_M_S2 / LBF_N

@@ -127,7 +127,10 @@ SECTIONS: dict[str, dict[str, Field]] = {
            for name, what in (('radial', 'the relative positions along the nominal baselines (Δr)'),
                               ('tangential', 'the relative positions across them in the spin plane (d·Δφ)'),
                               ('normal', 'the relative positions along the spin axis (d·Δψ)'),
-                              ('attitude', 'the attitude errors'), ('rate', 'the relative velocities and body rates'),
+                              ('radial_rate', 'the relative velocities along the baselines (Δṙ)'),
+                              ('tangential_rate', 'the relative velocities across them in the spin plane (d·Δφ̇)'),
+                              ('normal_rate', 'the relative velocities along the spin axis (d·Δψ̇)'),
+                              ('attitude', 'the attitude errors'), ('attitude_rate', 'the body rates'),
                               ('coil', 'the coil moments'), ('wheel', 'the wheel torques'))},
         'airtrack_separation': quantity('airtrack laws: the commanded separation of the slider from the '
                                         'electromagnet (the step\'s target)', 0.5, 'm', LENGTH, lo=1e-3, hi=100.0),

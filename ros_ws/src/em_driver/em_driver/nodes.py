@@ -19,7 +19,8 @@ VECTOR3 = 'geometry_msgs/msg/Vector3Stamped'
 SECTIONS: dict[str, dict[str, Field]] = {
     'em_driver': {
         'command_source': Field('str', 'node whose moment commands drive the coils', 'acds_controller',
-                                choices=('acds_controller', 'ascs_mode_manager', 'formation_controller')),
+                                choices=('acds_controller', 'ascs_mode_manager', 'formation_controller',
+                                         'canopen_cards')),
         'driver_kind': Field('str', 'coil hardware: electromagnet (HEAO/SSS coils, drive_types and coil_* keys) '
                              'or torque_rod (CubeSat rods of seed 003 from torque_rod_design, PWM from supply_v)',
                              'electromagnet', choices=('electromagnet', 'torque_rod')),

@@ -19,6 +19,23 @@ import yaml
 from ..arguments import UsageError
 from .run import DEFAULT_SCENARIO
 
+#: Entry-point group of contract plug-ins: the side of a node's contract a package adds beyond its topics (a bus, a
+#: device). Each entry names a module with
+#:   ``resolve(scenario, name)``: None, or (graph node, detail) when ``--node name`` is its node or a part of it (a
+#:   device the node serves: detail names it, '' for the whole node);
+#:   ``extend(scenario, contract, detail)``: adds its keys to the contract (YAML shows them as they are);
+#:   ``markdown(contract)``: its Markdown lines, after the contract's own;
+#:   ``FORMATS`` {name: help} and ``write(fmt, scenario, detail)``: the text of a format of its own (ValueError: one
+#:   line, a usage error).
+CONTRACT_PLUGINS = 'acds.contract'
+
+
+def contract_plugins() -> list:
+    """The modules the entry-point group :data:`CONTRACT_PLUGINS` names, in name order."""
+    from importlib.metadata import entry_points
+
+    return [ep.load() for ep in sorted(entry_points(group=CONTRACT_PLUGINS), key=lambda e: e.name)]
+
 
 def _qos(profile: Any) -> dict[str, Any]:
     return {'reliability': profile.reliability.name.lower(), 'durability': profile.durability.name.lower(),
@@ -231,11 +248,28 @@ def markdown(c: dict[str, Any]) -> str:
 def _contract(args: argparse.Namespace) -> int:
     from acds_common.scenario import load_scenario
 
-    c = node_contract(load_scenario(args.scenario or DEFAULT_SCENARIO), args.node)
+    scenario = load_scenario(args.scenario or DEFAULT_SCENARIO)
+    node, detail, owner = args.node, '', None
+    for plugin in contract_plugins():
+        resolved = plugin.resolve(scenario, args.node)
+        if resolved is not None:
+            (node, detail), owner = resolved, plugin
+            break
+    if args.format not in ('md', 'yaml'):
+        if owner is None or args.format not in owner.FORMATS:
+            raise UsageError(f'--format {args.format}: not a format of node {args.node} in {scenario.name}')
+        try:
+            sys.stdout.write(owner.write(args.format, scenario, detail))
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        return 0
+    c = node_contract(scenario, node)
+    if owner is not None:
+        owner.extend(scenario, c, detail)
     if args.format == 'yaml':
         sys.stdout.write(yaml.safe_dump(c, sort_keys=False, allow_unicode=True))
     else:
-        sys.stdout.write(markdown(c))
+        sys.stdout.write(markdown(c) + ''.join(f'{line}\n' for plugin in contract_plugins() for line in plugin.markdown(c)))
     return 0
 
 
@@ -248,5 +282,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    'the graph is built from.')
     p.add_argument('scenario', nargs='?', help=f'scenario name or path (default {DEFAULT_SCENARIO})')
     p.add_argument('--node', required=True, help='the node (e.g. acds_controller; <vehicle>/<node> in a formation)')
-    p.add_argument('--format', choices=('md', 'yaml'), default='md', help='Markdown (default) or YAML')
+    extra = {name: text for plugin in contract_plugins() for name, text in plugin.FORMATS.items()}
+    p.add_argument('--format', choices=('md', 'yaml', *extra), default='md',
+                   help='Markdown (default) or YAML' + ''.join(f'; {name}: {text}' for name, text in extra.items()))
     p.set_defaults(func=_contract)

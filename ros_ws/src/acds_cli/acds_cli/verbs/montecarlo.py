@@ -158,7 +158,7 @@ def study_command(verb: list[str], args: argparse.Namespace) -> str:
 
 
 def _execution_text(execution: Any) -> str:
-    return f'{execution.where}, {execution.workers} worker(s), {execution.threads} thread(s)'
+    return f'{execution.where}, {execution.workers} worker(s), {execution.threads} thread(s){execution.mixed()}'
 
 
 def study_folder(prefix: str, name: str, args: argparse.Namespace) -> Path:
@@ -189,11 +189,12 @@ class _Stop(BaseException):
 
 
 def run_journaled(journal: Any, samples: dict[tuple[str, int], Any], args: argparse.Namespace, steps_of: Any,
-                  verb: str) -> Any:
-    """Run the samples the journal lacks (one batch per run length, ``steps_of(key)``), appending each as it
-    finishes; the execution, or None when every sample was kept already. Ctrl-C, SIGTERM or SIGHUP:
-    print how many samples are kept and the resume command, exit 128 + the signal's number (130, 143, 129:
-    :class:`SystemExit`, the CLI's convention)."""
+                  verb: str, task_of: Any = None, after: Any = None) -> Any:
+    """Run the samples the journal lacks (one batch per run length, ``steps_of(key)``, and per task, ``task_of(key,
+    steps)``: the sample's runner, default the engine's), appending each as it finishes, then calling ``after(key,
+    summary)`` (which may stop the study by raising); the execution, or None when every sample was kept already.
+    Ctrl-C, SIGTERM or SIGHUP: print how many samples are kept and the resume command, exit 128 + the signal's
+    number (130, 143, 129: :class:`SystemExit`, the CLI's convention)."""
     import signal
 
     from acds_runtime.montecarlo import MonteCarloError, run_samples
@@ -208,13 +209,20 @@ def run_journaled(journal: Any, samples: dict[tuple[str, int], Any], args: argpa
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGHUP)}
     execution = None
     try:
-        batches: dict[int | None, list[tuple[str, int]]] = {}
+        batches: dict[tuple[int | None, Any], list[tuple[str, int]]] = {}
         for key in todo:
-            batches.setdefault(steps_of(key), []).append(key)
-        for steps, keys in batches.items():
+            steps = steps_of(key)
+            batches.setdefault((steps, None if task_of is None else task_of(key, steps)), []).append(key)
+
+        def done(key: tuple[str, int], summary: dict[str, Any]) -> None:
+            journal.record(key, summary)
+            if after is not None:
+                after(key, summary)
+        for (steps, task), keys in batches.items():
             execution = run_samples([samples[k].text for k in keys], engine=args.engine, steps=steps, jobs=args.jobs,
-                                    scheduler=args.scheduler, progress=not args.quiet,
-                                    on_result=lambda i, summary, keys=keys: journal.record(keys[i], summary))[1]
+                                    scheduler=args.scheduler, progress=not args.quiet, task=task,
+                                    allow_mixed=args.allow_mixed_workers,
+                                    on_result=lambda i, summary, keys=keys: done(keys[i], summary))[1]
     except (KeyboardInterrupt, _Stop) as exc:
         why = 'Ctrl-C' if isinstance(exc, KeyboardInterrupt) else exc.args[0]
         signum = exc.args[1] if isinstance(exc, _Stop) else getattr(exc, 'signum', signal.SIGINT)
@@ -268,6 +276,10 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     from acds_runtime.summaries import heao as heao_summary
 
     base = load_scenario(args.scenario)
+    from ..fsw_study import cmd_fsw_study, flown_by_user
+    if flown_by_user(args, base):
+        return cmd_fsw_study(args, base)
+    args.engine = args.engine or 'direct'
     out = study_folder('montecarlo', base.name, args)
     steps = _steps(base, args.until_min)
     rerun = rerun_command(args.scenario, args.seed, '{index}', args.vary, args.until_min)
@@ -343,6 +355,9 @@ def cmd_pick_sample(args: argparse.Namespace) -> int:
         records = json.loads((folder / 'samples.json').read_text())
     except (OSError, json.JSONDecodeError) as exc:
         raise UsageError(f'{folder}: not a montecarlo output folder ({exc})') from None
+    if 'fsw_command' in spec:
+        raise UsageError(f'{folder}: a study flown by your own node (--external); the baseline rule picks from a '
+                         'dispersion study of the built-in nodes (its report.md names the samples that differ most)')
     if spec.get('complete') is False:
         raise UsageError(f'{folder}: the study is incomplete (its report phase was interrupted: montecarlo.json says '
                          f'complete: false); finish it with {spec["command"]} --resume {folder}')
@@ -389,11 +404,14 @@ def cmd_pick_sample(args: argparse.Namespace) -> int:
 
 def add_execution_options(p: argparse.ArgumentParser) -> None:
     """--runs/--seed/--jobs/--scheduler/--engine shared by ``montecarlo`` and the paired ``sweep``."""
-    from acds_runtime.montecarlo import ENGINES
+    from acds_runtime.montecarlo import ALLOW_MIXED_OPTION, ENGINES
 
     p.add_argument('--seed', type=_seed, default=1, help='study seed (default 1); sample K is the same for every N')
     p.add_argument('--scheduler', metavar='ADDRESS',
                    help='run on this Dask cluster (tcp://host:8786) instead of a local one')
+    p.add_argument(ALLOW_MIXED_OPTION, action='store_true',
+                   help='accept Dask workers whose numeric configuration (Python, numpy and its SIMD dispatch, OpenBLAS, '
+                        'kernel compiler, project sources) differs from this machine\'s; the report names them')
     p.add_argument('--engine', choices=ENGINES, default='direct',
                    help='direct (default: one process, bit-identical to the graph) or graph (one process per node)')
     p.add_argument('--resume', metavar='DIR',
@@ -455,7 +473,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help='report the samples each percentile needs for a confidence interval this wide, %% of its value '
                         '(default 10)')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
-    p.set_defaults(func=cmd_montecarlo)
+    from ..fsw_study import add_fsw_options
+    add_fsw_options(p)
+    p.set_defaults(func=cmd_montecarlo, engine=None)  # direct; a study flown by your node: the graph
 
     p = sub.add_parser('pick-sample', help='the baseline rule: the sample nearest a percentile of a Monte Carlo study',
                        description='From a montecarlo --out folder, print the sample whose QUANTITY is nearest its '

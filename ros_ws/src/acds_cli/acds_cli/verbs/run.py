@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import signal
 import sys
 import time
@@ -25,6 +26,22 @@ from ..workspace import new_run_dir, workspace
 from .montecarlo import add_sample_options, sample_for_run
 
 DEFAULT_SCENARIO = 'heao_b_acquisition'
+#: Entry-point group of run plug-ins: a package's own ``acds run`` options and what the run holds for its nodes while
+#: it goes (a bus, a device). Each entry names a module with
+#:   ``add_arguments(parser)``: its options (they default to None);
+#:   ``prepare(scenario, args, run_dir)``: before anything starts, None when the scenario is not its own, else
+#:   a context manager the run is entered into: ``__enter__`` returns the scenario the engine runs (its values set
+#:   from the options) and ``__exit__`` releases what it holds; ``paces`` (bool) says it paces the run to the wall
+#:   clock itself, so ``--rtf`` applies on the direct engine too. A ValueError from ``prepare`` is a usage error
+#:   (one line, exit 2); a RuntimeError from ``__enter__`` fails the run (one line, exit 1).
+RUN_PLUGINS = 'acds.run_options'
+
+
+def run_plugins() -> list:
+    """The modules the entry-point group :data:`RUN_PLUGINS` names, in name order."""
+    from importlib.metadata import entry_points
+
+    return [ep.load() for ep in sorted(entry_points(group=RUN_PLUGINS), key=lambda e: e.name)]
 
 
 class Progress:
@@ -60,11 +77,7 @@ def _announce_live(port: int, host: str) -> None:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """Run a scenario through the full process graph (or the direct engine) and print its summary."""
-    from acds_runtime.direct import DirectRun
-    from acds_runtime.launcher import GraphRun, LaunchError
     from acds_runtime.preflight import preflight
-    from acds_runtime.report import format_summary
-    from acds_runtime.summary import print_tables, write_summary_json
 
     scenario, sample_text = sample_for_run(load_scenario(args.scenario or DEFAULT_SCENARIO), args)
     preflight(scenario)
@@ -83,8 +96,6 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise UsageError('--external: the direct engine runs every node in this process; an external node joins the '
                          'process graph (use --engine graph)')
     overrides = _deadlines(args, scenario, direct)
-    if direct and args.rtf:
-        raise UsageError('--rtf paces the process graph\'s clock; the direct engine has none (use --engine graph)')
     check_output_dir('--run-dir' if args.run_dir else 'run folder', Path(args.run_dir or workspace() / 'runs'))
     if args.summary_json:
         check_output_file('--summary-json', Path(args.summary_json))
@@ -98,6 +109,12 @@ def cmd_run(args: argparse.Namespace) -> int:
                          'RUN_DIR/bag)')
     # The default folder is created exclusively (a run started in the same second gets its own).
     run_dir = Path(args.run_dir) if args.run_dir else new_run_dir(scenario.name)
+    try:
+        sessions = [x for x in (plugin.prepare(scenario, args, run_dir) for plugin in run_plugins()) if x is not None]
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    if direct and args.rtf and not any(x.paces for x in sessions):
+        raise UsageError('--rtf paces the process graph\'s clock; the direct engine has none (use --engine graph)')
     if sample_text is not None:  # the drawn scenario with how it was drawn (the launcher adds scenario.yaml)
         run_dir.mkdir(parents=True, exist_ok=True)
         (run_dir / 'sample.yaml').write_text(sample_text)
@@ -116,6 +133,27 @@ def cmd_run(args: argparse.Namespace) -> int:
                              'it and open the bag in Foxglove)')
         from acds_runtime.foxglove_bridge import live_view
         live = live_view(args.foxglove, args.foxglove_host)
+    with contextlib.ExitStack() as held:
+        try:
+            for session in sessions:
+                scenario = held.enter_context(session)
+        except RuntimeError as exc:
+            print(f'[acds] run failed: {exc}', file=sys.stderr)
+            return 1
+        except KeyboardInterrupt:
+            print('\n[acds] stopped before the run started', file=sys.stderr)
+            return 130
+        return _run(args, scenario, run_dir, direct, external, overrides, bag, live, echo, steps)
+
+
+def _run(args: argparse.Namespace, scenario, run_dir: Path, direct: bool, external, overrides, bag, live, echo,
+         steps) -> int:
+    """The run itself, on the engine asked, then its summary, tables and plots."""
+    from acds_runtime.direct import DirectRun
+    from acds_runtime.launcher import GraphRun, LaunchError
+    from acds_runtime.report import format_summary
+    from acds_runtime.summary import print_tables, write_summary_json
+
     progress = Progress(scenario.control_period_s)
     options = dict(record=bag, record_storage=args.storage, record_compression=args.compression, live=live)
     if direct:
@@ -246,6 +284,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument('--peer', action='append', default=[], metavar='HOST', type=peer_host,
                    help='another host whose ROS 2 participants discovery contacts (repeatable; ROS_STATIC_PEERS): '
                         'where an external node runs (discovery otherwise stays on this host)')
+    for plugin in run_plugins():
+        plugin.add_arguments(p)
     p.set_defaults(func=cmd_run)
 
 

@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from ..arguments import UsageError, check_output_file, positive_int, positive_minutes
+from .cold_gas import STUDY_ACQUISITION_MIN, STUDY_THREE_ACQUISITIONS_LB
 from .montecarlo import (
     add_execution_options,
     add_sample_options,
@@ -276,7 +277,9 @@ def gas_budget(rows: list[dict[str, Any]], sc: Any) -> dict[str, Any]:
     +∞), GN₂ used (lb) and valve cycles, median, 10–90 % and worst, with the
     draw of the worst; the acquisitions the load supports at the 90th percentile of the GN₂ used, counting the whole
     load and counting only the gas above the regulator's set point (below it the regulator drops out and the thrust
-    falls with the tank: blowdown, seed 002 §5.2.1 regulation lost).
+    falls with the tank: blowdown, seed 002 §5.2.1 regulation lost); three acquisitions at the worst draw and at the
+    90th percentile beside the study's 4.3 lb (§3.2); the draws captured within the study's ten minutes (§2: "the
+    cold gas system selected will permit sun acquisition within ten minutes"), with a Wilson 95 % interval.
     """
     import numpy as np
     from acds_common.units import LB_KG
@@ -296,6 +299,11 @@ def gas_budget(rows: list[dict[str, Any]], sc: Any) -> dict[str, Any]:
     out.update(load_lb=load_lb, residual_at_set_point_lb=residual_lb,
                acquisitions_at_p90=None if not p90 else int(load_lb // p90),
                acquisitions_at_p90_regulated=None if not p90 else int((load_lb - residual_lb) // p90))
+    within = sum(1 for r in done if r.get('acquisition_time_min') is not None
+                 and r['acquisition_time_min'] <= STUDY_ACQUISITION_MIN)
+    interval = dr.wilson_interval(within, len(done))
+    out['within_study_time'] = {'minutes': STUDY_ACQUISITION_MIN, 'count': within, 'n': len(done),
+                                'interval': None if interval is None else list(interval)}
     return out
 
 
@@ -319,17 +327,27 @@ def gas_table(case: dict[str, Any]) -> str:
         return (f'  {title:34s} median {f(q["median"]):>7s}   p10–p90 {f(q["p10"])}–{f(q["p90"])}   worst '
                 f'{f(q["worst"])} (sample {q["worst_index"]})')
     at = g['acquisitions_at_p90']
+    w, used = g['within_study_time'], g['gas_used_lb']
+    lo, hi = w['interval'] or (math.nan, math.nan)
+    three = ('—' if used['worst'] is None else
+             f'{3 * used["worst"]:.2f} lb at the worst draw (sample {used["worst_index"]}), '
+             f'{3 * used["p90"]:.2f} lb at the 90th percentile ({g["n"]} draws); study (§3.2) '
+             f'{STUDY_THREE_ACQUISITIONS_LB} lb')
     return '\n'.join([
         f'{case["scenario"]}: cold gas per acquisition ({g["n"]} draws)',
         line('gas_handover_min', 'on gas: start → hand-over, min', '.2f'),
         line('gas_used_lb', 'GN₂ used, lb', '.3f'), line('gas_valve_cycles', 'valve cycles (all six valves)', '.0f'),
         f'  the {g["load_lb"]:.2f} lb load supports {"—" if at is None else at} acquisitions at the 90th percentile '
         f'({g["acquisitions_at_p90_regulated"]} on the gas above the regulator set point; '
-        f'{g["residual_at_set_point_lb"]:.3f} lb is left when the tanks reach it)'])
+        f'{g["residual_at_set_point_lb"]:.3f} lb is left when the tanks reach it)',
+        f'  three acquisitions: {three}',
+        f'  captured within the study\'s {w["minutes"]:g} min (§2): {w["count"]} of {w["n"]} '
+        f'(Wilson 95 % interval {100 * lo:.1f}–{100 * hi:.1f} %)'])
 
 
 def _execution(execution: Any) -> str:
-    return 'nothing left to run' if execution is None else f'{execution.where}, {execution.workers} worker(s)'
+    return ('nothing left to run' if execution is None
+            else f'{execution.where}, {execution.workers} worker(s){execution.mixed()}')
 
 
 def register(sub: argparse._SubParsersAction) -> None:

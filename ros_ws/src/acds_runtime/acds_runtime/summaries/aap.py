@@ -80,8 +80,10 @@ class Accumulator:
         self.capacity_nms = sc.get('wheels', 'cmg_capacity')
         self.q_target = np.array(c['target_quaternion_xyzw'], dtype=float)
         self.q_target /= np.linalg.norm(self.q_target)
+        # the loop gains k·W describe the linear k·H_s × B loop; the §10 day-only law flies a constant |M| instead
+        day_only = self.flown is not None and self.flown.day_moment_am2 is not None
         self.orbits = OrbitAccumulator(self.clock, np.array(c['dump_bias_momentum']),
-                                       None if self.law == 'none' else self.k_seed)
+                                       None if self.law == 'none' or day_only else self.k_seed)
         self.extra: dict[int, dict[str, Any]] = {}
         self._prev: tuple[int, dict[str, Any]] | None = None  # step k waiting for the torques of k + 1
         self._last_h: tuple[int, np.ndarray] | None = None
@@ -169,7 +171,8 @@ def print_tables(summary: dict[str, Any]) -> None:
               f'M_m {report["predicted_unconstrained_M_m_am2"]:.0f})')
     if report.get('day_moment_am2') is not None:
         print(f'    day-only dumping at constant |M| = {report["day_moment_am2"]:.0f} A·m² (§10: a multiple of the '
-              f'predicted unconstrained M_m {report["predicted_unconstrained_M_m_am2"]:.0f})')
+              f'predicted unconstrained M_m {report["predicted_unconstrained_M_m_am2"]:.0f}); no k·W gains: that '
+              'law is not the linear k·H_s × B loop')
     warning = loop_gain_warning(report)
     if warning is not None:
         print(f'    {warning}')

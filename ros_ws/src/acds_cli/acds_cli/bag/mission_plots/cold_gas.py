@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 from acds_common import topics, units
-from acds_common.thrusters import AXIS_NAMES, HEAO_B_DIRECTIONS, HEAO_B_POSITIONS_M, arrangement
+from acds_common.thrusters import DEFAULT_LAYOUT, LAYOUTS, arrangement, arrangement_from_section
 
 #: The ``cold_gas/state`` values a plot keeps, in this order.
 STATE_KEYS = ('thrust_n', *(f'thrust_time_T{j}_s' for j in range(1, 7)), 'propellant_kg', 'used_kg',
@@ -44,14 +44,13 @@ def plot(kit: Any) -> None:
     if not len(t):
         return
     gas, plt, finish, dt_s = kit.ctx.section('cold_gas', 'cold_gas'), kit.plt, kit.finish, kit.dt_s
-    arr = arrangement(*(((gas['thruster_positions'], gas['thruster_directions'], gas['max_cross_coupling']))
-                        if gas else (HEAO_B_POSITIONS_M, HEAO_B_DIRECTIONS)))
+    arr = arrangement_from_section(gas) if gas else arrangement(*LAYOUTS[DEFAULT_LAYOUT])
     fig, ax = plt.subplots(figsize=(8, 3.6))
     for j in range(6):
         fired = s[:, 1 + j] > 0.0
         ax.scatter(t[fired], np.full(fired.sum(), j + 1), c=s[fired, 1 + j] / dt_s, cmap='viridis', vmin=0.0,
                    vmax=1.0, marker='|', s=120, linewidths=1.2)
-    ax.set_yticks(range(1, 7), [f'T{j + 1} ({AXIS_NAMES[arr.axis_of(j)]})' for j in range(6)])
+    ax.set_yticks(range(1, 7), [f'T{j + 1} ({arr.axis_names(j)})' for j in range(6)])
     ax.set_ylim(0.4, 6.6)
     ax.set_ylabel('thruster (torque axis)')
     ax.grid(alpha=0.3)
