@@ -120,3 +120,22 @@ def test_a_figure_whose_run_fails_fails_the_build_naming_the_scenario_and_the_er
     assert line.startswith(f'index: figure run of scenario {bad} failed: acds run {bad} ')
     assert 'max_moment_am2' in line, line
     assert not (tmp_path / 'out' / 'html' / '_images').exists() or not list((tmp_path / 'out' / 'html' / '_images').iterdir())
+
+
+def test_a_figure_runs_cache_key_follows_extends(tmp_path):
+    """A figure run is cached by its scenario's digest: a change to the scenario it extends (or to a file beside
+    that one which it names) is a new digest, so the page is not built from the run of the parent as it was."""
+    from acds_cli.docs.figures import scenario_digest
+
+    base, child = tmp_path / 'base.yaml', tmp_path / 'child.yaml'
+    (tmp_path / 'rod.json').write_text('{"turns": 1}')
+    base.write_text('extends: oresat_detumble\nname: base\nduration_min: 2\nrod_file: rod.json\n')
+    child.write_text('extends: base\nname: child\n')
+    before = scenario_digest(str(child), [])
+    assert scenario_digest(str(child), []) == before
+    (tmp_path / 'rod.json').write_text('{"turns": 2}')
+    after_file = scenario_digest(str(child), [])
+    base.write_text('extends: oresat_detumble\nname: base\nduration_min: 3\nrod_file: rod.json\n')
+    after_base = scenario_digest(str(child), [])
+    assert len({before, after_file, after_base}) == 3
+    assert scenario_digest(str(child), ['--steps', '10']) != after_base

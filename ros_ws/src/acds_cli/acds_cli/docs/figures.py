@@ -37,15 +37,17 @@ FAILURES: list[str] = []
 
 
 def scenario_digest(scenario: str, args: list[str]) -> str:
-    """Digest of what a figure run depends on: the scenario's YAML, the files beside it it names, the options."""
-    from acds_common.scenario import scenario_path
+    """Digest of what a figure run depends on: the scenario's YAML and every YAML its ``extends`` reaches, the
+    files beside each that it names, the options."""
+    from acds_common.scenario import extends_chain, scenario_path
 
-    path = scenario_path(scenario)
-    text = path.read_bytes()
-    h = hashlib.sha256(text)
-    for other in sorted(path.parent.iterdir()):
-        if other != path and other.is_file() and other.name.encode() in text:
-            h.update(other.name.encode() + other.read_bytes())
+    h = hashlib.sha256()
+    for path in extends_chain(scenario_path(scenario)):
+        text = path.read_bytes()
+        h.update(text)
+        for other in sorted(path.parent.iterdir()):
+            if other != path and other.is_file() and other.name.encode() in text:
+                h.update(other.name.encode() + other.read_bytes())
     h.update(json.dumps(args).encode())
     return h.hexdigest()[:16]
 
