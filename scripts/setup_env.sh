@@ -30,7 +30,7 @@ fi
 
 want=$(cd "$ROOT" && cat requirements.lock ros_ws/src/*/setup.py ros_ws/src/*/setup.cfg examples/*/setup.py \
   examples/*/setup.cfg 2>/dev/null | sha256sum | cut -c1-16)
-# The SIMD pin where Python starts (README "Running it on a cluster"): a .pth file in the environment's
+# The SIMD pin where Python starts (docs/studies.md, "Running it on a cluster"): a .pth file in the environment's
 # site-packages imports acds_common, whose import sets acds_common.SIMD_PIN (unless the user set the variables),
 # before any program run with this Python (a Dask scheduler or worker, pytest, a node, a user's script) imports
 # numpy. Sorted after the editable installs' own .pth files (site reads them in name order), so it finds acds_common.

@@ -61,7 +61,7 @@ def test_bad_input_is_one_line_before_any_sample(tmp_path, extra, message):
 
 def _by_hand(sample: str, run_dir: Path) -> dict:
     """``acds run oresat_detumble --sample S:K --external ...`` with the example started by hand on the run's domain
-    (as the README shows: ROS_DOMAIN_ID, localhost discovery, the node's defaults)."""
+    (as docs/flight_software.md shows: ROS_DOMAIN_ID, localhost discovery, the node's defaults)."""
     summary = run_dir / 'summary.json'
     run = subprocess.Popen([sys.executable, '-m', 'acds_cli', 'run', 'oresat_detumble', '--sample', sample,
                             '--until-min', UNTIL_MIN, '--external', NODE, '--no-record', '--quiet',

@@ -32,8 +32,8 @@ PYTHON_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml', 'matplotlib': '
                'pytest': 'python3-pytest', 'rosbags': 'python3-rosbags-pip', 'rclpy': 'rclpy',
                'dask': 'python3-dask', 'tqdm': 'python3-tqdm', 'ppigrf': 'python3-ppigrf-pip',
                'foxglove': 'python3-foxglove-sdk-pip', 'websockets': 'python3-websockets', 'mcap': 'python3-mcap-pip',
-               'numba': 'python3-numba', 'can': 'python3-can', 'canopen': 'python3-canopen-pip',
-               'oresat_configs': 'python3-oresat-configs-pip'}
+               'numba': 'python3-numba', 'sphinx': 'python3-sphinx', 'docutils': 'python3-docutils',
+               'can': 'python3-can', 'canopen': 'python3-canopen-pip', 'oresat_configs': 'python3-oresat-configs-pip'}
 #: Packages whose code publishes or subscribes to any graph topic by its type name
 #: (``acds_common.lockstep.message_class``: the node host, the runtime's monitor and recorder, the CLI's recorder and player).
 EVERY_TOPIC = {'acds_common', 'acds_runtime', 'acds_cli'}

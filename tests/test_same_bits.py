@@ -1,7 +1,7 @@
-"""Same bits on every worker (README "Running it on a cluster"): the SIMD pin where the environment's Python starts,
+"""Same bits on every worker (docs/studies.md, "Running it on a cluster"): the SIMD pin where the environment's Python starts,
 and the numeric configuration checked, not assumed.
 
-Real processes the README's way: a ``dask scheduler`` and ``dask worker --nworkers 2 --nthreads 1`` started from the
+Real processes the documented way: a ``dask scheduler`` and ``dask worker --nworkers 2 --nthreads 1`` started from the
 environment's ``bin`` with an environment that does not carry the pin (as a user's shell); 20 samples of
 ``heao_b_acquisition`` (30 min each) compared digest by digest with the local study (on an AVX-512 host an unpinned
 worker gives another digest for sample 0 there, for 3 of the 20 over the full runs); a worker whose SIMD dispatch
@@ -59,7 +59,7 @@ def free_port() -> int:
 
 
 def start_worker(scheduler: str, log: Path, **env: str) -> subprocess.Popen[bytes]:
-    """``dask worker SCHEDULER --nworkers 2 --nthreads 1`` on the loopback, as the README starts one."""
+    """``dask worker SCHEDULER --nworkers 2 --nthreads 1`` on the loopback, as docs/studies.md starts one."""
     with open(log, 'wb') as out:
         return subprocess.Popen([str(BIN / 'dask'), 'worker', scheduler, '--nworkers', '2', '--nthreads', '1',
                                  '--host', '127.0.0.1', '--no-dashboard'], stdout=out, stderr=subprocess.STDOUT,
@@ -131,7 +131,7 @@ def test_the_pin_is_in_force_where_the_environments_python_starts():
 
 @pytest.mark.timeout(900)  # ~25 s on the idle 2-core machine; > 300 s beside four busy sessions (load 20)
 def test_a_study_on_dask_workers_started_by_hand_gives_the_local_studys_digests(scheduler, tmp_path):
-    """20 samples on the README's cluster and locally (``--jobs 2``), 30 min each (on this AVX-512 host an unpinned
+    """20 samples on the documented cluster and locally (``--jobs 2``), 30 min each (on this AVX-512 host an unpinned
     worker already differs in sample 0 there): the same digest for every sample and the same samples.csv, byte for
     byte."""
     study = ['montecarlo', BASE, '--runs', '20', '--until-min', '30', '--quiet']

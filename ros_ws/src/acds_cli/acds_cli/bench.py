@@ -50,7 +50,7 @@ SCENARIO = 'heao_b_acquisition'
 MIN_STEPS = 500
 #: The dispersion line's study: samples 0…DISPERSION_SAMPLES − 1 of this seed.
 DISPERSION_SEED, DISPERSION_SAMPLES = 1, 20
-#: The flight-software sample line: its scenario, node and command (the README's), the short sample's steps, how
+#: The flight-software sample line: its scenario, node and command (docs/flight_software.md's), the short sample's steps, how
 #: many short samples (their median is the overhead), the long sample's steps.
 FSW_SCENARIO, FSW_NODE = 'oresat_detumble', 'acds_controller=oresat_detumble_fsw'
 FSW_COMMAND = 'oresat_detumble_fsw --ros-args --params-file {params}'

@@ -1,5 +1,5 @@
 """``montecarlo SCENARIO --runs N --external NODE[=ROS_NAME] --fsw-command 'CMD …' [--paired]``: the dispersion study
-flown by the user's flight software (README "Monte Carlo with your own flight software").
+flown by the user's flight software (docs/flight_software.md, "Monte Carlo with your own flight software").
 
 Each sample runs through the per-process graph with NODE left to the user's node, which the study starts for it
 from the command template and stops after it (:mod:`acds_runtime.flight_software`); J samples side by side on

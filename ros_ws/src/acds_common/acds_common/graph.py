@@ -138,12 +138,21 @@ class NodeSpec:
 @dataclass(frozen=True)
 class Topic:
     """A topic a package's nodes publish: its name (relative to the node's namespace, or absolute), message
-    type ('package/msg/Type'), unit (SI, '' for none) and meaning."""
+    type ('package/msg/Type'), unit (SI, '' for none) and meaning.
+
+    ``transfer``: for a topic in raw units (a sensor's volts), a function of the producing node's normalized
+    parameters returning the lines that state its transfer to engineering units (zero, scale per axis,
+    range, quantisation, what a reference channel means); the contract prints them. ``realism``: what
+    reading the topic means for an external flight computer (a calibrated or truth topic it could not
+    read on board); the contract prints it where it offers the topic.
+    """
 
     name: str
     type: str
     unit: str = ''
     doc: str = ''
+    transfer: Callable[[dict[str, Any]], list[str]] | None = None
+    realism: str = ''
 
 
 @dataclass(frozen=True)
@@ -162,7 +171,7 @@ class Ports:
 
 @dataclass(frozen=True)
 class Node:
-    """A node as its package declares it (README "Adding a node").
+    """A node as its package declares it (docs: Architecture, "Adding a node").
 
     ``name``: the ROS node name, its console script, its key in a scenario's ``nodes``. ``sections``:
     the scenario sections it reads (each key becomes its parameter ``<section>_<key>_<si unit>``).
@@ -171,6 +180,9 @@ class Node:
     graph has one). ``in_graph`` / ``in_vehicle``: it may be listed in a scenario's ``nodes`` / in a
     formation vehicle's ``nodes`` (then it runs in the vehicle's namespace). ``every_vehicle``: a
     formation-wide node, which also reads these sections of every vehicle (``<vehicle>.<parameter>``).
+    ``sections_with``: ``(section, node)`` pairs: a section the node reads only when that node is in the
+    graph (its ports then take the variant that reads it), so a scenario gives it only the parameters its
+    ports read.
     """
 
     name: str
@@ -180,6 +192,12 @@ class Node:
     in_graph: bool = True
     in_vehicle: bool = False
     every_vehicle: tuple[str, ...] = ()
+    sections_with: tuple[tuple[str, str], ...] = ()
+
+    def sections_in(self, graph_nodes: Iterable[str]) -> tuple[str, ...]:
+        """The sections this node reads in a graph of ``graph_nodes`` (instances; a vehicle's by its node name)."""
+        present = {g.rpartition('/')[2] for g in graph_nodes}
+        return self.sections + tuple(sec for sec, node in self.sections_with if node in present)
 
 
 @dataclass(frozen=True)

@@ -66,6 +66,7 @@ from acds_common.graph import (
 )
 from acds_common.parameters import (
     FORMATION_VEHICLES,
+    LOCKSTEP,
     ConfigError,
     ParamSpec,
     formation_wide,
@@ -258,9 +259,15 @@ class LockstepNode(Node):
         if wide:  # the formation's vehicles decide which parameters there are
             vehicles = list(self.declare_parameter(FORMATION_VEHICLES.name, Parameter.Type.STRING_ARRAY,
                                                    descriptor(FORMATION_VEHICLES)).value or [])
+        # The graph's nodes decide which sections the node reads (Node.sections_with): declared first.
+        graph_spec = next(s for s in LOCKSTEP if s.name == 'graph_nodes')
+        given = self.declare_parameter(graph_spec.name, Parameter.Type.STRING_ARRAY, descriptor(graph_spec)).value
+        declared = {graph_spec.name: None if given is None else list(given)}
+        if wide:
+            declared[FORMATION_VEHICLES.name] = vehicles
         self.params = normalize(name, self._declare_parameters(
-            [s for s in node_param_specs(name, vehicles) if s.name != FORMATION_VEHICLES.name],
-            {FORMATION_VEHICLES.name: vehicles} if wide else {}))
+            [s for s in node_param_specs(name, vehicles, declared[graph_spec.name] or ()) if s.name not in declared],
+            declared))
         self.spec: NodeSpec = node_spec(name, self.params)
         if self.get_namespace() != self.spec.namespace:
             raise ConfigError(f'{name}: runs in namespace {self.get_namespace()} but its parameter vehicle='

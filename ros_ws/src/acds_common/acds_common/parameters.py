@@ -87,12 +87,14 @@ def _section_specs(section: str, prefix: str = '') -> list[ParamSpec]:
     return out
 
 
-def node_param_specs(node: str, vehicles: list[str] | tuple[str, ...] = ()) -> list[ParamSpec]:
-    """Every parameter of ``node``: lockstep ones, then its scenario sections' fields; a formation-wide
-    node (:func:`formation_wide`) also has ``formation_vehicles`` and each vehicle's sections."""
+def node_param_specs(node: str, vehicles: list[str] | tuple[str, ...] = (),
+                     graph_nodes: list[str] | tuple[str, ...] = ()) -> list[ParamSpec]:
+    """Every parameter of ``node`` in a graph of ``graph_nodes``: lockstep ones, then the fields of the scenario
+    sections it reads there (:meth:`~acds_common.graph.Node.sections_in`); a formation-wide node
+    (:func:`formation_wide`) also has ``formation_vehicles`` and each vehicle's sections."""
     _pkg, decl = declared_node(node)
     specs = list(LOCKSTEP) + (list(TIME_OWNER_ONLY) if decl.time_owner else [])
-    for section in decl.sections:
+    for section in decl.sections_in(graph_nodes):
         specs.extend(_section_specs(section))
     if decl.every_vehicle:
         specs.append(FORMATION_VEHICLES)
@@ -152,7 +154,7 @@ def normalize(node: str, given: dict[str, Any]) -> dict[str, Any]:
     :func:`~acds_common.scenario.Scenario.node_parameters`); a ROS host passes ``None`` for a
     parameter it did not receive.
     """
-    specs = node_param_specs(node, given.get('formation_vehicles') or ())
+    specs = node_param_specs(node, given.get('formation_vehicles') or (), given.get('graph_nodes') or ())
     known = {s.name for s in specs}
     unknown = sorted(set(given) - known - {'use_sim_time'})
     if unknown:

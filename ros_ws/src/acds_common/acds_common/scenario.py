@@ -239,7 +239,7 @@ class Scenario:
         own = self.vehicle(vehicle) if vehicle else {}
         params: dict[str, Any] = {}
         _pkg, decl = declared_node(node)
-        for section in decl.sections:
+        for section in decl.sections_in(inst for inst, _n, _v in self.instances()):
             values = own.get(section, self.values.get(section))
             for name, f in SCHEMA[section].items():
                 params[f.param_name(section, name)] = values[name]
@@ -339,6 +339,16 @@ def _extends_path(base: Any, child: Path) -> Path:
         if candidate.exists():
             return candidate
     raise ScenarioError(f'{child}: extends: {base!r} not found (looked for {" and ".join(map(str, candidates))})')
+
+
+def extends_chain(path: Path) -> list[Path]:
+    """The scenario file ``path`` and every file its ``extends`` reaches, in order (what its content depends on)."""
+    chain = [path]
+    while isinstance(data := yaml.load(_read_text(chain[-1]), Loader=_ScenarioLoader), dict) and 'extends' in data:
+        chain.append(_extends_path(data['extends'], chain[-1]))
+        if chain[-1].resolve() in {c.resolve() for c in chain[:-1]}:
+            raise ScenarioError(f'{chain[-1]}: "extends" loops back on itself')
+    return chain
 
 
 def _read_yaml(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:

@@ -14,7 +14,7 @@ centre-of-mass station (r × d along x needs r_x = 0): so a layout on one statio
 with couples and pitches and yaws with single thrusters or couples. The net force of a firing (a couple's is zero
 for roll) is stated in :attr:`Arrangement.force_per_thrust` and reported on ``cold_gas/wrench``; it is not fed to
 the orbit (the orbit is Keplerian, spec §3): at 4.6 lb of GN₂ and Isp 65 s the whole load's impulse is 1330 N·s,
-a Δv of at most 0.46 m/s on HEAO-B's 6,436 lb (2,919 kg, Table 4-1; README test_readme_figures checks it).
+a Δv of at most 0.46 m/s on HEAO-B's 6,436 lb (2,919 kg, Table 4-1; docs/missions/heao.md, tests/test_docs_figures.py checks it).
 
 **Default layout, ``platform`` (§6.2.5).** "The six thrusters located on the lower surface of the equipment
 platform of the spacecraft equipment module … The thruster orientation is similar to the current HEAO reaction

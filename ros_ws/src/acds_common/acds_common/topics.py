@@ -3,7 +3,7 @@
 The names below are the interface between the shipped packages (a consumer names the topic it reads
 from another package's node). Each topic's message type, unit and meaning are declared by the
 package that publishes it (:class:`acds_common.graph.Topic`); a new node's own topics are declared
-in its package alone (README "Adding a node"). The mechanism's own topics and their types are
+in its package alone (docs: Architecture, "Adding a node"). The mechanism's own topics and their types are
 :data:`TYPES`.
 
 Every node runs in namespace ``/acds`` (a formation vehicle's nodes in ``/acds/<vehicle>``); names

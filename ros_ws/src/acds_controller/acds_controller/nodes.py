@@ -189,8 +189,9 @@ def check_airtrack(sc: Any) -> str:
 PACKAGE = Package(
     'acds_controller',
     nodes=(
-        Node('acds_controller', ('spacecraft', 'controller', 'magnetometer', 'wheels', 'orbit', 'earth', 'cold_gas'),
-             _acds_controller),
+        # The cold_gas section only with node cold_gas in the graph: the variant that flies the gas reads it.
+        Node('acds_controller', ('spacecraft', 'controller', 'magnetometer', 'wheels', 'orbit', 'earth'),
+             _acds_controller, sections_with=(('cold_gas', 'cold_gas'),)),
         Node('formation_controller', ('orbit', 'formation'), _formation_controller, in_graph=False, in_vehicle=True,
              every_vehicle=('spacecraft', 'vehicle', 'em_driver', 'wheels')),
     ),

@@ -41,7 +41,8 @@ from acds_common.scenario import Scenario
 
 from .launcher import VENV_BIN, GraphRun, LaunchError
 
-#: The command template's placeholders and what each becomes (README "Monte Carlo with your own flight software").
+#: The command template's placeholders and what each becomes (docs/flight_software.md, "Monte Carlo with your own
+#: flight software").
 PLACEHOLDERS = {'domain': "the sample's ROS_DOMAIN_ID", 'params': "the sample's parameters file for your node",
                 'run_dir': "the sample's run folder"}
 #: The placeholders of a flight computer on a CAN bus (a scenario with the bus cards; README "Monte Carlo with your

@@ -17,7 +17,7 @@ execution's notes, which the report's header carries.
 
 ``jobs=1`` without a scheduler runs the samples one after the other in this process (no Dask);
 ``jobs>1`` starts a ``LocalCluster`` of that many single-threaded worker processes; ``scheduler``
-("tcp://host:8786") uses the user's cluster (``dask scheduler`` / ``dask worker``; README).
+("tcp://host:8786") uses the user's cluster (``dask scheduler`` / ``dask worker``; docs: Studies).
 """
 
 from __future__ import annotations

@@ -19,10 +19,12 @@ fault form is for tools and tests that talk to the node directly).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
+from acds_common import topics
 from acds_common.commands import AXES, UNITS, CommandError, MagnetometerSelect, decode, finite_number
 from acds_common.coupling import CouplingError, coupling_from_section
 from acds_common.units import GAUSS_T
@@ -36,10 +38,43 @@ from magnetometer_sim.fluxgate import (
 
 __all__ = ['MagnetometerFault', 'apply_command', 'build_magnetometer', 'parse_command']
 
+def axis_params(section: dict[str, Any]) -> FluxgateAxisParams:
+    """Every fluxgate axis of the section's magnetometer (Table 4-5, with the section's noise and accuracy)."""
+    return FluxgateAxisParams(noise_std_g=float(section['noise_std']) / GAUSS_T,
+                              accuracy_error_enabled=bool(section['accuracy_error']))
+
+
+def volts_transfer(section: dict[str, Any]) -> list[str]:
+    """The output volts' transfer to field, per axis, as the contract states it (fluxgate module docstring)."""
+    a = axis_params(section)
+    fs_v = (a.rail_low_v, a.rail_high_v)
+    steps = round((fs_v[1] - fs_v[0]) / a.step_v)
+    k_si = a.scale_v_per_g / GAUSS_T
+    residual = ', '.join(f'{v:g}' for v in section['residual_field'])
+    return [
+        f'axes x, y, z (sensor frame = body axes), the same transfer each: zero field → V_bias = {a.bias_v:g} V; '
+        f'scale k = {a.scale_v_per_g:g} V/G = {k_si:g} V/T; range ±{a.range_g:g} G = ±{a.range_g * GAUSS_T:g} T → '
+        f'{fs_v[0]:g}…{fs_v[1]:g} V (clipped at the rails)',
+        f'quantisation: steps of {a.step_v:g} V = {a.resolution_g:g} G ({steps} steps over {fs_v[0]:g}…{fs_v[1]:g} '
+        f'V, about {math.log2(steps):.1f} bits); read it with an A/D of your own (the built-in controller: '
+        'controller_adc_bits over 0…5 V)',
+        f'to engineering units: B_i = (V_i − V_bias,i)/k T, with V_bias,i the same step\'s '
+        f'{topics.NAMESPACE}/{topics.MAG_BIAS_VOLTS} (the bias channel: the assembly\'s zero-field reference voltage, nominally '
+        f'{a.bias_v:g} V; a bias-shift fault moves it with the field channels, so subtracting it, not '
+        f'{a.bias_v:g} V, removes that fault)',
+        f'error budget: end-point nonlinearity, slope within ±{100 * abs(a.nonlinearity_frac):g} % of k over the '
+        f'range (≤ 0.4 % of reading); accuracy ±{100 * a.accuracy_frac_fs:g} % of full scale '
+        f'({"applied, seeded per unit" if a.accuracy_error_enabled else "not applied in this scenario"}); '
+        f'noise σ = {a.noise_std_g * GAUSS_T:g} T',
+        f'what the volts measure: B_true + residual body-fixed field [{residual}] T + coupling Δ·M of the '
+        f'electromagnets\' previous-step dipole (coupling preset {section["coupling_preset"]}); assembly '
+        f'{section["active_unit"]} active',
+    ]
+
+
 def build_magnetometer(section: dict[str, Any], seed: int) -> Magnetometer:
     """The two-assembly magnetometer the section describes (faults are injected later, at fault_time)."""
-    params = FluxgateAxisParams(noise_std_g=float(section['noise_std']) / GAUSS_T,
-                                accuracy_error_enabled=bool(section['accuracy_error']))
+    params = axis_params(section)
     try:
         delta = coupling_from_section(section)
     except CouplingError as exc:

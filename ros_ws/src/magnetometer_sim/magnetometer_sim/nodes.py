@@ -1,4 +1,4 @@
-"""The magnetometer_sim node, as its package declares it to the graph (spec §5; issue 19).
+"""The magnetometer_sim node, as its package declares it to the graph (spec §5).
 
 The fluxgate magnetometer assemblies: the true field of step k (rigid_body), the coils' achieved
 dipole of step k − 1 (the coupling Δ) and the mode of step k − 1 → output volts, bias volts and the
@@ -6,6 +6,8 @@ field they mean. Named in the entry-point group ``acds.nodes`` (setup.py).
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 from acds_common import topics
 from acds_common.frames import MAGNETOMETER
@@ -52,14 +54,37 @@ PORTS = Ports(
      Output('field', topics.MAG_FIELD, MAGNETOMETER),
      Output('diagnostics', topics.DIAGNOSTICS, every_step=False)))
 
+def _volts_transfer(params: dict[str, Any]) -> list[str]:
+    """The output volts' transfer to field, from the node's parameters (the contract's)."""
+    from acds_common.parameters import section
+
+    from magnetometer_sim.configuration import volts_transfer
+    return volts_transfer(section(params, 'magnetometer'))
+
+
+def _bias_transfer(params: dict[str, Any]) -> list[str]:
+    """What the bias channel means (the contract's)."""
+    from acds_common.parameters import section
+
+    from magnetometer_sim.configuration import axis_params
+    a = axis_params(section(params, 'magnetometer'))
+    return [f'per axis the active assembly\'s zero-field reference voltage, {a.bias_v:g} V nominal, quantised like '
+            f'the field channels ({a.step_v:g} V); it is the V_bias of {topics.NAMESPACE}/{topics.MAG_VOLTS}\'s '
+            'transfer, and moves only with a bias-shift fault']
+
+
 #: What the magnetometer_sim package adds to the graph.
 PACKAGE = Package(
     'magnetometer_sim',
     nodes=(Node('magnetometer_sim', ('magnetometer',), PORTS),),
     sections=SECTIONS,
     topics=(
-        Topic(topics.MAG_FIELD, 'sensor_msgs/msg/MagneticField', 'T', 'the field the volts mean, body'),
-        Topic(topics.MAG_VOLTS, VECTOR3, 'V', 'per-axis output volts (0…5 V)'),
-        Topic(topics.MAG_BIAS_VOLTS, VECTOR3, 'V', 'per-axis bias reference volts (2.5 V nominal)'),
+        Topic(topics.MAG_FIELD, 'sensor_msgs/msg/MagneticField', 'T', 'the field the volts mean, body',
+              realism='calibrated: the simulated sensor\'s own inversion of its volts about the nominal bias, '
+                      'no A/D of yours in between; a flight computer on board reads the volts and the bias '
+                      'channel (raw, realistic), this topic is the shortcut'),
+        Topic(topics.MAG_VOLTS, VECTOR3, 'V', 'per-axis output volts (0…5 V)', transfer=_volts_transfer),
+        Topic(topics.MAG_BIAS_VOLTS, VECTOR3, 'V', 'per-axis bias reference volts (2.5 V nominal)',
+              transfer=_bias_transfer),
     ),
 )

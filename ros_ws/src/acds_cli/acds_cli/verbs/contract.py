@@ -42,32 +42,76 @@ def _qos(profile: Any) -> dict[str, Any]:
             'history': profile.history.name.lower(), 'depth': profile.depth}
 
 
+#: What reading a truth topic means for an external flight computer (no spacecraft measures its own truth).
+TRUTH_REALISM = ('truth: the simulated world itself, which no sensor on board gives; a flight computer that reads '
+                 'it is better informed than flight hardware allows (fine for a test harness, not for a claim about '
+                 'flight performance)')
+
+
+def _declaration(name: str) -> Any:
+    from acds_common import topics
+    from acds_common.graph import declared_topics
+
+    decl = declared_topics().get(topics.relative(name))
+    if decl is None:  # a formation vehicle's topic: the single-vehicle declaration under its namespace
+        decl = declared_topics().get(topics.relative(name).partition('/')[2])
+    return decl
+
+
 def _topic_info(name: str) -> dict[str, Any]:
     """Type, unit, meaning and data fields of a topic, as its package (or the mechanism) declares it."""
     from acds_common import topics
     from acds_common.cdr import DATA_FIELDS
-    from acds_common.graph import declared_topics
 
     msg_type = topics.type_of(name)
-    decl = declared_topics().get(topics.relative(name))
-    if decl is None:  # a formation vehicle's topic: the single-vehicle declaration under its namespace
-        decl = declared_topics().get(topics.relative(name).partition('/')[2])
+    decl = _declaration(name)
     return {'type': msg_type, 'unit': decl.unit if decl else '', 'meaning': decl.doc if decl else '',
             'data_fields': DATA_FIELDS[msg_type]}
 
 
+def _realism(name: str) -> str:
+    decl = _declaration(name)
+    if decl is not None and decl.realism:
+        return decl.realism
+    return TRUTH_REALISM if '/truth/' in name else ''
+
+
+def _transfer(name: str, source: str, graph: Any, params: dict[str, dict[str, Any]]) -> list[str]:
+    """The declared transfer of a raw-unit topic to engineering units, from its producing node's parameters."""
+    from acds_common.parameters import normalize
+
+    decl = _declaration(name)
+    if decl is None or decl.transfer is None or not graph.present(source):
+        return []
+    return decl.transfer(normalize(graph.nodes[source].name, params[source]))
+
+
+def scenario_contracts(scenario: Any) -> dict[str, dict[str, Any]]:
+    """The contract of every node of ``scenario``'s graph, by instance (its parameters and graph built once)."""
+    from acds_common.graph import build_graph
+    from acds_common.parameters import node_parameters
+
+    params = node_parameters(scenario, scenario.total_steps())
+    graph = build_graph(params)
+    return {node: _node_contract(scenario, node, params, graph) for node in params}
+
+
 def node_contract(scenario: Any, node: str, steps: int | None = None) -> dict[str, Any]:
     """The contract of instance ``node`` in ``scenario``'s graph (UsageError when the graph has no such node)."""
-    from acds_common import topics
     from acds_common.graph import build_graph
-    from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS
-    from acds_common.parameters import node_param_specs, node_parameters, parameters_yaml
+    from acds_common.parameters import node_parameters
 
-    steps = steps if steps is not None else scenario.total_steps()
-    params = node_parameters(scenario, steps)
+    params = node_parameters(scenario, steps if steps is not None else scenario.total_steps())
     if node not in params:
         raise UsageError(f'--node {node}: scenario {scenario.name} runs no such node (its nodes: {", ".join(params)})')
-    graph = build_graph(params)
+    return _node_contract(scenario, node, params, build_graph(params))
+
+
+def _node_contract(scenario: Any, node: str, params: dict[str, dict[str, Any]], graph: Any) -> dict[str, Any]:
+    from acds_common import topics
+    from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS
+    from acds_common.parameters import node_param_specs, parameters_yaml
+
     spec = graph.nodes[node]
     dt = scenario.control_period_s
     lockstep_qos, command_qos = _qos(LOCKSTEP_QOS), _qos(COMMAND_QOS)
@@ -77,11 +121,19 @@ def node_contract(scenario: Any, node: str, steps: int | None = None) -> dict[st
             present = graph.present(inp.source)
             rule = (f"step k reads the source's step k−{inp.lag} message (stamp (k−{inp.lag})·Δt; none for k < {inp.lag})"
                     if inp.lag else "step k reads the source's step k message (stamp k·Δt)")
-            inputs.append({'topic': spec.topic(inp.topic), **_topic_info(spec.topic(inp.topic)), 'source': inp.source,
+            name = spec.topic(inp.topic)
+            inputs.append({'topic': name, **_topic_info(name), 'source': inp.source,
                            'present': present, 'stage': stage.name, 'lag': inp.lag, 'qos': lockstep_qos,
-                           'rule': rule if present else 'source not in this graph: the input is absent (not subscribed)'})
+                           'rule': rule if present else 'source not in this graph: the input is absent (not subscribed)',
+                           'transfer': _transfer(name, inp.source, graph, params), 'realism': _realism(name)})
     clock = (not spec.time_owner and
              any(not any(i.lag == 0 and graph.present(i.source) for i in st.inputs) for st in spec.stages))
+    read = {i['topic'] for i in inputs}
+    others = [{'topic': other.topic(o.topic), **_topic_info(other.topic(o.topic)), 'source': inst,
+               'frame_id': o.frame_id, 'realism': _realism(other.topic(o.topic)),
+               'transfer': _transfer(other.topic(o.topic), inst, graph, params)}
+              for inst, other in graph.nodes.items() if inst != node
+              for o in other.outputs if o.every_step and o.lockstep and other.topic(o.topic) not in read]
     outputs = []
     for out in spec.outputs:
         name = spec.topic(out.topic)
@@ -92,11 +144,12 @@ def node_contract(scenario: Any, node: str, steps: int | None = None) -> dict[st
                         'child_frame_id': out.child_frame_id, 'every_step': out.every_step,
                         'stamp_offset': out.stamp_offset, 'qos': lockstep_qos if out.lockstep else command_qos,
                         'rule': f'{when}, the output of step k stamped (k+{out.stamp_offset})·Δt'
-                        if out.stamp_offset else f'{when}, the output of step k stamped k·Δt'})
+                        if out.stamp_offset else f'{when}, the output of step k stamped k·Δt',
+                        'transfer': _transfer(name, node, graph, params)})
     if spec.time_owner:
         outputs.append({'topic': topics.CLOCK, **_topic_info(topics.CLOCK), 'frame_id': '', 'child_frame_id': '',
                         'every_step': True, 'stamp_offset': 0, 'qos': lockstep_qos,
-                        'rule': 'announces step k (clock k·Δt) once the outputs of step k are published'})
+                        'rule': 'announces step k (clock k·Δt) once the outputs of step k are published', 'transfer': []})
     rules = ['an output for step k is stamped k·Δt plus its declared stamp_offset (integer nanoseconds, exactly)',
              "a lag-L input of step k is the source's step k−L message; an input whose source is not in the graph "
              'is absent',
@@ -120,7 +173,8 @@ def node_contract(scenario: Any, node: str, steps: int | None = None) -> dict[st
         rules.append('the time owner cannot be external (it publishes /clock and paces the graph)')
         rules.append(f'as it finishes, it publishes its last step on {topics.RUN_END} '
                      f'({topics.TYPES[topics.RUN_END]}) before it delivers its last messages and leaves')
-    specs = {s.name: s for s in node_param_specs(spec.name, params[node].get('formation_vehicles') or ())}
+    specs = {s.name: s for s in node_param_specs(spec.name, params[node].get('formation_vehicles') or (),
+                                                 params[node]['graph_nodes'])}
     parameters = [{'name': name, 'type': specs[name].kind, 'unit': specs[name].unit,
                    'range': [specs[name].lo, specs[name].hi] if specs[name].lo is not None or specs[name].hi is not None
                    else None, 'choices': list(specs[name].choices) or None, 'value': value}
@@ -128,7 +182,7 @@ def node_contract(scenario: Any, node: str, steps: int | None = None) -> dict[st
     return {'node': node, 'package': spec.package, 'scenario': scenario.name, 'stepper': spec.stepper,
             'namespace': spec.namespace, 'control_period_s': dt, 'rate_hz': 1.0 / dt, 'time_owner': spec.time_owner,
             'follows_clock': clock, 'ground_commands': spec.ground_commands, 'rules': rules,
-            'inputs': inputs, 'outputs': outputs, 'parameters': parameters,
+            'inputs': inputs, 'outputs': outputs, 'other_topics': others, 'parameters': parameters,
             'parameters_file': parameters_yaml({node: params[node]})}
 
 
@@ -161,6 +215,26 @@ def markdown(c: dict[str, Any]) -> str:
         lines.append(f'| `{o["topic"]}` | {o["type"]} | {_cell(o["unit"])} | {_cell(frame)} | '
                      f'{"yes" if o["every_step"] else "no"} | (k+{o["stamp_offset"]})·Δt | {qos} | '
                      f'{_cell(o["data_fields"])} |')
+    raw = [(i['topic'], i['source'], i['transfer']) for i in c['inputs'] if i['transfer']] + \
+        [(o['topic'], c['node'], o['transfer']) for o in c['outputs'] if o['transfer']]
+    if raw:
+        lines += ['', '## Raw units: transfer to engineering units', '',
+                  'Generated from the producing node\'s parameters in this scenario.']
+        for topic, source, transfer in raw:
+            lines += ['', f'`{topic}` (from {source}):', '', *(f'- {t}' for t in transfer)]
+    real = [i for i in c['inputs'] if i['realism'] and i['present']]
+    if real:
+        lines += ['', '## Realism of the inputs', '', *(f'- `{i["topic"]}`: {i["realism"]}' for i in real)]
+    if c['other_topics']:
+        lines += ['', '## Other per-step topics of this graph', '',
+                  'Every other per-step topic of the graph, one message per step with the same QoS and stamp rule as '
+                  'the inputs above (a node run as external may subscribe to any of them; the graph does not wait '
+                  'for its reading). What reading it means for realism is in the last column.', '',
+                  '| topic | type | unit | source | frame | meaning | realism |',
+                  '| --- | --- | --- | --- | --- | --- | --- |']
+        for o in c['other_topics']:
+            lines.append(f'| `{o["topic"]}` | {o["type"]} | {_cell(o["unit"])} | {o["source"]} | '
+                         f'{_cell(o["frame_id"])} | {_cell(o["meaning"])} | {_cell(o["realism"])} |')
     lines += ['', '## Parameters', '', '| name | type | unit | range | value |', '| --- | --- | --- | --- | --- |']
     for p in c['parameters']:
         rng = p['range'] and f'[{_cell(p["range"][0])}, {_cell(p["range"][1])}]'

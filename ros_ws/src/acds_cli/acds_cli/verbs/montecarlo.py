@@ -9,7 +9,7 @@ quantity, ``report.md`` and ``montecarlo.json`` (what was run, to rebuild any sa
 the percentile table in study units. Exit 1 if a sample's run failed (listed, never dropped).
 
 ``pick-sample DIR`` applies the baseline rule to such a study: the sample whose acquisition time
-is nearest the chosen percentile (default the 90th: a representative worst case, see the README),
+is nearest the chosen percentile (default the 90th: a representative worst case, see the docs' Studies page),
 printed with the scenario keys that set its conditions and, for Table 4-7 case 4, the H ∥ B attitude
 on the same geometry.
 
@@ -32,7 +32,7 @@ from acds_common.scenario import Scenario, ScenarioError
 from ..arguments import UsageError, check_output_dir, positive_int, positive_minutes
 from ..workspace import new_run_dir, workspace
 
-#: The quantity and percentile of the baseline rule (README "Choosing the baseline's open conditions").
+#: The quantity and percentile of the baseline rule (docs: Studies, "Choosing the baseline's open conditions").
 BASELINE_QUANTITY, BASELINE_PERCENTILE = 'acquisition_time_min', 90.0
 
 
@@ -384,7 +384,7 @@ def cmd_pick_sample(args: argparse.Namespace) -> int:
     print(f'# Open conditions (seed 002 §4.3.1 leaves them open): sample {index} of `{spec["command"]}`,')
     print(f'# the sample whose {args.quantity} is nearest the {args.percentile:g}th percentile ({target:.1f} min) '
           'of that distribution')
-    print('# (rule: a representative worst case, README "Choosing the baseline\'s open conditions").')
+    print('# (rule: a representative worst case, docs: Studies, "Choosing the baseline\'s open conditions").')
     by_section: dict[str, dict[str, Any]] = {}
     for label, value in sample.drawn.items():
         section, _, key = label.rpartition('.')
