@@ -34,6 +34,11 @@ from ..workspace import new_run_dir, workspace
 
 #: The quantity and percentile of the baseline rule (README "Choosing the baseline's open conditions").
 BASELINE_QUANTITY, BASELINE_PERCENTILE = 'acquisition_time_min', 90.0
+#: What one sample leaves on disk, bytes: its journal line, its samples.json entry and its samples.csv row, twice over
+#: what heao_b_acquisition's measure (1.5 + 2.0 + 0.5 kB; a sample with more mode changes writes more).
+BYTES_PER_SAMPLE = 8_000
+#: What a study leaves besides its samples, bytes: the PNGs, report.md, percentiles.json (0.4 MB measured).
+BYTES_PER_STUDY = 2_000_000
 
 
 def add_sample_options(p: argparse.ArgumentParser, *, run: bool) -> None:
@@ -172,6 +177,21 @@ def study_folder(prefix: str, name: str, args: argparse.Namespace) -> Path:
     return out
 
 
+def check_disk(out: Path, runs: int) -> None:
+    """Refuse, in one line before anything starts, a study whose ``runs`` samples the disk under ``out`` cannot
+    hold (:data:`BYTES_PER_SAMPLE` each and :data:`BYTES_PER_STUDY`)."""
+    import shutil
+
+    where = next(p for p in (out, *out.resolve().parents) if p.exists())
+    free = shutil.disk_usage(where).free
+    need = runs * BYTES_PER_SAMPLE + BYTES_PER_STUDY
+    if need > free:
+        fit = max(0, (free - BYTES_PER_STUDY) // BYTES_PER_SAMPLE)
+        raise UsageError(f'--runs {runs}: about {need / 1e6:,.1f} MB of output ({BYTES_PER_SAMPLE / 1e3:g} kB a sample) '
+                         f'and {free / 1e6:,.1f} MB free under {where}: at most {fit:,} samples fit (free space, or '
+                         'choose another --out)')
+
+
 def open_journal(out: Path, study: dict[str, Any], samples: dict[tuple[str, int], Any], resume: bool) -> Any:
     """The study's journal (``acds_runtime.journal``), new or resumed; a mismatch is a UsageError (one line)."""
     from acds_runtime.journal import Journal, JournalError, samples_hash, text_hash
@@ -269,15 +289,18 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
 
     base = load_scenario(args.scenario)
     out = study_folder('montecarlo', base.name, args)
+    check_disk(out, args.runs)
     steps = _steps(base, args.until_min)
     rerun = rerun_command(args.scenario, args.seed, '{index}', args.vary, args.until_min)
     sampler, samples = draw_samples(base, args.seed, args.runs, args.vary, rerun)
     variables = [v.text for v in sampler.variables]
     run_length = _run_length(base, steps, samples)
     command = study_command(['montecarlo', args.scenario], args)
+    from acds_runtime.montecarlo import kernel_build
+
     journal = open_journal(out, {'verb': 'montecarlo', 'scenario': base.name, 'seed': args.seed, 'runs': args.runs,
                                  'vary': args.vary, 'engine': args.engine, 'until_min': args.until_min,
-                                 'steps': steps, 'command': command},
+                                 'steps': steps, 'kernels': kernel_build(), 'command': command},
                            {('', s.index): s for s in samples}, bool(args.resume))
     print(f'[montecarlo] {base.name}: {args.runs} samples of seed {args.seed} ({"; ".join(variables)}), '
           f'{run_length}, engine {args.engine}; output {out}', file=sys.stderr, flush=True)
@@ -305,7 +328,8 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     dr.write_rows(out, rows, records)
     dr.write_json(out / 'percentiles.json', stats)
     plots = dr.plot_distributions(out, rows, stats)
-    report = dr.write_report(out, spec, rows, stats, sens, plots)
+    failures = _not_captured(base, out, rows, samples)
+    report = dr.write_report(out, spec, rows, stats, sens, plots, failures)
     mark_complete(out, spec, True)
     print(f'\n== {base.name}: {args.runs} samples (seed {args.seed}), {run_length}; '
           f'{where}; {wall:.0f} s wall ==')
@@ -314,12 +338,25 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     if top:
         print('rank correlation of acquisition time with: ' +
               ', '.join(f'{k} {v:+.2f}' for k, v in list(top.items())[:4]))
+    if failures:
+        print('\n' + '\n'.join(failures))
     failed = [r for r in rows if 'error' in r]
     for r in failed:
         print(f'[montecarlo] sample {r["index"]} failed: {r["error"].splitlines()[0]}', file=sys.stderr)
     print(f'[montecarlo] {report}; samples.csv, samples.json, percentiles.json, {len(plots)} PNG(s) in {out}',
           file=sys.stderr)
     return 1 if failed else 0
+
+
+def _not_captured(base: Scenario, out: Path, rows: list[dict[str, Any]], samples: list[Any]) -> list[str]:
+    """The samples that did not reach capture, with their drawn conditions (HEAO acquisitions only; markdown)."""
+    from acds_runtime import dispersion_report as dr
+    from acds_runtime.summaries import heao as heao_summary
+
+    if not heao_summary.applies(base):
+        return []
+    explain = f'./scripts/acds explain-sample {shlex.quote(str(out))} {{index}}'
+    return dr.not_captured_lines(rows, list(dr.flatten(samples[0].drawn)), explain)
 
 
 # ------------------------------------------------------------------------------------ pick-sample
