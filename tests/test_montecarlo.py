@@ -385,3 +385,22 @@ def test_the_report_lists_the_samples_not_captured_and_explain_sample_says_why(c
     assert any((run_dir / 'plots').glob('mode_timeline.*'))
     bad = run_acds('explain-sample', str(clean_study), '6', '--engine', 'direct')
     assert bad.returncode == 2 and bad.stderr.strip().splitlines()[-1].endswith('has samples 0…5')
+
+
+def test_a_sample_journaled_twice_counts_once(clean_study, tmp_path):
+    """A worker lost after its result was journaled and rescheduled can only add a second line of the same sample
+    (the same bits): a resume keeps the first and the table is the clean study's, byte for byte."""
+    import shutil
+
+    out = tmp_path / 'mc'
+    shutil.copytree(clean_study, out)
+    for name in ('samples.csv', 'percentiles.json'):
+        (out / name).unlink()
+    journal = out / 'samples.jsonl'
+    lines = journal.read_text().splitlines(keepends=True)
+    journal.write_text(''.join([*lines, lines[3], lines[1 + 4]]))
+    proc = run_acds(*STUDY, '--resume', str(out))
+    assert proc.returncode == 0, proc.stderr
+    assert 'resuming' in proc.stderr and '6 of 6 samples kept, 0 to run' in proc.stderr
+    for name in ('samples.csv', 'percentiles.json'):
+        assert (out / name).read_bytes() == (clean_study / name).read_bytes(), name
