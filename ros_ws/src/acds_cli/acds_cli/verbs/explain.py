@@ -150,6 +150,7 @@ def facts_of(bag_path: Path, scenario: Any) -> dict[str, Any]:
         big_h = big_h + h[ih2]
     keep = t_b[ib] >= entered
     geometry = _field_geometry(b[ib][keep], big_h[keep])
+    geometry['h_at_entry_ftlbs'] = float(units.nms_to_ftlbs(np.linalg.norm(big_h[keep][0]))) if keep.any() else None
     in_cone = angle <= cone
     nulled = np.all(np.abs(w_deg) <= rate, axis=1) if len(w_deg) else np.zeros(0, bool)
     return {
@@ -204,11 +205,15 @@ def verdict(f: dict[str, Any], sat: list[bool]) -> str:
         return f'Why, in short: it never left Mode 1A because {cause}.'
     parts = []
     if along:
-        parts.append('the body momentum stayed close to the field line (the adverse alignment of Table 4-7 case 4, '
-                     'B ∥ H, here drawn by chance), so the unloading law could not take it out of the wheels')
+        parts.append(f'the body momentum lay along the field line (within 30° of it {100 * f["share_h_along_b"]:.0f} % '
+                     'of the time: the adverse alignment of Table 4-7 case 4, B ∥ H, reached here in flight), where the '
+                     'magnetic torque M × B, perpendicular to B, cannot take it out of the wheels')
     if any(sat):
-        parts.append(f'the momentum left exceeded the {_axes(sat)} wheel capacity, so the wheels saturated and the '
-                     'rates were never nulled')
+        entry = f['h_at_entry_ftlbs']
+        parts.append(f'it entered Mode 1B on its rates (the transition test is on rates, not momentum) still carrying '
+                     f'|H| = {entry or 0:.1f} ft-lb-sec, and what stayed exceeded the {_axes(sat)} wheel capacity '
+                     f'({", ".join(f"{c:.1f}" for c, m in zip(f["capacity_ftlbs"], sat, strict=True) if m)} ft-lb-sec), '
+                     'so the wheels saturated and the rates were never nulled')
     if not parts:
         parts.append('the capture test never held: ' + ('the rates were never nulled' if f['share_rates_nulled'] == 0
                                                          else 'z was never within the cone while the rates were nulled'))
