@@ -100,24 +100,15 @@ def _segment_share(mask: np.ndarray) -> float:
 def facts_of(bag_path: Path, scenario: Any) -> dict[str, Any]:
     """What the acquisition acted through, from the bag (module doc): modes, capture test, wheels, field geometry."""
     from acds_common import topics, units
-    from acds_common.mode_report import ModeReport
     from acds_runtime.bag.reader import open_bag
     from acds_runtime.summaries.heao import Accumulator, transitions
 
-    from ..bag.plots import _common, _gather, _series, _v3, run_context, sun_angle_deg
+    from ..bag.plots import _common, _gather, _series, _v3, mode_of, odometry_values, run_context, sun_angle_deg
 
     bag = open_bag(bag_path)
     ctx = run_context(bag)
 
-    def mode_of(m: Any) -> tuple[str, str, bool]:
-        if not m.status:
-            return '', '', False
-        report = ModeReport.from_values(m.status[0].message, ((v.key, v.value) for v in m.status[0].values))
-        return report.mode, report.cause, report.captured
-
-    odometry = lambda m: [*_v3(m.twist.twist.angular), m.pose.pose.orientation.x, m.pose.pose.orientation.y,  # noqa: E731
-                          m.pose.pose.orientation.z, m.pose.pose.orientation.w]
-    data = _gather(bag, {topics.TRUTH_ODOMETRY: odometry, topics.WHEEL_MOMENTUM: lambda m: _v3(m.vector),
+    data = _gather(bag, {topics.TRUTH_ODOMETRY: odometry_values, topics.WHEEL_MOMENTUM: lambda m: _v3(m.vector),
                          topics.TRUTH_B_BODY: lambda m: _v3(m.magnetic_field)}, {topics.MODE: mode_of})
     stamps, values = data.get(topics.resolve(topics.MODE), ((), []))
     history = [(t / 1e9, *v) for t, v in zip(stamps, values, strict=True)]
