@@ -127,9 +127,8 @@ def _steps(scenario: Scenario, until_min: float | None) -> int | None:
 
 def _run_length(scenario: Scenario, steps: int | None, samples: list[Any] | None = None) -> str:
     """How long each run is: its steps and control period (their ranges when the samples vary the period)."""
-    runs = [s.scenario for s in samples or []] or [scenario]
-    lengths = sorted({(steps if steps is not None else sc.total_steps(), sc.control_period_s) for sc in runs},
-                     key=lambda nd: nd[0] * nd[1])
+    runs = [s.length for s in samples or []] or [(scenario.total_steps(), scenario.control_period_s)]
+    lengths = sorted({(steps if steps is not None else n, dt) for n, dt in runs}, key=lambda nd: nd[0] * nd[1])
     if len({dt for _, dt in lengths}) > 1:
         counts, periods = sorted(n for n, _ in lengths), sorted(dt for _, dt in lengths)
         text = (f'{counts[0]}–{counts[-1]} steps of {periods[0]:g}–{periods[-1]:g} s (control_period_s varied; '
@@ -143,10 +142,15 @@ def _run_length(scenario: Scenario, steps: int | None, samples: list[Any] | None
 
 
 def draw_samples(base: Scenario, seed: int, runs: int, vary: list[str], command: str) -> tuple[Any, list[Any]]:
-    """The sampler and its ``runs`` samples (each validated; the first pre-flighted: every stepper built)."""
+    """The sampler and its ``runs`` samples as the study keeps them (``KeptSample``: each validated, then its
+    Scenario let go; the first pre-flighted: every stepper built)."""
     sampler = _sampler(base, seed, vary, command)
-    samples = [_draw(sampler, i) for i in range(runs)]
-    _preflight(samples[0])
+    samples = []
+    for i in range(runs):
+        sample = _draw(sampler, i)
+        if i == 0:
+            _preflight(sample)
+        samples.append(sample.kept())
     return sampler, samples
 
 
@@ -255,7 +259,7 @@ def run_journaled(journal: Any, samples: dict[tuple[str, int], Any], args: argpa
 
 def records_of(samples: list[Any], summaries: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per sample: index, name, drawn values, geometry at t0, run summary (``samples.json``)."""
-    return [{'index': s.index, 'name': s.scenario.name, 'drawn': s.drawn, 'geometry': s.geometry(), 'summary': summary}
+    return [{'index': s.index, 'name': s.name, 'drawn': s.drawn, 'geometry': s.geometry(), 'summary': summary}
             for s, summary in zip(samples, summaries, strict=True)]
 
 
