@@ -331,3 +331,76 @@ def test_a_study_stopped_by_a_signal_exits_128_plus_its_number(tmp_path, sig):
     proc, err = _interrupt_study(out, sig, 1)
     assert proc.returncode == 128 + sig, err
     assert f'interrupted ({signal.Signals(sig).name})' in err and f'--resume {out}' in err, err
+
+
+def test_a_resume_with_another_engine_is_refused(clean_study):
+    proc = run_acds(*STUDY, '--engine', 'graph', '--resume', str(clean_study))
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        f'acds montecarlo: error: --resume {clean_study}: the study there has engine "direct", this command "graph"']
+
+
+def test_a_resume_on_another_build_of_the_kernels_names_it(clean_study, tmp_path):
+    """A journal whose study ran on another numba (or other model sources) is refused in one line naming both."""
+    import shutil
+
+    out = tmp_path / 'mc'
+    shutil.copytree(clean_study, out)
+    journal = out / 'samples.jsonl'
+    head, *rest = journal.read_text().splitlines(keepends=True)
+    study = json.loads(head)
+    ours = study['study']['kernels']
+    study['study']['kernels'] = ours.replace('numba ', 'numba 0.0.0-', 1)
+    journal.write_text(json.dumps(study) + '\n' + ''.join(rest[:2]))
+    proc = run_acds(*STUDY, '--resume', str(out))
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and 'the study there has kernels "numba 0.0.0-' in lines[0] and f'this command "{ours}"' in lines[0]
+
+
+def test_runs_beyond_what_the_disk_holds_are_refused_before_anything_starts(tmp_path):
+    out = tmp_path / 'mc'
+    proc = run_acds('montecarlo', BASE, '--runs', str(10 ** 15), '--quiet', '--out', str(out))
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and 'samples fit' in lines[0]
+    assert lines[0].startswith(f'acds montecarlo: error: --runs {10 ** 15}: about ')
+    assert not out.exists()
+
+
+def test_the_report_lists_the_samples_not_captured_and_explain_sample_says_why(clean_study, tmp_path):
+    """Five minutes are too short for any capture: every sample is listed (with its drawn conditions), and
+    explain-sample replays one (direct engine: the same bits) into its folder, finds the study's truth digest and
+    says which mode it stayed in, its wheels and its field geometry."""
+    report = (clean_study / 'report.md').read_text()
+    assert '## Samples not captured' in report
+    assert '6 of 6 samples did not reach acquisition capture' in report and 'Wilson interval' in report
+    assert all(f'\n| {k} | ' in report for k in range(6))
+    run_dir = tmp_path / 'explain'
+    proc = run_acds('explain-sample', str(clean_study), '2', '--engine', 'direct', '--run-dir', str(run_dir))
+    assert proc.returncode == 0, proc.stderr
+    assert 'the same truth digest as the study\'s sample 2' in proc.stdout
+    assert 'it never left Mode 1A' in proc.stdout and 'Field geometry: the orbit was' in proc.stdout
+    assert (run_dir / 'explanation.md').exists() and (run_dir / 'bag').is_dir()
+    assert any((run_dir / 'plots').glob('mode_timeline.*'))
+    bad = run_acds('explain-sample', str(clean_study), '6', '--engine', 'direct')
+    assert bad.returncode == 2 and bad.stderr.strip().splitlines()[-1].endswith('has samples 0…5')
+
+
+def test_a_sample_journaled_twice_counts_once(clean_study, tmp_path):
+    """A worker lost after its result was journaled and rescheduled can only add a second line of the same sample
+    (the same bits): a resume keeps the first and the table is the clean study's, byte for byte."""
+    import shutil
+
+    out = tmp_path / 'mc'
+    shutil.copytree(clean_study, out)
+    for name in ('samples.csv', 'percentiles.json'):
+        (out / name).unlink()
+    journal = out / 'samples.jsonl'
+    lines = journal.read_text().splitlines(keepends=True)
+    journal.write_text(''.join([*lines, lines[3], lines[1 + 4]]))
+    proc = run_acds(*STUDY, '--resume', str(out))
+    assert proc.returncode == 0, proc.stderr
+    assert 'resuming' in proc.stderr and '6 of 6 samples kept, 0 to run' in proc.stderr
+    for name in ('samples.csv', 'percentiles.json'):
+        assert (out / name).read_bytes() == (clean_study / name).read_bytes(), name

@@ -87,7 +87,7 @@ def test_the_montecarlo_header_gives_the_samples_step_counts_when_the_control_pe
 
     base = load_scenario('heao_b_acquisition_short')  # 60 min at 1 s
     _, samples = draw_samples(base, 1, 6, ['control_period_s=choice(0.5, 2.0)'], '')
-    assert {s.scenario.control_period_s for s in samples} == {0.5, 2.0}
+    assert {s.length[1] for s in samples} == {0.5, 2.0}
     text = _run_length(base, None, samples)
     assert text.startswith('1800–7200 steps of 0.5–2 s (control_period_s varied; 60.0–60.0 min sim)'), text
     assert _run_length(base, None).startswith('3600 steps of 1 s (60.0 min sim)')

@@ -25,8 +25,9 @@ shared with other work, the wall rate measures the load as much as the code.
 
 ``--json`` prints one object with the keys ``graph_steps_per_s``, ``bare_chain_steps_per_s``,
 ``ratio``, ``hops``, ``deliveries_per_step``, ``direct_steps_per_s``, ``direct_steps_per_cpu_s``,
-``direct_kernel_load_s``, ``core_steps_per_s``, ``dispersion_samples_per_s``, ``dispersion_samples_per_cpu_s``,
-``fsw_sample_overhead_s``,
+``direct_kernel_load_s``, ``core_steps_per_s``, ``core_steps_per_cpu_s``, ``direct_kernel_ratio`` and
+``direct_kernel_ratio_cpu`` (the whole six-model step against the rigid-body kernel alone: direct / core, per wall and
+per CPU second), ``dispersion_samples_per_s``, ``dispersion_samples_per_cpu_s``, ``fsw_sample_overhead_s``,
 ``fsw_sample_steps_per_s``, ``cores`` (and
 ``cpu_ms_per_step``, ``load_average``).
 """
@@ -195,8 +196,9 @@ def fsw_sample_cost() -> tuple[float, float]:
     return overhead, (FSW_STEPS - FSW_SHORT_STEPS) / max(1e-9, long - overhead)
 
 
-def core_rate(steps: int) -> float:
-    """Steps/s of the rigid body + environment kernel alone (the scenario's body, orbit, field, substeps)."""
+def core_rate(steps: int) -> tuple[float, float]:
+    """Steps per wall second and per CPU second of the rigid body + environment kernel alone (the scenario's body,
+    orbit, field, substeps)."""
     import numpy as np
     from acds_common import kernels
     from acds_common.scenario import load_scenario
@@ -207,11 +209,11 @@ def core_rate(steps: int) -> float:
     model = build_rigid_body(*(sc.values[s] for s in RIGID_BODY_SECTIONS))
     dipole, zero = np.array([100.0, -50.0, 20.0]), np.zeros(3)
     dt = sc.control_period_s
-    t0 = time.perf_counter()
+    t0, cpu0 = time.perf_counter(), time.process_time()
     for _ in range(steps):
         model.advance(dt, dipole, zero, zero)
         model.truth(zero)
-    return steps / (time.perf_counter() - t0)
+    return steps / (time.perf_counter() - t0), steps / (time.process_time() - cpu0)
 
 
 #: Entry-point group of modules adding figures to the bench: each has ``bench(args) -> (JSON fields, printed lines)``.
@@ -228,7 +230,7 @@ def main(args: argparse.Namespace) -> int:
     graph = graph_rate(args.steps)
     bare = bare_chain_rate(graph['hops'], args.steps)
     direct, direct_cpu, kernel_load = direct_rate(max(args.steps, 5000))
-    core = core_rate(max(args.steps, 5000))
+    core, core_cpu = core_rate(max(args.steps, 5000))
     dispersion, dispersion_cpu = dispersion_rate()
     fsw_overhead, fsw_rate = fsw_sample_cost()
     result = {'graph_steps_per_s': round(graph['steps_per_s'], 1), 'bare_chain_steps_per_s': round(bare, 1),
@@ -236,7 +238,9 @@ def main(args: argparse.Namespace) -> int:
               'deliveries_per_step': round(graph['deliveries_per_step'], 2),
               'direct_steps_per_s': round(direct, 1), 'direct_steps_per_cpu_s': round(direct_cpu, 1),
               'direct_kernel_load_s': round(kernel_load, 3),
-              'core_steps_per_s': round(core, 1), 'dispersion_samples_per_s': round(dispersion, 3),
+              'core_steps_per_s': round(core, 1), 'core_steps_per_cpu_s': round(core_cpu, 1),
+              'direct_kernel_ratio': round(direct / core, 3), 'direct_kernel_ratio_cpu': round(direct_cpu / core_cpu, 3),
+              'dispersion_samples_per_s': round(dispersion, 3),
               'dispersion_samples_per_cpu_s': round(dispersion_cpu, 3),
               'fsw_sample_overhead_s': round(fsw_overhead, 3), 'fsw_sample_steps_per_s': round(fsw_rate, 1),
               'cores': os.cpu_count(),
@@ -250,7 +254,8 @@ def main(args: argparse.Namespace) -> int:
     print(f'ratio graph / bare ring:                          {graph["steps_per_s"] / bare:10.3f}')
     print(f'direct engine (one process, no DDS):              {direct:10.1f} steps/s  ({direct_cpu:.1f} per CPU s; '
           f'{kernel_load:.2f} s once per process to load its compiled kernels)')
-    print(f'rigid body + environment kernel:                  {core:10.1f} steps/s')
+    print(f'rigid body + environment kernel:                  {core:10.1f} steps/s  ({core_cpu:.1f} per CPU s)')
+    print(f'ratio direct engine / kernel:                     {direct / core:10.3f}  ({direct_cpu / core_cpu:.3f} per CPU s)')
     print(f'dispersion ({DISPERSION_SAMPLES} case-1 samples to capture, direct): {dispersion:10.3f} samples/s '
           f'({dispersion_cpu:.3f} per CPU s)')
     print(f'flight-software sample ({FSW_SCENARIO}, the example node started per sample): {fsw_overhead:.2f} s '

@@ -54,8 +54,9 @@ import numpy as np
 
 from .summary import summary_json
 
-#: Percentiles reported for every quantity.
-PERCENTILES = (5, 10, 25, 50, 75, 90, 95)
+#: Percentiles reported for every quantity (the tails p0.1/p1/p99/p99.9 only where the samples allow:
+#: :func:`samples_needed`).
+PERCENTILES = (0.1, 1, 5, 10, 25, 50, 75, 90, 95, 99, 99.9)
 #: Bootstrap resamples of the paired median ratio and of each percentile's interval.
 BOOTSTRAP_RESAMPLES = 2000
 #: Confidence of the interval on each percentile, %.
@@ -197,19 +198,29 @@ def samples_for_width(n: int, interval: Sequence[float | None], value: float | N
     return max(2, math.ceil(n * ((hi - lo) / (target_pct / 100 * abs(value))) ** 2))
 
 
+def samples_needed(p: float) -> int:
+    """The fewest samples for which percentile ``p`` is an estimate and not the extreme sample: at least one
+    sample on each side of it, n ≥ 100 / min(p, 100 − p) (p1 and p99: 100; p0.1 and p99.9: 1,000). Below that
+    the type-7 value is only the smallest (largest) sample, and the bootstrap cannot see past it either."""
+    return math.ceil(round(100.0 / min(p, 100.0 - p), 6))
+
+
 def describe(rows: Sequence[dict[str, Any]], q: Quantity, seed: int, stream: int,
              target_pct: float = TARGET_WIDTH_PCT) -> dict[str, Any]:
-    """``{"p5": …, …, "p95": …, "n", "censored", "censored_above", "unit", "interval": {"p5": [lo, hi], …},
-    "samples_for_width": {"p5": N, …}, "confidence_pct", "target_width_pct"}`` of one quantity (module doc)."""
+    """``{"p0.1": …, "p1": …, …, "p99.9": …, "n", "censored", "censored_above", "unit", "too_few": {"p0.1": 1000, …},
+    "interval": {"p5": [lo, hi], …}, "samples_for_width": {"p5": N, …}, "confidence_pct", "target_width_pct"}`` of
+    one quantity (module doc). A percentile the samples do not allow (:func:`samples_needed`) is null, named in
+    ``too_few`` with the samples it needs, and has no interval."""
     vals, censor_at = values_of(rows, q)
-    out: dict[str, Any] = {f'p{p}': percentile(vals, p) for p in PERCENTILES}
+    allowed = [p for p in PERCENTILES if len(vals) >= samples_needed(p)]
+    out: dict[str, Any] = {f'p{p}': percentile(vals, p) if p in allowed else None for p in PERCENTILES}
     out.update(n=len(vals), censored=len(censor_at), censored_above=min(censor_at) if censor_at else None,
-               unit=q.unit)
+               unit=q.unit, too_few={f'p{p}': samples_needed(p) for p in PERCENTILES if p not in allowed})
     tail = (100.0 - CONFIDENCE_PCT) / 2
     boot = _bootstrap_sorted(vals, seed, (stream,)) if len(vals) else None
     intervals: dict[str, list[float | None]] = {}
     for p in PERCENTILES:
-        dist = _interpolate(boot, p) if boot is not None else np.array([])
+        dist = _interpolate(boot, p) if boot is not None and p in allowed else np.array([])
         intervals[f'p{p}'] = [percentile(dist, tail), percentile(dist, 100.0 - tail)]
     out['interval'] = intervals
     out['samples_for_width'] = {k: samples_for_width(len(vals), v, out[k], target_pct) for k, v in intervals.items()}
@@ -322,10 +333,60 @@ def wilson_interval(k: int, n: int, confidence_pct: float = CONFIDENCE_PCT) -> t
     return max(0.0, centre - half), min(1.0, centre + half)
 
 
+# ------------------------------------------------------------------------------- not captured
+
+
+#: The columns that say a sample's conditions and outcome in the not-captured list (report and print).
+NOT_CAPTURED_COLUMNS = (('orbit_dipole_inclination_deg', 'orbit to dipole axis, deg', '.1f'),
+                        ('initial_h_b_angle_deg', 'H vs B at t0, deg', '.1f'),
+                        ('initial_sun_angle_deg', 'z to sun at t0, deg', '.1f'),
+                        ('time_magnetics_only_min', 'Mode 1B at, min', '.1f'),
+                        ('peak_wheel_momentum_rss_ftlbs', 'peak |h|, ft-lb-sec', '.2f'),
+                        ('wheel_saturation_time_min', 'wheel at capacity at, min', '.1f'),
+                        ('final_mode', 'final mode', 's'),
+                        ('sim_minutes', 'run, min', '.0f'))
+
+
+def not_captured(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The samples that ran and did not reach acquisition capture (censored in the acquisition time), by index."""
+    return sorted((r for r in rows if 'error' not in r and 'acquisition_time_min' in r and not r.get('captured')),
+                  key=lambda r: r['index'])
+
+
+def failure_rate(rows: Sequence[dict[str, Any]]) -> tuple[int, int, tuple[float, float] | None]:
+    """Not captured k of n samples that ran, and the Wilson interval of k/n (:func:`wilson_interval`)."""
+    ran = [r for r in rows if 'error' not in r and 'acquisition_time_min' in r]
+    k = len(not_captured(ran))
+    return k, len(ran), wilson_interval(k, len(ran))
+
+
+def not_captured_lines(rows: Sequence[dict[str, Any]], drawn_columns: Sequence[str], explain: str) -> list[str]:
+    """Markdown: how many samples did not capture (with the Wilson interval), and one table row each with its drawn
+    conditions, geometry at t0 and outcome; ``explain`` is the command that replays one (``{index}`` in it)."""
+    k, n, ci = failure_rate(rows)
+    if not n:
+        return []
+    lines = [f'{k} of {n} samples did not reach acquisition capture by the end of their run '
+             f'({100 * k / n:.2f} %, {CONFIDENCE_PCT:g} % Wilson interval {100 * ci[0]:.2f}–{100 * ci[1]:.2f} %).']
+    if not k:
+        return lines
+    lines += ['', f'Each can be replayed and explained: `{explain}`.', '']
+    heads = [label for _, label, _ in NOT_CAPTURED_COLUMNS]
+    lines += ['| sample | ' + ' | '.join(heads) + ' | drawn |', '|' + '---|' * (len(heads) + 2)]
+    for r in not_captured(rows):
+        cells = ['—' if r.get(key) is None else format(r[key], spec) for key, _, spec in NOT_CAPTURED_COLUMNS]
+        drawn = ', '.join(f'`{c}` {r[c]:.4g}' if isinstance(r.get(c), float) else f'`{c}` {r.get(c)}'
+                          for c in drawn_columns)
+        lines.append(f'| {r["index"]} | ' + ' | '.join(cells) + f' | {drawn} |')
+    return lines
+
+
 # ----------------------------------------------------------------------------------------- output
 
 
-def _fmt(v: float | None, above: float | None, spec: str = '.1f') -> str:
+def _fmt(v: float | None, above: float | None, spec: str = '.1f', needs: int | None = None) -> str:
+    if needs is not None:  # the samples do not allow this percentile (samples_needed)
+        return f'n<{needs}'
     if v is None:
         return f'>{above:.4g}' if above is not None else '—'
     return format(v, spec)
@@ -339,18 +400,19 @@ def percentile_table(stats: dict[str, dict[str, Any]]) -> str:
                                                                            for p in PERCENTILES)
     some = next(iter(stats.values()), {})
     lines = [f'each percentile, below it its {some.get("confidence_pct", CONFIDENCE_PCT):g} % bootstrap interval and '
-             f'the samples for an interval {some.get("target_width_pct", TARGET_WIDTH_PCT):g} % of the value wide',
+             f'the samples for an interval {some.get("target_width_pct", TARGET_WIDTH_PCT):g} % of the value wide; '
+             '"n<N": too few samples for that tail (it needs N: one sample beyond it on each side)',
              head, '-' * len(head)]
     labels = {q.key: q.label for q in QUANTITIES}
     pad = ' ' * (44 + 9 + 5 + 4 + 3)
     for key, s in stats.items():
         spec = '.0f' if s['unit'] == 'A·m²' else '.2f' if s['unit'] == 'ft-lb-sec' else '.1f'
-        above = s['censored_above']
+        above, few = s['censored_above'], s.get('too_few', {})
         lines.append(f'{labels[key]:44s} {s["unit"]:9s} {s["n"]:5d} {s["censored"]:4d} ' +
-                     ' '.join(f'{_fmt(s[f"p{p}"], above, spec):>{cell}s}' for p in PERCENTILES))
-        intervals = [s['interval'][f'p{p}'] for p in PERCENTILES]
+                     ' '.join(f'{_fmt(s[f"p{p}"], above, spec, few.get(f"p{p}")):>{cell}s}' for p in PERCENTILES))
         lines.append(f'{"  interval":{len(pad) - 1}s} ' + ' '.join(
-            f'{"[" + _fmt(lo, above, spec) + ", " + _fmt(hi, above, spec) + "]":>{cell}s}' for lo, hi in intervals))
+            f'{"—" if f"p{p}" in few else "[" + _fmt(lo, above, spec) + ", " + _fmt(hi, above, spec) + "]":>{cell}s}'
+            for p, (lo, hi) in ((p, s['interval'][f'p{p}']) for p in PERCENTILES)))
         lines.append(f'{"  samples for the target width":{len(pad) - 1}s} ' + ' '.join(
             f'{_fmt(s["samples_for_width"][f"p{p}"], None, "d"):>{cell}s}' for p in PERCENTILES))
     return '\n'.join(lines)
@@ -431,8 +493,10 @@ def plot_distributions(out: Path, rows: Sequence[dict[str, Any]], stats: dict[st
 
 
 def write_report(out: Path, spec: dict[str, Any], rows: Sequence[dict[str, Any]], stats: dict[str, dict[str, Any]],
-                 sens: dict[str, dict[str, float | None]], plots: Sequence[Path]) -> Path:
-    """``report.md``: what was drawn and run, the percentile table, the plots, the rank sensitivities."""
+                 sens: dict[str, dict[str, float | None]], plots: Sequence[Path],
+                 failures: Sequence[str] = ()) -> Path:
+    """``report.md``: what was drawn and run, the percentile table, the samples not captured (``failures``:
+    :func:`not_captured_lines`), the plots, the rank sensitivities."""
     n_ok = sum('error' not in r for r in rows)
     lines = [f'# Monte Carlo dispersion of `{spec["scenario"]}`', '',
              f'- command: `{spec["command"]}`',
@@ -451,6 +515,8 @@ def write_report(out: Path, spec: dict[str, Any], rows: Sequence[dict[str, Any]]
     if failed:
         lines += ['## Failed samples', ''] + [f'- sample {r["index"]}: {r["error"].splitlines()[0]}' for r in failed]
         lines.append('')
+    if failures:
+        lines += ['## Samples not captured', '', *failures, '']
     lines += ['## Distributions', ''] + [f'![{p.stem}]({p.name})' for p in plots] + ['']
     band = 1.96 / math.sqrt(max(n_ok - 1, 1))
     lines += ['## Sensitivity (Spearman rank correlation)', '',

@@ -144,6 +144,26 @@ def refusal(mixed: tuple[str, str]) -> str:
             f'worker from the project\'s .venv, set up as here, or pass {ALLOW_MIXED_OPTION} to accept it)')
 
 
+def kernel_build() -> str:
+    """The build the samples' numbers come from, in one line: the compiler (numba, llvmlite), numpy, and one hash
+    over the sources of the models and kernels (every node package, entry point ``acds.nodes``, and acds_common).
+    A study resumed on another build would mix two arithmetics in one table, so the journal keeps it and a resume
+    compares it (:mod:`acds_runtime.journal`)."""
+    import importlib.util
+    from importlib.metadata import entry_points, version
+
+    packages = sorted({ep.value.split(':')[0].split('.')[0] for ep in entry_points(group='acds.nodes')} | {'acds_common'})
+    h = hashlib.sha256()
+    for name in packages:
+        spec = importlib.util.find_spec(name)
+        for root in spec.submodule_search_locations or () if spec else ():
+            for path in sorted(Path(root).rglob('*.py')):
+                h.update(f'{name}/{path.relative_to(root)}\0'.encode())
+                h.update(path.read_bytes())
+    return (f'numba {version("numba")}, llvmlite {version("llvmlite")}, numpy {version("numpy")}, '
+            f'model sources {h.hexdigest()[:12]}')
+
+
 def task_key(text: str, engine: str, steps: int | None) -> str:
     """The Dask key of a sample's task: the same inputs give the same key (and so the same result)."""
     return 'acds-sample-' + hashlib.sha256(f'{engine}\0{steps}\0{text}'.encode()).hexdigest()[:24]

@@ -405,6 +405,31 @@ class Sample:
         """:func:`initial_geometry` of the sample."""
         return initial_geometry(self.scenario)
 
+    def kept(self) -> KeptSample:
+        """What a study keeps of this sample while its samples run (:class:`KeptSample`)."""
+        sc = self.scenario
+        return KeptSample(self.seed, self.index, self.drawn, self.text, sc.name, self.geometry(),
+                          (sc.total_steps(), sc.control_period_s))
+
+
+@dataclass(frozen=True)
+class KeptSample:
+    """A drawn sample as a study keeps it: index, drawn values, YAML text, name, geometry at t0 and run length
+    (steps, control period s). About 4 kB, where a :class:`Sample` holds its validated Scenario (about 27 kB): a
+    study of N samples holds N of these, so its memory grows by that much a sample, not by the Scenario."""
+
+    seed: int
+    index: int
+    drawn: dict[str, Any]
+    text: str
+    name: str
+    geometry_t0: dict[str, float | None]
+    length: tuple[int, float]
+
+    def geometry(self) -> dict[str, float | None]:
+        """:func:`initial_geometry` of the sample, computed when it was drawn."""
+        return self.geometry_t0
+
 
 def _name(base: str, seed: int, index: int) -> str:
     suffix = f'_s{seed}k{index}'

@@ -87,3 +87,28 @@ def test_pick_sample_is_nearest_the_percentile():
     rows[8] = _row(8, 1.0, None)
     with pytest.raises(ValueError, match='censored'):
         dr.pick_sample(rows, 'acquisition_time_min', 90)
+
+
+def test_a_tail_percentile_needs_a_sample_beyond_it_on_each_side():
+    """p1/p99 need 100 samples, p0.1/p99.9 1,000: with fewer they are null, named in too_few, and have no interval."""
+    assert [dr.samples_needed(p) for p in (0.1, 1, 5, 50, 95, 99, 99.9)] == [1000, 100, 20, 2, 20, 100, 1000]
+    rng = np.random.default_rng(3)
+    rows = [_row(i, 10.0, float(x)) for i, x in enumerate(rng.uniform(50, 150, 150))]
+    acq = dr.describe(rows, dr.QUANTITIES[2], 1, 2)
+    assert acq['p1'] == pytest.approx(np.percentile([r['acquisition_time_min'] for r in rows], 1))
+    assert acq['p0.1'] is None and acq['p99.9'] is None and acq['too_few'] == {'p0.1': 1000, 'p99.9': 1000}
+    assert acq['interval']['p99.9'] == [None, None] and None not in acq['interval']['p99']
+    table = dr.percentile_table({'acquisition_time_min': acq})
+    assert 'n<1000' in table and 'p99.9' in table
+
+
+def test_the_samples_not_captured_are_listed_with_a_wilson_interval():
+    rows = [_row(0, 10.0, 50.0, **{'orbit.raan_deg': 3.0}), _row(1, 20.0, None, sim=480.0, final_mode='mode_1b',
+                                                                  **{'orbit.raan_deg': 7.5}),
+            {'index': 2, 'name': 's2', 'error': 'boom'}]
+    assert [r['index'] for r in dr.not_captured(rows)] == [1]
+    k, n, ci = dr.failure_rate(rows)
+    assert (k, n) == (1, 2) and ci == pytest.approx(dr.wilson_interval(1, 2))
+    lines = dr.not_captured_lines(rows, ['orbit.raan_deg'], 'explain {index}')
+    assert lines[0].startswith('1 of 2 samples did not reach acquisition capture')
+    assert lines[-1].startswith('| 1 | ') and '| mode_1b |' in lines[-1] and '`orbit.raan_deg` 7.5' in lines[-1]

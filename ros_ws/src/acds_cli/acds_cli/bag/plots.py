@@ -88,6 +88,20 @@ def _v3(v: Any) -> list[float]:
     return [v.x, v.y, v.z]
 
 
+def odometry_values(m: Any) -> list[float]:
+    """ω body (rad/s) and q body→ECI (x, y, z, w) of a ``truth/odometry`` message."""
+    q = m.pose.pose.orientation
+    return [*_v3(m.twist.twist.angular), q.x, q.y, q.z, q.w]
+
+
+def mode_of(m: Any) -> tuple[str, str, bool]:
+    """(mode, this step's transition cause, captured) of a ``mode`` message ('', '', False when empty)."""
+    if not m.status:
+        return '', '', False
+    report = ModeReport.from_values(m.status[0].message, ((v.key, v.value) for v in m.status[0].values))
+    return report.mode, report.cause, report.captured
+
+
 def _angle_deg(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     na, nb = np.linalg.norm(a, axis=1), np.linalg.norm(b, axis=1)
     with np.errstate(invalid='ignore', divide='ignore'):
@@ -206,11 +220,9 @@ def figures(bag: Bag) -> list[tuple[str, Any]]:
     import matplotlib.pyplot as plt
 
     ctx = run_context(bag)
-    odometry = lambda m: [*_v3(m.twist.twist.angular), m.pose.pose.orientation.x, m.pose.pose.orientation.y,  # noqa: E731
-                          m.pose.pose.orientation.z, m.pose.pose.orientation.w]
     vectors: dict[str, Callable[[Any], list[float]]] = {
         topics.TRUTH_SUN_COSINES: lambda m: _v3(m.vector),
-        topics.TRUTH_ODOMETRY: odometry,
+        topics.TRUTH_ODOMETRY: odometry_values,
         topics.WHEEL_MOMENTUM: lambda m: _v3(m.vector),
         topics.DIPOLE_AVG: lambda m: _v3(m.vector),
         topics.TRUTH_B_BODY: lambda m: _v3(m.magnetic_field),
@@ -220,12 +232,6 @@ def figures(bag: Bag) -> list[tuple[str, Any]]:
     missions = mission_plots.chosen(ctx)
     for mission in missions:
         vectors.update(mission.vectors(ctx))
-
-    def mode_of(m: Any) -> tuple[str, str, bool]:
-        if not m.status:
-            return '', '', False
-        report = ModeReport.from_values(m.status[0].message, ((v.key, v.value) for v in m.status[0].values))
-        return report.mode, report.cause, report.captured
 
     data = _gather(bag, vectors, {topics.MODE: mode_of})
     mode_stamps, mode_values = data.get(topics.resolve(topics.MODE), ((), []))

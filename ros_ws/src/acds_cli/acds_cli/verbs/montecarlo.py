@@ -34,6 +34,11 @@ from ..workspace import new_run_dir, workspace
 
 #: The quantity and percentile of the baseline rule (docs: Studies, "Choosing the baseline's open conditions").
 BASELINE_QUANTITY, BASELINE_PERCENTILE = 'acquisition_time_min', 90.0
+#: What one sample leaves on disk, bytes: its journal line, its samples.json entry and its samples.csv row, twice over
+#: what heao_b_acquisition's measure (1.5 + 2.0 + 0.5 kB; a sample with more mode changes writes more).
+BYTES_PER_SAMPLE = 8_000
+#: What a study leaves besides its samples, bytes: the PNGs, report.md, percentiles.json (0.4 MB measured).
+BYTES_PER_STUDY = 2_000_000
 
 
 def add_sample_options(p: argparse.ArgumentParser, *, run: bool) -> None:
@@ -122,9 +127,8 @@ def _steps(scenario: Scenario, until_min: float | None) -> int | None:
 
 def _run_length(scenario: Scenario, steps: int | None, samples: list[Any] | None = None) -> str:
     """How long each run is: its steps and control period (their ranges when the samples vary the period)."""
-    runs = [s.scenario for s in samples or []] or [scenario]
-    lengths = sorted({(steps if steps is not None else sc.total_steps(), sc.control_period_s) for sc in runs},
-                     key=lambda nd: nd[0] * nd[1])
+    runs = [s.length for s in samples or []] or [(scenario.total_steps(), scenario.control_period_s)]
+    lengths = sorted({(steps if steps is not None else n, dt) for n, dt in runs}, key=lambda nd: nd[0] * nd[1])
     if len({dt for _, dt in lengths}) > 1:
         counts, periods = sorted(n for n, _ in lengths), sorted(dt for _, dt in lengths)
         text = (f'{counts[0]}–{counts[-1]} steps of {periods[0]:g}–{periods[-1]:g} s (control_period_s varied; '
@@ -138,10 +142,15 @@ def _run_length(scenario: Scenario, steps: int | None, samples: list[Any] | None
 
 
 def draw_samples(base: Scenario, seed: int, runs: int, vary: list[str], command: str) -> tuple[Any, list[Any]]:
-    """The sampler and its ``runs`` samples (each validated; the first pre-flighted: every stepper built)."""
+    """The sampler and its ``runs`` samples as the study keeps them (``KeptSample``: each validated, then its
+    Scenario let go; the first pre-flighted: every stepper built)."""
     sampler = _sampler(base, seed, vary, command)
-    samples = [_draw(sampler, i) for i in range(runs)]
-    _preflight(samples[0])
+    samples = []
+    for i in range(runs):
+        sample = _draw(sampler, i)
+        if i == 0:
+            _preflight(sample)
+        samples.append(sample.kept())
     return sampler, samples
 
 
@@ -170,6 +179,21 @@ def study_folder(prefix: str, name: str, args: argparse.Namespace) -> Path:
     out = Path(args.out) if args.out else _default_out(prefix, name, args.seed, args.runs)
     check_output_dir('--out' if args.out else 'output folder', out)
     return out
+
+
+def check_disk(out: Path, runs: int) -> None:
+    """Refuse, in one line before anything starts, a study whose ``runs`` samples the disk under ``out`` cannot
+    hold (:data:`BYTES_PER_SAMPLE` each and :data:`BYTES_PER_STUDY`)."""
+    import shutil
+
+    where = next(p for p in (out, *out.resolve().parents) if p.exists())
+    free = shutil.disk_usage(where).free
+    need = runs * BYTES_PER_SAMPLE + BYTES_PER_STUDY
+    if need > free:
+        fit = max(0, (free - BYTES_PER_STUDY) // BYTES_PER_SAMPLE)
+        raise UsageError(f'--runs {runs}: about {need / 1e6:,.1f} MB of output ({BYTES_PER_SAMPLE / 1e3:g} kB a sample) '
+                         f'and {free / 1e6:,.1f} MB free under {where}: at most {fit:,} samples fit (free space, or '
+                         'choose another --out)')
 
 
 def open_journal(out: Path, study: dict[str, Any], samples: dict[tuple[str, int], Any], resume: bool) -> Any:
@@ -243,7 +267,7 @@ def run_journaled(journal: Any, samples: dict[tuple[str, int], Any], args: argpa
 
 def records_of(samples: list[Any], summaries: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per sample: index, name, drawn values, geometry at t0, run summary (``samples.json``)."""
-    return [{'index': s.index, 'name': s.scenario.name, 'drawn': s.drawn, 'geometry': s.geometry(), 'summary': summary}
+    return [{'index': s.index, 'name': s.name, 'drawn': s.drawn, 'geometry': s.geometry(), 'summary': summary}
             for s, summary in zip(samples, summaries, strict=True)]
 
 
@@ -281,15 +305,18 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
         return cmd_fsw_study(args, base)
     args.engine = args.engine or 'direct'
     out = study_folder('montecarlo', base.name, args)
+    check_disk(out, args.runs)
     steps = _steps(base, args.until_min)
     rerun = rerun_command(args.scenario, args.seed, '{index}', args.vary, args.until_min)
     sampler, samples = draw_samples(base, args.seed, args.runs, args.vary, rerun)
     variables = [v.text for v in sampler.variables]
     run_length = _run_length(base, steps, samples)
     command = study_command(['montecarlo', args.scenario], args)
+    from acds_runtime.montecarlo import kernel_build
+
     journal = open_journal(out, {'verb': 'montecarlo', 'scenario': base.name, 'seed': args.seed, 'runs': args.runs,
                                  'vary': args.vary, 'engine': args.engine, 'until_min': args.until_min,
-                                 'steps': steps, 'command': command},
+                                 'steps': steps, 'kernels': kernel_build(), 'command': command},
                            {('', s.index): s for s in samples}, bool(args.resume))
     print(f'[montecarlo] {base.name}: {args.runs} samples of seed {args.seed} ({"; ".join(variables)}), '
           f'{run_length}, engine {args.engine}; output {out}', file=sys.stderr, flush=True)
@@ -317,7 +344,8 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     dr.write_rows(out, rows, records)
     dr.write_json(out / 'percentiles.json', stats)
     plots = dr.plot_distributions(out, rows, stats)
-    report = dr.write_report(out, spec, rows, stats, sens, plots)
+    failures = _not_captured(base, out, rows, samples)
+    report = dr.write_report(out, spec, rows, stats, sens, plots, failures)
     mark_complete(out, spec, True)
     print(f'\n== {base.name}: {args.runs} samples (seed {args.seed}), {run_length}; '
           f'{where}; {wall:.0f} s wall ==')
@@ -326,12 +354,25 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     if top:
         print('rank correlation of acquisition time with: ' +
               ', '.join(f'{k} {v:+.2f}' for k, v in list(top.items())[:4]))
+    if failures:
+        print('\n' + '\n'.join(failures))
     failed = [r for r in rows if 'error' in r]
     for r in failed:
         print(f'[montecarlo] sample {r["index"]} failed: {r["error"].splitlines()[0]}', file=sys.stderr)
     print(f'[montecarlo] {report}; samples.csv, samples.json, percentiles.json, {len(plots)} PNG(s) in {out}',
           file=sys.stderr)
     return 1 if failed else 0
+
+
+def _not_captured(base: Scenario, out: Path, rows: list[dict[str, Any]], samples: list[Any]) -> list[str]:
+    """The samples that did not reach capture, with their drawn conditions (HEAO acquisitions only; markdown)."""
+    from acds_runtime import dispersion_report as dr
+    from acds_runtime.summaries import heao as heao_summary
+
+    if not heao_summary.applies(base):
+        return []
+    explain = f'./scripts/acds explain-sample {shlex.quote(str(out))} {{index}}'
+    return dr.not_captured_lines(rows, list(dr.flatten(samples[0].drawn)), explain)
 
 
 # ------------------------------------------------------------------------------------ pick-sample
