@@ -1,5 +1,5 @@
 """A dispersion study flown by a flight computer on a CAN bus: ``montecarlo SCENARIO --fsw-command 'CMD {can_host}
-{can_port} …' [--rtf R] [--paired]`` for a scenario whose cards serve a bus (README "Monte Carlo with your own flight
+{can_port} …' [--rtf R] [--paired]`` for a scenario whose cards serve a bus (docs/flight_software.md "Monte Carlo with your own flight
 software", "Flight software on the bus").
 
 Each sample is ``acds run SCENARIO --sample S:K --engine direct --can-port 0 --rtf R`` with the flight computer
