@@ -1,6 +1,6 @@
 """A dispersion study flown by a flight computer on a CAN bus: ``montecarlo SCENARIO --fsw-command 'CMD {can_host}
-{can_port} …' [--rtf R] [--paired]`` for a scenario whose cards serve a bus (docs/flight_software.md "Monte Carlo with your own flight
-software", "Flight software on the bus").
+{can_port} …' [--rtf R] [--paired]`` for a scenario whose cards serve a bus (docs/flight_software.md "Monte Carlo with your
+own flight software", docs/bus.md).
 
 Each sample is ``acds run SCENARIO --sample S:K --engine direct --can-port 0 --rtf R`` with the flight computer
 started by the study: the run's plug-in session (entry-point group ``acds.run_options``) serves the sample's bus on

@@ -45,8 +45,8 @@ from .launcher import VENV_BIN, GraphRun, LaunchError
 #: flight software").
 PLACEHOLDERS = {'domain': "the sample's ROS_DOMAIN_ID", 'params': "the sample's parameters file for your node",
                 'run_dir': "the sample's run folder"}
-#: The placeholders of a flight computer on a CAN bus (a scenario with the bus cards; docs/flight_software.md "Monte Carlo with your
-#: own flight software").
+#: The placeholders of a flight computer on a CAN bus (a scenario with the bus cards; docs/flight_software.md
+#: "Monte Carlo with your own flight software").
 BUS_PLACEHOLDERS = {'can_host': "the host of the sample's socketcand bus",
                     'can_port': "its TCP port (a free one per sample)", 'run_dir': "the sample's run folder"}
 #: Launchers that start the node where this process's environment does not reach: the command needs ``{domain}``.
