@@ -174,7 +174,8 @@ def test_the_paired_report_counts_identical_pairs_and_names_the_samples_that_dif
     assert list(stats['quantities']) == ['detumble_time_min', 'energy_j']  # constants and run keys left out
     energy = stats['quantities']['energy_j']
     assert energy['max_abs_difference'] == 5.0 and energy['difference']['p50'] == 0.0
-    assert energy['difference']['interval']['p95'][1] == 5.0  # the bootstrap of the differences
+    assert energy['difference']['interval']['p75'][1] == 5.0  # the bootstrap of the differences
+    assert energy['difference']['too_few']['p95'] == 20  # a tail percentile needs n >= 100 / min(p, 100 - p) pairs
     assert stats['quantities']['detumble_time_min']['one_sided'] == 1
     assert [(d['index'], d['key']) for d in stats['differ_most']] == [(4, 'detumble_time_min'), (2, 'energy_j')]
     assert paired_table(stats)[0].startswith('identical in 4 of 6')

@@ -233,11 +233,11 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     records = []
     for s in samples:
         ours = journal.done[(FSW, s.index)]
-        rec = {'index': s.index, 'name': s.scenario.name, 'drawn': s.drawn, 'flight_software': ours,
+        rec = {'index': s.index, 'name': s.name, 'drawn': s.drawn, 'flight_software': ours,
                'timing': ours.get('fsw', {}).get('timing'), 'replay': _replay(rerun, s.index, args.external)}
         if on_bus:  # the sample again from its CAN log, without the flight computer: the same truth digest
             rec['replay'] = (rerun.replace('{index}', str(s.index)) + ' --engine direct --replay-can '
-                             + shlex.quote(str(sample_dir(out, s.scenario.name) / 'can.asc')))
+                             + shlex.quote(str(sample_dir(out, s.name) / 'can.asc')))
         if args.paired:
             rec['built_in'] = journal.done[(BUILT_IN, s.index)]
         records.append(rec)
