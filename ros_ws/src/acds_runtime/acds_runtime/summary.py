@@ -3,8 +3,9 @@
 A :class:`RunObserver` is fed every message of a run — serialized bytes by the run monitor
 (per-process graph) or values by the direct engine — decodes only the topics its summary
 modules read (a module summarises single-vehicle runs, or formations when it sets
-``FORMATIONS = True``), joins them by step and hands complete steps, in step order, to each module in
-``acds_runtime/summaries/`` (``Accumulator(scenario)`` with ``step(k, values)``, ``event(topic,
+``FORMATIONS = True``), joins them by step and hands complete steps, in step order, to each summary module the
+installed packages declare (entry-point group ``acds.summaries``, :mod:`acds_common.plugins`:
+``Accumulator(scenario)`` with ``step(k, values)``, ``event(topic,
 value)`` and ``contribute(summary)``). It keeps only what the summaries keep (running peaks,
 change points), never the messages, so its memory does not grow with the run's length.
 ``print_tables`` lets each module print its tables.
@@ -30,7 +31,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from acds_common import topics
+from acds_common import plugins, topics
 from acds_common.attitude import dcm
 from acds_common.cdr import Codec
 from acds_common.environment import orbit_from_section
@@ -46,21 +47,15 @@ ODOMETRY, B_BODY, WHEEL_H, WHEEL_HDOT, TORQUE_MAG, TORQUE_GG = (topics.resolve(t
     topics.TRUTH_TORQUE_GG))
 
 
-#: Entry-point group of summary modules other packages contribute (the same protocol as ``summaries/``' modules:
-#: ``applies(scenario)``, ``Accumulator(scenario)``, ``null_keys(summary)``, ``print_tables(summary)``), in name order
-#: after this package's own.
-SUMMARY_PLUGINS = 'acds.summaries'
-
-
 def _summary_modules() -> list:
+    """The summary modules the installed packages declare (:data:`acds_common.plugins.SUMMARIES`) and those still in
+    ``summaries/``, together in name order."""
     import importlib
     import pkgutil
-    from importlib.metadata import entry_points
 
     from . import summaries
-    return ([importlib.import_module(f'{summaries.__name__}.{m.name}')
-             for m in sorted(pkgutil.iter_modules(summaries.__path__), key=lambda m: m.name)]
-            + [ep.load() for ep in sorted(entry_points(group=SUMMARY_PLUGINS), key=lambda e: e.name)])
+    own = [(m.name, importlib.import_module(f'{summaries.__name__}.{m.name}')) for m in pkgutil.iter_modules(summaries.__path__)]
+    return [m for _n, m in sorted(own + [(p.name, p.module) for p in plugins.plugins(plugins.SUMMARIES)], key=lambda e: e[0])]
 
 
 class DynamicsSummary:
@@ -78,7 +73,7 @@ class DynamicsSummary:
 
     @staticmethod
     def applies(scenario: Any) -> bool:
-        """A single vehicle's run (a formation's vehicles are summarised by ``summaries.emff``)."""
+        """A single vehicle's run (a formation's vehicles are summarised by a summary module with ``FORMATIONS``)."""
         return not scenario.formation
 
     def __init__(self, scenario: Any) -> None:
