@@ -25,7 +25,7 @@ from types import ModuleType
 
 SUMMARIES, PLOTS, VERBS = 'acds.summaries', 'acds.plots', 'acds.verbs'
 #: The attribute of a summary module listing the top-level summary keys it contributes.
-KEYS_ATTRIBUTE = 'KEYS'
+KEYS_ATTRIBUTE = 'SUMMARY_KEYS'
 
 
 class PluginConflict(ValueError):

@@ -1,6 +1,6 @@
 """The AAP Workshop CMG dump report of a recorded run (seed 000 §5), and its plot.
 
-The report is the run summary's ``dump_report`` (:mod:`acds_runtime.summaries.aap`): the bag is read
+The report is the run summary's ``dump_report`` (:mod:`acds_controller.aap_summary`): the bag is read
 read-only, in one streaming pass, by the same :class:`~acds_runtime.summary.RunObserver` the run monitor
 and the direct engine feed, built from the scenario recorded in the bag, so a bag gives exactly the report
 its run printed. The same pass keeps the few series the plot needs (|M| and orbital day per step, the
@@ -37,7 +37,7 @@ class DumpSeries:
 
 def check_workshop(scenario: Any, where: str = '') -> None:
     """BagError unless ``scenario`` is an AAP Workshop run (what the dump report reads)."""
-    from acds_runtime.summaries import aap
+    from acds_controller import aap_summary as aap
 
     if not aap.applies(scenario):
         raise BagError(f'{where}scenario {scenario.name} is not an AAP Workshop run (wheels.kind cmg with the '
@@ -88,7 +88,7 @@ def plot_dump(report: dict[str, Any], series: DumpSeries, scenario: Any, out_dir
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
-    from acds_runtime.summaries.aap import orbit_clock
+    from acds_controller.aap_summary import orbit_clock
 
     check_out_dir(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -196,9 +196,9 @@ study) and --mm-sweep (§12's M_m estimation) run a scenario many times instead 
 def cmd_dump_report(args: argparse.Namespace) -> int:
     """Print the dump report of a bag or of a scenario's direct-engine run; write its JSON and plots."""
     from acds_common.scenario import ScenarioError
+    from acds_controller.aap_summary import print_tables
     from acds_runtime.bag.writer import BagError, check_out_dir, check_target
     from acds_runtime.launcher import LaunchError
-    from acds_runtime.summaries.aap import print_tables
     from acds_runtime.summary import write_summary_json
 
     from ..arguments import check_output_file

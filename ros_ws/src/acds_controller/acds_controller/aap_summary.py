@@ -33,12 +33,17 @@ import numpy as np
 from acds_common import topics
 from acds_common.environment import orbit_from_section
 from acds_common.units import dump_gain_si_to_seed, nms_to_ftlbs
+
 from acds_controller.cmg_dump import OrbitAccumulator, OrbitClock, dump_report, loop_gain_warning
 from acds_controller.configuration import build_workshop
 
 DIPOLE, COMMAND, B_BODY, TORQUE, TORQUE_GG, SUN, H_S, CMG_H, ODOMETRY = (topics.resolve(t) for t in (
     topics.DIPOLE_AVG, topics.MOMENT_COMMAND, topics.TRUTH_B_BODY, topics.TRUTH_TORQUE_MAG, topics.TRUTH_TORQUE_GG,
     topics.SUN_SENSOR, topics.SAMPLED_MOMENTUM, topics.WHEEL_MOMENTUM, topics.TRUTH_ODOMETRY))
+
+
+#: The summary keys this module contributes (:data:`acds_common.plugins.KEYS_ATTRIBUTE`).
+SUMMARY_KEYS = ('dump_report',)
 
 
 def applies(scenario: Any) -> bool:
