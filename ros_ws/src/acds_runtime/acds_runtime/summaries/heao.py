@@ -53,7 +53,7 @@ def acquisition_times(history: list[tuple[float, str, str, bool]]) -> dict[str, 
     t_cap = next((t for t, m, _, c in history if c and m == 'mode_1b'), None)
     if mode0 not in ('mode_1a', 'mode_1b', *GAS_MODES):  # a normal-mode run: no acquisition
         t_1b = t_cap = None
-    return {  # an acquisition on gas (seed 002 §3.1) has no magnetics-only phase; its gas phases: summaries.cold_gas
+    return {  # an acquisition on gas (seed 002 §3.1) has no magnetics-only phase; its gas phases: cold_gas.cold_gas_summary
         'time_magnetics_only_min': None if t_1b is None or mode0 in GAS_MODES else (t_1b - t0) / 60,
         'time_wheels_magnetics_min': None if t_1b is None or t_cap is None else (t_cap - t_1b) / 60,
         'acquisition_time_min': None if t_cap is None else (t_cap - t0) / 60,

@@ -19,6 +19,12 @@ from acds_common.units import LB_KG, LBF_N, PSI_PA
 _MODE, _STATE = (topics.resolve(t) for t in (topics.MODE, topics.COLD_GAS_STATE))
 
 
+#: The summary keys this module contributes (:data:`acds_common.plugins.KEYS_ATTRIBUTE`).
+SUMMARY_KEYS = ('gas_rate_damping_min', 'gas_handover_min', 'gas_used_lb', 'gas_vented_lb', 'gas_left_lb',
+                'gas_impulse_lbf_s', 'gas_valve_cycles', 'gas_max_open_valves', 'gas_final_tank_psia',
+                'gas_pressure_switch_acted')
+
+
 def applies(scenario: Any) -> bool:
     """Runs with the cold-gas subsystem in the graph."""
     return 'cold_gas' in scenario.get('', 'nodes')
