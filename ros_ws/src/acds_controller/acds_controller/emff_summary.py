@@ -27,6 +27,7 @@ import numpy as np
 from acds_common import topics
 from acds_common.attitude import quat_to_dcm
 from acds_common.inertia import inertia_tensor
+
 from acds_controller.formation_array import linear_array_rate_rad_s, mission_efficiency
 from acds_controller.formation_control import steady_spin_dipole_product_am4
 
@@ -36,6 +37,10 @@ FORMATIONS = True
 SETTLING_BAND = 0.05
 #: The steady dipole product is averaged over the run's last this many seconds.
 STEADY_WINDOW_S = 30.0
+
+
+#: The summary keys this module contributes (:data:`acds_common.plugins.KEYS_ATTRIBUTE`).
+SUMMARY_KEYS = ('formation',)
 
 
 def applies(scenario: Any) -> bool:
