@@ -24,7 +24,7 @@ def vectors(_ctx: Any) -> dict[str, Callable[[Any], list[float]]]:
 
 def plot(kit: Any) -> None:
     """``torque_rod_detumble``: rates, |ω| against the detumbled threshold, dipole commands, rod currents."""
-    from acds_runtime.summaries.oresat import DETUMBLED_RATE_DEG_S
+    from em_driver.oresat_summary import DETUMBLED_RATE_DEG_S
 
     t_w, w = kit.rates
     if not len(t_w):

@@ -34,6 +34,12 @@ ODOMETRY, POWER, DUTY, CURRENT = (topics.resolve(t) for t in (
     topics.TRUTH_ODOMETRY, topics.COIL_POWER, topics.COIL_DUTY, topics.COIL_CURRENT))
 
 
+#: The summary keys this module contributes (:data:`acds_common.plugins.KEYS_ATTRIBUTE`).
+SUMMARY_KEYS = ('detumble_threshold_deg_s', 'initial_rate_deg_s', 'final_rate_deg_s', 'detumble_time_min',
+                'first_below_threshold_min', 'detumble_energy_j', 'energy_j', 'mean_power_w', 'peak_current_ma', 'mean_duty',
+                'mean_duty_to_detumble', 'full_duty_fraction')
+
+
 def applies(scenario: Any) -> bool:
     """The detumble summary comes from runs whose em_driver drives torque rods."""
     return scenario.get('em_driver', 'driver_kind') == 'torque_rod' and 'em_driver' in scenario.get('', 'nodes')
