@@ -273,7 +273,7 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     """Draw, run (appending each sample to the journal), summarise (module doc)."""
     from acds_common.scenario import load_scenario
     from acds_runtime import dispersion_report as dr
-    from acds_runtime.summaries import heao as heao_summary
+    from ascs_mode_manager import heao_summary
 
     base = load_scenario(args.scenario)
     from ..fsw_study import cmd_fsw_study, flown_by_user

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 from acds_common import topics
-from acds_common.mode_report import ModeValueReader, mode_state
+from acds_common.mode_report import ModeValueReader, mode_state, transitions
 from acds_common.modes import GAS_MODES
 from acds_common.units import nms_to_ftlbs
 
@@ -29,19 +29,6 @@ _MODE, _WHEEL_MOMENTUM, _WHEEL_TORQUE, _MOMENT_COMMAND = (
 _NULL_KEYS = ('time_magnetics_only_min', 'time_wheels_magnetics_min', 'acquisition_time_min',
               'final_wheel_momentum_ftlbs', 'peak_wheel_momentum_ftlbs', 'peak_moment_am2',
               'wheel_saturation_time_min', 'mode_transitions')
-
-
-def transitions(history: list[tuple[float, str, str, bool]]) -> list[dict[str, Any]]:
-    """Mode changes and the acquisition capture as [{t_min, from, to, cause}] (capture: to = 'capture')."""
-    out: list[dict[str, Any]] = []
-    prev_mode, prev_captured = None, None
-    for t, mode, cause, captured in history:
-        if prev_mode is not None and mode != prev_mode:
-            out.append({'t_min': t / 60, 'from': prev_mode, 'to': mode, 'cause': cause or None})
-        if captured and prev_captured is False and (prev_mode == mode or prev_mode is None):
-            out.append({'t_min': t / 60, 'from': mode, 'to': 'capture', 'cause': cause or None})
-        prev_mode, prev_captured = mode, captured
-    return out
 
 
 def acquisition_times(history: list[tuple[float, str, str, bool]]) -> dict[str, float | None]:
@@ -63,6 +50,10 @@ def acquisition_times(history: list[tuple[float, str, str, bool]]) -> dict[str, 
 def saturated(h_nms: np.ndarray, capacity_nms: np.ndarray) -> bool:
     """Whether any body-axis |h_i| has reached its capacity (relative tolerance 1e-9)."""
     return bool(np.any(np.abs(h_nms) >= np.asarray(capacity_nms) * (1.0 - 1e-9)))
+
+
+#: The summary keys this module contributes (:data:`acds_common.plugins.KEYS_ATTRIBUTE`).
+SUMMARY_KEYS = (*_NULL_KEYS, 'final_mode')
 
 
 def applies(scenario: Any) -> bool:
