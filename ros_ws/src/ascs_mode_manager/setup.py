@@ -18,7 +18,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
-        'acds.summaries': ['heao = ascs_mode_manager.heao_summary'],
+        'acds.summaries': ['heao = ascs_mode_manager.heao_summary', 'sss = ascs_mode_manager.sss_summary'],
         'console_scripts': [
             'ascs_mode_manager = ascs_mode_manager.mode_manager_node:main'
         ],

@@ -48,14 +48,8 @@ ODOMETRY, B_BODY, WHEEL_H, WHEEL_HDOT, TORQUE_MAG, TORQUE_GG = (topics.resolve(t
 
 
 def _summary_modules() -> list:
-    """The summary modules the installed packages declare (:data:`acds_common.plugins.SUMMARIES`) and those still in
-    ``summaries/``, together in name order."""
-    import importlib
-    import pkgutil
-
-    from . import summaries
-    own = [(m.name, importlib.import_module(f'{summaries.__name__}.{m.name}')) for m in pkgutil.iter_modules(summaries.__path__)]
-    return [m for _n, m in sorted(own + [(p.name, p.module) for p in plugins.plugins(plugins.SUMMARIES)], key=lambda e: e[0])]
+    """The summary modules the installed packages declare (:data:`acds_common.plugins.SUMMARIES`, in name order)."""
+    return plugins.modules(plugins.SUMMARIES)
 
 
 class DynamicsSummary:

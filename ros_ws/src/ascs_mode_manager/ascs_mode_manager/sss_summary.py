@@ -35,6 +35,7 @@ from acds_common import topics
 from acds_common.attitude import quat_to_dcm
 from acds_common.inertia import inertia_tensor
 from acds_common.units import nm_to_dyne_cm, rad_s_to_rpm, tesla_to_gauss
+
 from ascs_mode_manager.spin_mechanizations import MECHANIZATIONS, Mechanization, ripple_pct, simulate_rotating_field
 from ascs_mode_manager.sss_ascs import PassAccumulator
 
@@ -53,6 +54,10 @@ def one_revolution(mech: Mechanization, field_t: float, spin_rate_rad_s: float, 
     history = simulate_rotating_field(mech, tesla_to_gauss(field_t), rpm, duration_s=60.0 / rpm, direction=direction,
                                       polarity_level_t=polarity_level_t)
     return float(np.mean(history.torque_nm)), ripple_pct(history.torque_nm)
+
+
+#: The summary keys this module contributes (:data:`acds_common.plugins.KEYS_ATTRIBUTE`).
+SUMMARY_KEYS = ('perigee_passes', 'sss_events')
 
 
 def applies(scenario: Any) -> bool:
