@@ -19,6 +19,7 @@ setup(
     entry_points={
         'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
         'acds.summaries': ['heao = ascs_mode_manager.heao_summary', 'sss = ascs_mode_manager.sss_summary'],
+        'acds.plots': ['sss = ascs_mode_manager.sss_plots'],
         'console_scripts': [
             'ascs_mode_manager = ascs_mode_manager.mode_manager_node:main'
         ],
