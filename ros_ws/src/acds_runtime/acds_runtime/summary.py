@@ -47,8 +47,17 @@ ODOMETRY, B_BODY, WHEEL_H, WHEEL_HDOT, TORQUE_MAG, TORQUE_GG = (topics.resolve(t
     topics.TRUTH_TORQUE_GG))
 
 
+#: The summary keys of the runtime itself (:meth:`RunObserver.summary`, :class:`DynamicsSummary`): no package's
+#: summary module may declare them (:func:`acds_common.plugins.check_summary_keys`).
+COMMON_KEYS = ('scenario', 'steps', 'sim_minutes', 'wall_seconds', 'step_angle_max_rad', 'integration', 'torque_free',
+               'momentum_drift_rel', 'energy_drift_rel', 'final_rates_deg_s', 'final_momentum_ftlbs', 'b_min_gauss',
+               'b_max_gauss', 'truth_messages', 'truth_digest')
+
+
 def _summary_modules() -> list:
-    """The summary modules the installed packages declare (:data:`acds_common.plugins.SUMMARIES`, in name order)."""
+    """The summary modules the installed packages declare (:data:`acds_common.plugins.SUMMARIES`, in name order),
+    after checking that no two declare the same key."""
+    plugins.check_summary_keys(COMMON_KEYS)
     return plugins.modules(plugins.SUMMARIES)
 
 
