@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 from acds_cli.__main__ import main
-from acds_cli.verbs import duty_curve, mechanizations
+from ascs_mode_manager import mechanizations_cli as mechanizations
+from em_driver import duty_curve_cli as duty_curve
 from em_driver.bridge_switch import duty_cycle_closed_form
 from em_driver.duty_curve import FIG_4_10_COIL, FIG_4_10_DRIVER
 

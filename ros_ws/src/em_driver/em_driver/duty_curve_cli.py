@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
 from em_driver.bridge_switch import BridgeSwitchCoil, duty_cycle_closed_form
 from em_driver.duty_curve import FIG_4_10_COIL, FIG_4_10_DRIVER, duty_table, step_response
 
@@ -83,7 +84,7 @@ def _write_pngs(out_dir: Path, rows: list[tuple[float, float, float, float, floa
 
 def cmd_duty_curve(args: argparse.Namespace) -> int:
     """Print the table (or CSV) and write the PNGs when asked."""
-    from ..arguments import check_output_dir
+    from acds_cli.arguments import check_output_dir
 
     if args.png is not None:
         check_output_dir('--png', args.png)

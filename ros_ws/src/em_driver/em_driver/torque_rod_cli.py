@@ -65,11 +65,11 @@ def _report(d: dict) -> list[str]:
 
 def cmd_design(args: argparse.Namespace) -> int:
     """Design the rod, print it, optionally write the JSON record."""
+    from acds_cli.arguments import UsageError, check_output_file
+
     from em_driver.bridge_switch import EmDriverError
     from em_driver.torque_rod import HEAVY_BUILD_INCREMENT_MIL
     from em_driver.torque_rod_design import DesignRequest, InfeasibleDesignError, design_torque_rod
-
-    from ..arguments import UsageError, check_output_file
     if args.insulation_mm is None and args.awg not in HEAVY_BUILD_INCREMENT_MIL:
         raise UsageError(f'--awg {args.awg}: the heavy-build insulation table covers AWG {min(HEAVY_BUILD_INCREMENT_MIL)}'
                          f'–{max(HEAVY_BUILD_INCREMENT_MIL)}; give --insulation-mm (the enamel build on the diameter) '
@@ -103,7 +103,7 @@ def cmd_design(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``design-torque-rod`` verb."""
-    from ..arguments import non_negative_number, positive_number
+    from acds_cli.arguments import non_negative_number, positive_number
 
     text = 'size a CubeSat torque rod (seed 003 design procedure as a bounded minimum-mass search)'
     p = sub.add_parser('design-torque-rod', help=text, description=text + '. Defaults: the seed 003 constraints.')

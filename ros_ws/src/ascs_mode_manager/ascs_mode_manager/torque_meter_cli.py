@@ -14,6 +14,7 @@ import sys
 
 import numpy as np
 from acds_common.units import GAUSS_T, nm_to_dyne_cm
+
 from ascs_mode_manager.spin_mechanizations import AscsError
 from ascs_mode_manager.sss_ascs import SssAscsConfig
 from ascs_mode_manager.torque_meter import (
@@ -94,7 +95,7 @@ def cmd_torque_meter(args: argparse.Namespace) -> int:
     """Run the stand and print its table (or CSV); write the strip chart when asked."""
     from pathlib import Path
 
-    from ..arguments import check_output_dir
+    from acds_cli.arguments import check_output_dir
 
     if args.png:
         check_output_dir("--png", Path(args.png))
