@@ -14,7 +14,7 @@ import signal
 import subprocess
 import sys
 
-from acds_common.plugins import VERBS, PluginConflict, VerbRegistry, check_summary_keys, plugins
+from acds_common.plugins import PLOTS, VERBS, PluginConflict, VerbRegistry, check_summary_keys, plugins
 from acds_common.scenario import ScenarioError, list_scenarios
 
 from .arguments import OneLineParser, UsageError, positive_int
@@ -129,6 +129,7 @@ def main(argv: list[str] | None = None) -> int:
         parser = build_parser()
         from acds_runtime.summary import COMMON_KEYS
         check_summary_keys(COMMON_KEYS)
+        plugins(PLOTS)
     except PluginConflict as exc:
         print(f'acds: plug-in conflict: {exc}', file=sys.stderr)
         return 2

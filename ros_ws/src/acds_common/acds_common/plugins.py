@@ -53,7 +53,7 @@ def plugins(group: str) -> tuple[Plugin, ...]:
     owner: dict[str, str] = {}
     found = []
     for ep in sorted(entry_points(group=group), key=lambda e: (e.name, e.dist.name if e.dist else '')):
-        package = ep.dist.name if ep.dist else ep.value.split('.')[0]
+        package = (ep.dist.name if ep.dist else ep.value.split('.')[0]).replace('-', '_')  # as ROS spells it
         _owner_check(f'{group} name', owner, ep.name, package)
         found.append(Plugin(ep.name, package, ep.load()))
     return tuple(found)
