@@ -52,9 +52,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     """The command-line surface (later verbs register here too)."""
     parser = OneLineParser(prog='acds', description=(
-        'ACDS emulator of spacecraft magnetic attitude control: HEAO wheels + electromagnets, SSS magnetic '
-        'spin/attitude control, AAP Workshop CMG momentum dump, OreSat torque rods, electromagnetic formation '
-        'flight (EMFF).'))
+        'ACDS emulator of spacecraft magnetic attitude control: the missions are the installed packages\' '
+        '(`acds scenarios` lists their scenarios).'))
     sub = parser.add_subparsers(dest='verb', metavar='VERB', required=True)
 
     registry = VerbRegistry(sub)
