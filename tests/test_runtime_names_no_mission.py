@@ -35,10 +35,6 @@ PATTERN = re.compile('|'.join([*WORDS, *(rf'\b{c}\b' for c in MISSION_TOPICS),
 NOT_MOVED_YET = {
     'acds_cli/verbs/emff.py': 'EMFF verbs (linearize, radius sweep, airtrack) use acds_controller and dynamics cores: '
                               'a mission package of their own',
-    'acds_cli/verbs/cmg.py': 'AAP dump-report and size-magnet use acds_controller and em_driver: a mission package',
-    'acds_cli/bag/dump_report.py': 'AAP dump report of a bag (with verbs/cmg.py)',
-    'acds_cli/dump_study.py': 'AAP dump study (with verbs/cmg.py)',
-    'acds_runtime/dump_study.py': 'AAP dump study (with verbs/cmg.py)',
     'acds_cli/verbs/sweep.py': 'the Table 4-7 HEAO sweep group and the cold-gas study figures',
     'acds_cli/verbs/montecarlo.py': "the HEAO acquisition quantities of the dispersion report",
     'acds_runtime/dispersion_report.py': "the HEAO acquisition quantities of the dispersion report",

@@ -27,8 +27,7 @@ import numpy as np
 import yaml
 from acds_common import units
 from acds_common.scenario import Scenario, ScenarioError, load_scenario, scenario_path
-
-from .sampling import scenario_from_text
+from acds_runtime.sampling import scenario_from_text
 
 #: "The same M(t)" (§5): per-orbit M_o and M_m within this fraction of the initialised run's.
 SAME_M_TOLERANCE = 0.05
