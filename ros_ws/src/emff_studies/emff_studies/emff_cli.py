@@ -27,8 +27,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from ..arguments import UsageError, check_output_dir, check_output_file
+from acds_cli.arguments import UsageError, check_output_dir, check_output_file
 
 #: The review's deviations (slides 46–47) and a finer grid, percent of the nominal array radius.
 DEFAULT_DEVIATIONS_PCT = (0.001, 0.5, 1.0, 2.0, 3.0, 3.5, 4.0, 5.0, 6.0, 8.0)
@@ -449,7 +448,7 @@ def cmd_airtrack(args: argparse.Namespace) -> int:
         if args.step_m >= x0:
             raise UsageError(f'--step-m: the slider starts at x0 − step = {x0 - args.step_m:g} m, off the track '
                              f'(x0 = {x0:g} m): must be < {x0:g}, got {args.step_m:g}')
-    from ..workspace import workspace
+    from acds_cli.workspace import workspace
     out_dir = Path(args.out) if args.out else workspace() / 'runs' / 'emff_airtrack'
     check_output_dir('--out' if args.out else 'plot folder', out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
