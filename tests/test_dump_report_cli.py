@@ -6,9 +6,9 @@ from __future__ import annotations
 import json
 
 import pytest
+from aap_mission.dump_report import report_from_bag
 from acds_cli.__main__ import main
 from acds_common.scenario import load_scenario
-from acds_controller.aap_dump_report import report_from_bag
 from acds_runtime.direct import DirectRun
 
 STEPS = 330  # 20 s steps: the first orbit (5563 s) and a part of the second

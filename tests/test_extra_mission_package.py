@@ -96,8 +96,8 @@ def test_a_mission_package_installed_outside_the_workspace_adds_its_summary_figu
 #: Fixture distributions that declare what a shipped package already declares: (entry-point group, module text,
 #: the shipped package the line must name).
 CLASHES = {
-    'summary_key': ('acds.summaries', 'SUMMARY_KEYS = ("acquisition_time_min",)\n', 'ascs_mode_manager'),
-    'verb': ('acds.verbs', 'def register(sub):\n    sub.add_parser("duty-curve")\n', 'em_driver'),
+    'summary_key': ('acds.summaries', 'SUMMARY_KEYS = ("acquisition_time_min",)\n', 'heao_mission'),
+    'verb': ('acds.verbs', 'def register(sub):\n    sub.add_parser("duty-curve")\n', 'heao_mission'),
     'plot': ('acds.plots', 'def applies(ctx):\n    return False\n', 'ascs_mode_manager'),
 }
 

@@ -20,7 +20,6 @@ setup(
         'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
         'acds.summaries': ['aap = acds_controller.aap_summary', 'emff = acds_controller.emff_summary'],
         'acds.plots': ['formation = acds_controller.emff_plots'],
-        'acds.verbs': ['aap = acds_controller.aap_cli'],
         'console_scripts': [
             'acds_controller = acds_controller.controller_node:main',
             'formation_controller = acds_controller.formation_controller_node:main',

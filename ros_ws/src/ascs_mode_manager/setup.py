@@ -18,10 +18,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
-        'acds.summaries': ['heao = ascs_mode_manager.heao_summary', 'sss = ascs_mode_manager.sss_summary'],
+        'acds.summaries': ['sss = ascs_mode_manager.sss_summary'],
         'acds.plots': ['sss = ascs_mode_manager.sss_plots'],
-        'acds.verbs': ['mechanizations = ascs_mode_manager.mechanizations_cli',
-                       'torque_meter = ascs_mode_manager.torque_meter_cli'],
         'console_scripts': [
             'ascs_mode_manager = ascs_mode_manager.mode_manager_node:main'
         ],

@@ -20,7 +20,6 @@ setup(
         'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
         'acds.summaries': ['cold_gas = cold_gas.cold_gas_summary'],
         'acds.plots': ['cold_gas = cold_gas.cold_gas_plots'],
-        'acds.verbs': ['cold_gas = cold_gas.cold_gas_cli'],
         'console_scripts': [
             'cold_gas = cold_gas.cold_gas_node:main'
         ],

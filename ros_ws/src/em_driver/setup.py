@@ -20,8 +20,6 @@ setup(
         'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
         'acds.summaries': ['oresat = em_driver.oresat_summary'],
         'acds.plots': ['torque_rod = em_driver.oresat_plots'],
-        'acds.verbs': ['duty_curve = em_driver.duty_curve_cli', 'oresat = em_driver.torque_rod_cli',
-                       'size_magnet = em_driver.magnet_sizing_cli'],
         'console_scripts': [
             'em_driver = em_driver.em_driver_node:main'
         ],

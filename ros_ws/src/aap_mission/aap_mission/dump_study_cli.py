@@ -1,5 +1,5 @@
 """``acds dump-report SCENARIO --k-sweep A:B:N`` and ``--mm-sweep KIND:A:B:N``: the seed-000 studies of the dump law
-(§5's k range, §12's M_m estimation), run on the direct engine (:mod:`acds_controller.aap_dump_study`); a table on stdout,
+(§5's k range, §12's M_m estimation), run on the direct engine (:mod:`aap_mission.dump_study`); a table on stdout,
 a plot and the rows as JSON."""
 
 from __future__ import annotations
@@ -78,7 +78,7 @@ _SWEEP_LABEL = {'hb': '|H_b|, ft-lb-sec', 'iy_minus_iz': 'I_y − I_z, slug-ft²
 
 def print_mm_table(name: str, sweep: str, rows: list[dict[str, Any]], slopes: dict[str, float]) -> None:
     """The §12 sweep: M_m against the swept quantity, with the memo's rule beside it, and the fitted slopes."""
-    from acds_controller.aap_dump_study import SEED_MM_PER_HB
+    from aap_mission.dump_study import SEED_MM_PER_HB
 
     print(f'M_m estimation (seed 000 §12) of {name}: {_SWEEP_LABEL[sweep]} swept, the law as the scenario flies it')
     print(f'  {_SWEEP_LABEL[sweep]:>20} {"|H_b|":>8} {"M_n":>8} {"M_d":>8} {"M_o":>8} {"M_m":>8} {"12.5·H_b":>9} '
@@ -129,8 +129,8 @@ def cmd_study(args: argparse.Namespace) -> int:
     from acds_runtime.launcher import LaunchError
     from acds_runtime.preflight import preflight
 
-    from acds_controller import aap_dump_study as dump_study
-    from acds_controller.aap_dump_report import check_workshop
+    from aap_mission import dump_study
+    from aap_mission.dump_report import check_workshop
 
     def progress(text: str) -> None:
         print(f'[acds] {text}', file=sys.stderr, flush=True)

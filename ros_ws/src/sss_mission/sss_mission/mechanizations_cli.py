@@ -11,7 +11,6 @@ import argparse
 import sys
 
 from acds_common.units import nm_to_dyne_cm
-
 from ascs_mode_manager.spin_mechanizations import (
     DESIGN_FIELD_T,
     MECHANIZATIONS,

@@ -14,7 +14,6 @@ import sys
 
 import numpy as np
 from acds_common.units import GAUSS_T, nm_to_dyne_cm
-
 from ascs_mode_manager.spin_mechanizations import AscsError
 from ascs_mode_manager.sss_ascs import SssAscsConfig
 from ascs_mode_manager.torque_meter import (

@@ -88,7 +88,6 @@ def plot_dump(report: dict[str, Any], series: DumpSeries, scenario: Any, out_dir
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
-
     from acds_controller.aap_summary import orbit_clock
 
     check_out_dir(out_dir)

@@ -21,7 +21,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from acds_cli.arguments import UsageError, check_output_file, positive_int
+from ..arguments import UsageError, check_output_file, positive_int
 
 #: The study's figures the budget is printed beside (seed 002 §3.2), lb.
 STUDY_THREE_ACQUISITIONS_LB = 4.3
@@ -69,12 +69,13 @@ def _chain(sample: Any, sampler: Any, acquisitions: int) -> tuple[list[dict[str,
 def cmd_budget(args: argparse.Namespace) -> int:
     """Draw, pick the worst and the percentile draw, chain each (module doc)."""
     import numpy as np
-    from acds_cli.verbs.montecarlo import _draw, _sampler
     from acds_common.scenario import load_scenario
     from acds_common.units import LB_KG
     from acds_runtime import dispersion_report as dr
     from acds_runtime.direct import DirectRun
     from acds_runtime.preflight import preflight
+
+    from .montecarlo import _draw, _sampler
 
     base = load_scenario(args.scenario)
     if 'cold_gas' not in base.get('', 'nodes'):

@@ -22,12 +22,12 @@ def cmd_dump_report(args: argparse.Namespace) -> int:
     """Print the dump report of a bag or of a scenario's direct-engine run; write its JSON and plots."""
     from acds_cli.arguments import check_output_file
     from acds_common.scenario import ScenarioError
+    from acds_controller.aap_summary import print_tables
     from acds_runtime.bag.writer import BagError, check_out_dir, check_target
     from acds_runtime.launcher import LaunchError
     from acds_runtime.summary import write_summary_json
 
-    from acds_controller.aap_dump_report import check_workshop, plot_dump, report_from_bag
-    from acds_controller.aap_summary import print_tables
+    from aap_mission.dump_report import check_workshop, plot_dump, report_from_bag
 
     source = Path(args.source)
     is_bag = source.is_dir() or source.suffix in ('.mcap', '.db3')
@@ -35,7 +35,7 @@ def cmd_dump_report(args: argparse.Namespace) -> int:
         if is_bag:
             print('acds dump-report: --k-sweep and --mm-sweep run a scenario, not a recorded bag', file=sys.stderr)
             return 2
-        from acds_controller.aap_dump_study_cli import cmd_study
+        from aap_mission.dump_study_cli import cmd_study
         return cmd_study(args)
     try:
         if args.json:
@@ -52,7 +52,7 @@ def cmd_dump_report(args: argparse.Namespace) -> int:
             from acds_runtime.direct import DirectRun
             from acds_runtime.preflight import preflight
 
-            from acds_controller.aap_dump_study import scenario_with_sets
+            from aap_mission.dump_study import scenario_with_sets
 
             scenario = scenario_with_sets(args.source, args.set or [])
             check_workshop(scenario)

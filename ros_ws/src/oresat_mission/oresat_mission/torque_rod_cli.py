@@ -66,7 +66,6 @@ def _report(d: dict) -> list[str]:
 def cmd_design(args: argparse.Namespace) -> int:
     """Design the rod, print it, optionally write the JSON record."""
     from acds_cli.arguments import UsageError, check_output_file
-
     from em_driver.bridge_switch import EmDriverError
     from em_driver.torque_rod import HEAVY_BUILD_INCREMENT_MIL
     from em_driver.torque_rod_design import DesignRequest, InfeasibleDesignError, design_torque_rod

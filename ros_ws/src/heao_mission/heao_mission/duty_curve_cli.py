@@ -14,7 +14,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
 from em_driver.bridge_switch import BridgeSwitchCoil, duty_cycle_closed_form
 from em_driver.duty_curve import FIG_4_10_COIL, FIG_4_10_DRIVER, duty_table, step_response
 

@@ -23,7 +23,6 @@ from typing import Any
 def _moments(args: argparse.Namespace) -> tuple[Any, str]:
     """(DumpMoments, where they came from) from the options."""
     from acds_common import units
-
     from em_driver.magnet_sizing import (
         DumpMoments,
         MagnetSizingError,
@@ -120,7 +119,6 @@ def cmd_size_magnet(args: argparse.Namespace) -> int:
     """Print (and optionally write as JSON) the designs for both structures of the chosen core."""
     from acds_cli.arguments import check_output_file
     from acds_common import units
-
     from em_driver import magnet_sizing as ms
 
     if args.json:
