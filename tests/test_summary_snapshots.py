@@ -21,9 +21,10 @@ import sys
 from pathlib import Path
 
 import pytest
+from acds_common.plugins import KEYS_ATTRIBUTE, SUMMARIES, plugins
 from acds_common.scenario import SCENARIO_DIR, load_scenario
 from acds_runtime.direct import DirectRun
-from acds_runtime.summary import print_tables, summary_json
+from acds_runtime.summary import COMMON_KEYS, print_tables, summary_json
 
 DATA = Path(__file__).resolve().parent / 'data' / 'summary_snapshots.json'
 #: Steps of each snapshot run: short (the whole file records in about a minute), long enough that every
@@ -61,6 +62,14 @@ RECORDED: dict = json.loads(DATA.read_text()) if DATA.exists() else {}
 
 def test_every_shipped_scenario_is_recorded():
     assert sorted(RECORDED) == sorted(p.stem for p in SCENARIO_DIR.glob('*.yaml'))
+
+
+def test_every_summary_key_is_declared():
+    """Every key of every recorded summary is the runtime's own or one a summary plug-in declares
+    (``SUMMARY_KEYS``: what the one-line conflict check between packages compares)."""
+    declared = set(COMMON_KEYS) | {k for p in plugins(SUMMARIES) for k in getattr(p.module, KEYS_ATTRIBUTE, ())}
+    undeclared = {name: sorted(set(rec['summary']) - declared) for name, rec in RECORDED.items()}
+    assert not any(undeclared.values()), {n: keys for n, keys in undeclared.items() if keys}
 
 
 @pytest.mark.parametrize('name', sorted(RECORDED))
