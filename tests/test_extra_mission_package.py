@@ -17,13 +17,13 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 import textwrap
 from pathlib import Path
 
 import pytest
+from acds_runtime.testing import install_outside
 
 ROOT = Path(__file__).resolve().parents[1]
 FIXTURE = ROOT / 'tests' / 'fixtures' / 'extra_mission_pkg'
@@ -50,17 +50,6 @@ RUN = textwrap.dedent('''
 ''')
 
 
-def _install(source: Path, tmp: Path) -> Path:
-    src = tmp / 'src'
-    shutil.copytree(source, src, ignore=shutil.ignore_patterns('build', '*.egg-info', '__pycache__'))
-    site = tmp / 'site'
-    proc = subprocess.run([sys.executable, '-m', 'pip', 'install', '--quiet', '--disable-pip-version-check',
-                           '--no-deps', '--no-build-isolation', '--no-index', '--target', str(site), str(src)],
-                          capture_output=True, text=True, timeout=300, check=False)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return site
-
-
 def _env(site: Path, tmp: Path) -> dict[str, str]:
     return dict(os.environ, PYTHONPATH=str(site), ROS_LOG_DIR=str(tmp / 'ros_log'), MPLBACKEND='Agg')
 
@@ -71,7 +60,7 @@ def _acds(env: dict[str, str], *args: str) -> subprocess.CompletedProcess:
 
 
 def test_a_mission_package_installed_outside_the_workspace_adds_its_summary_figure_and_verb(tmp_path):
-    site = _install(FIXTURE, tmp_path)
+    site = install_outside(FIXTURE, tmp_path)
     env = _env(site, tmp_path)
     proc = subprocess.run([sys.executable, '-c', RUN, SCENARIO, str(tmp_path), str(STEPS)], env=env,
                           capture_output=True, text=True, timeout=600, check=False)
