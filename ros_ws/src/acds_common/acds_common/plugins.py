@@ -88,6 +88,10 @@ class VerbRegistry:
             _owner_check('verb', self._owner, verb, self.package)
         return self._subparsers.add_parser(name, **kwargs)
 
+    def __getattr__(self, name: str) -> object:
+        """Everything else of the subparsers object, as it is."""
+        return getattr(self._subparsers, name)
+
     def register(self, module: ModuleType, package: str) -> None:
         """Let ``module`` (of ``package``) register its verbs."""
         self.package = package
