@@ -21,13 +21,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..arguments import UsageError, check_output_file, positive_int
+from acds_cli.arguments import UsageError, check_output_file, positive_int
+from cold_gas.study import STUDY_LOAD_LB, STUDY_THREE_ACQUISITIONS_LB
 
-#: The study's figures the budget is printed beside (seed 002 §3.2), lb.
-STUDY_THREE_ACQUISITIONS_LB = 4.3
-STUDY_LOAD_LB = 4.6
-#: Seed 002 §2: "The cold gas system selected will permit sun acquisition within ten minutes", min.
-STUDY_ACQUISITION_MIN = 10.0
 _KEYS = ('gas_handover_min', 'acquisition_time_min', 'gas_used_lb', 'gas_left_lb', 'gas_final_tank_psia',
          'gas_valve_cycles', 'gas_vented_lb', 'truth_digest')
 
@@ -69,13 +65,12 @@ def _chain(sample: Any, sampler: Any, acquisitions: int) -> tuple[list[dict[str,
 def cmd_budget(args: argparse.Namespace) -> int:
     """Draw, pick the worst and the percentile draw, chain each (module doc)."""
     import numpy as np
+    from acds_cli.verbs.montecarlo import _draw, _sampler
     from acds_common.scenario import load_scenario
     from acds_common.units import LB_KG
     from acds_runtime import dispersion_report as dr
     from acds_runtime.direct import DirectRun
     from acds_runtime.preflight import preflight
-
-    from .montecarlo import _draw, _sampler
 
     base = load_scenario(args.scenario)
     if 'cold_gas' not in base.get('', 'nodes'):
