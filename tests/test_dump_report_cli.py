@@ -6,8 +6,8 @@ from __future__ import annotations
 import json
 
 import pytest
+from aap_mission.dump_report import report_from_bag
 from acds_cli.__main__ import main
-from acds_cli.bag.dump_report import report_from_bag
 from acds_common.scenario import load_scenario
 from acds_runtime.direct import DirectRun
 

@@ -16,12 +16,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from acds_cli.verbs.emff import airtrack_graph_study
 from acds_common.airtrack import AirtrackPlant
 from acds_common.scenario import load_scenario
 from acds_runtime.direct import DirectRun
 from dynamics.errors import DynamicsError
 from dynamics.formation import Coil, FormationConfig, FormationDynamics, VehicleInput, VehicleSpec, VehicleState
+from emff_studies.emff_cli import airtrack_graph_study
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -347,8 +347,8 @@ def test_bad_formation_is_one_line_exit_2(tmp_path, edit, message):
 
 @pytest.mark.parametrize('configuration', ['stable', 'unstable'])
 def test_airtrack_poles_are_the_slides_and_lqr_holds_the_step(configuration):
-    from acds_cli.verbs.emff import airtrack_study
     from dynamics.airtrack import AirtrackConfig
+    from emff_studies.emff_cli import airtrack_study
     cfg = AirtrackConfig(configuration=configuration)
     a, _ = cfg.plant.linearised(0.5)
     s2 = 6.0 * 4e-7 * math.pi * cfg.nominal_dipole_am2 * cfg.magnet_dipole_am2 / (math.pi * cfg.mass_kg * 0.5 ** 5)
@@ -370,8 +370,8 @@ def test_airtrack_poles_are_the_slides_and_lqr_holds_the_step(configuration):
 
 
 def test_radius_sweep_starts_both_models_at_the_same_perturbed_radius():
-    from acds_cli.verbs.emff import linear_run, perturbed_data, steady_spin
     from acds_controller.formation_lqr_step import lqr_controller
+    from emff_studies.emff_cli import linear_run, perturbed_data, steady_spin
     sc = load_scenario('emff_two_vehicle_lqr')
     data = perturbed_data(sc, 0.03)
     a, b = (v['vehicle'] for v in data['vehicles'])

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 import textwrap
@@ -23,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from acds_runtime.testing import install_outside
 
 ROOT = Path(__file__).resolve().parents[1]
 FIXTURE = ROOT / 'tests' / 'fixtures' / 'extra_node_pkg'
@@ -72,14 +72,7 @@ RUN_BOTH = textwrap.dedent('''
 @pytest.fixture(scope='module')
 def installed(tmp_path_factory):
     """The fixture package installed into a temporary folder: (site folder, its bin folder)."""
-    tmp = tmp_path_factory.mktemp('extra_node')
-    source = tmp / 'src'
-    shutil.copytree(FIXTURE, source, ignore=shutil.ignore_patterns('build', '*.egg-info', '__pycache__'))
-    site = tmp / 'site'
-    proc = subprocess.run([sys.executable, '-m', 'pip', 'install', '--quiet', '--disable-pip-version-check',
-                           '--no-deps', '--no-build-isolation', '--no-index', '--target', str(site), str(source)],
-                          capture_output=True, text=True, timeout=300, check=False)
-    assert proc.returncode == 0, proc.stderr[-3000:]
+    site = install_outside(FIXTURE, tmp_path_factory.mktemp('extra_node'))
     assert (site / 'bin' / 'rate_gyro').is_file()
     return site, site / 'bin'
 

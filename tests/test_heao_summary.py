@@ -7,7 +7,8 @@ import pytest
 from acds_cli import __main__ as acds_main
 from acds_cli.verbs import sweep
 from acds_cli.verbs.sweep import GROUPS, expand, table
-from acds_runtime.summaries.heao import acquisition_times, saturated, transitions
+from acds_common.mode_report import transitions
+from heao_mission.heao_summary import acquisition_times, saturated
 
 
 def _history(modes: list[tuple[float, str, bool]]) -> list[tuple[float, str, str, bool]]:

@@ -21,7 +21,7 @@ from acds_common.scenario import SCENARIO_DIR, load_scenario
 from acds_common.torque_rod_record import dipole_bound_am2, read_torque_rod_record
 from acds_runtime.direct import DirectRun
 from acds_runtime.preflight import preflight
-from acds_runtime.summaries import oresat
+from em_driver import oresat_summary as oresat
 from em_driver.torque_rod_design import DesignRequest, design_torque_rod
 
 SHIPPED_ROD = SCENARIO_DIR / 'oresat_torque_rod_awg35.json'

@@ -13,8 +13,8 @@ from acds_common.scenario import load_scenario
 from acds_common.units import GAUSS_T, nm_to_dyne_cm, rpm_to_rad_s
 from acds_runtime.direct import DirectRun
 from acds_runtime.report import format_summary, summary_rows
-from acds_runtime.summaries.sss import one_revolution, print_tables
 from ascs_mode_manager.spin_mechanizations import MECHANIZATIONS, closed_form_average_torque_nm, closed_form_ripple_pct
+from ascs_mode_manager.sss_summary import one_revolution, print_tables
 
 SUMMARY = {
     'scenario': 'x', 'steps': 10, 'sim_minutes': 5.0, 'wall_seconds': 1.0,

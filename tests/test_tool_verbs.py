@@ -9,9 +9,10 @@ from pathlib import Path
 
 import pytest
 from acds_cli.__main__ import main
-from acds_cli.verbs import duty_curve, mechanizations
 from em_driver.bridge_switch import duty_cycle_closed_form
 from em_driver.duty_curve import FIG_4_10_COIL, FIG_4_10_DRIVER
+from heao_mission import duty_curve_cli as duty_curve
+from sss_mission import mechanizations_cli as mechanizations
 
 KEYS = ("two_channel_sine", "two_channel_constant", "one_channel_sine", "one_channel_constant")
 

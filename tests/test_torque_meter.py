@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 from acds_cli.__main__ import main
-from acds_cli.verbs.torque_meter import CSV_HEADER
 from acds_common.units import GAUSS_T, nm_to_dyne_cm
 from ascs_mode_manager import torque_meter
 from ascs_mode_manager.spin_mechanizations import ATTITUDE_COIL, SPIN_COIL, AscsError
+from sss_mission.torque_meter_cli import CSV_HEADER
 
 
 def _csv_rows(capsys: pytest.CaptureFixture[str], argv: list[str]) -> list[dict]:

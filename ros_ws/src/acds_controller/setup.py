@@ -18,6 +18,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
+        'acds.summaries': ['aap = acds_controller.aap_summary', 'emff = acds_controller.emff_summary'],
+        'acds.plots': ['formation = acds_controller.emff_plots'],
         'console_scripts': [
             'acds_controller = acds_controller.controller_node:main',
             'formation_controller = acds_controller.formation_controller_node:main',

@@ -18,6 +18,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
+        'acds.summaries': ['sss = ascs_mode_manager.sss_summary'],
+        'acds.plots': ['sss = ascs_mode_manager.sss_plots'],
         'console_scripts': [
             'ascs_mode_manager = ascs_mode_manager.mode_manager_node:main'
         ],

@@ -18,6 +18,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
+        'acds.summaries': ['cold_gas = cold_gas.cold_gas_summary'],
+        'acds.plots': ['cold_gas = cold_gas.cold_gas_plots'],
         'console_scripts': [
             'cold_gas = cold_gas.cold_gas_node:main'
         ],

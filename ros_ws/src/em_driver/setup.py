@@ -18,6 +18,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'acds.nodes': [f'{package_name} = {package_name}.nodes:PACKAGE'],
+        'acds.summaries': ['oresat = em_driver.oresat_summary'],
+        'acds.plots': ['torque_rod = em_driver.oresat_plots'],
         'console_scripts': [
             'em_driver = em_driver.em_driver_node:main'
         ],

@@ -1,7 +1,9 @@
 """``acds`` (``./scripts/acds`` in a checkout): one user entry, one verb per job. Every verb has ``--help``.
 
-The verbs are the modules of :mod:`acds_cli.verbs` (each with ``register(subparsers)``), beside the few
-small ones here (scenarios, test, setup, bench).
+The verbs are the modules of :mod:`acds_cli.verbs` and those the installed packages declare in the entry-point
+group ``acds.verbs`` (each with ``register(subparsers)``, :mod:`acds_common.plugins`), beside the few small ones
+here (scenarios, test, setup, bench). A verb, plug-in name or summary key two packages declare: one line naming
+both, exit 2, before any verb runs.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import signal
 import subprocess
 import sys
 
+from acds_common.plugins import PLOTS, VERBS, PluginConflict, VerbRegistry, check_summary_keys, plugins
 from acds_common.scenario import ScenarioError, list_scenarios
 
 from .arguments import OneLineParser, UsageError, positive_int
@@ -49,17 +52,18 @@ def cmd_bench(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     """The command-line surface (later verbs register here too)."""
     parser = OneLineParser(prog='acds', description=(
-        'ACDS emulator of spacecraft magnetic attitude control: HEAO wheels + electromagnets, SSS magnetic '
-        'spin/attitude control, AAP Workshop CMG momentum dump, OreSat torque rods, electromagnetic formation '
-        'flight (EMFF).'))
+        'ACDS emulator of spacecraft magnetic attitude control: the missions are the installed packages\' '
+        '(`acds scenarios` lists their scenarios).'))
     sub = parser.add_subparsers(dest='verb', metavar='VERB', required=True)
 
-    for module in _verb_modules():
-        module.register(sub)
-    p = sub.add_parser('scenarios', help='list the shipped scenarios', description='List the shipped scenarios.')
+    registry = VerbRegistry(sub)
+    for package, module in _verb_modules():
+        registry.register(module, package)
+    registry.package = 'acds_cli'
+    p = registry.add_parser('scenarios', help='list the shipped scenarios', description='List the shipped scenarios.')
     p.set_defaults(func=cmd_scenarios)
 
-    p = sub.add_parser('test', help='run the whole test suite (lint + pytest)',
+    p = registry.add_parser('test', help='run the whole test suite (lint + pytest)',
                        description='Lint (ruff) and run every test (pytest). Extra args go to pytest.')
     p.add_argument('--jobs', '-j', type=positive_int, default=3,
                    help='parallel test workers (default 3: the graph tests wait on node processes, pauses and '
@@ -67,11 +71,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('pytest_args', nargs=argparse.REMAINDER, help='passed to pytest')
     p.set_defaults(func=cmd_test)
 
-    p = sub.add_parser('setup', help='only set up the virtual environment (idempotent)',
+    p = registry.add_parser('setup', help='only set up the virtual environment (idempotent)',
                        description='Create or refresh .venv (done by scripts/acds before any verb).')
     p.set_defaults(func=lambda _a: 0)
 
-    p = sub.add_parser('bench', help='benchmark the lockstep graph against a bare rclpy chain',
+    p = registry.add_parser('bench', help='benchmark the lockstep graph against a bare rclpy chain',
                        description='Print graph lockstep steps/s, a bare rclpy chain with the same hops, their ratio, '
                                    'and core-only dynamics steps/s.')
     p.add_argument('--json', action='store_true', help='last line: one JSON object')
@@ -81,20 +85,19 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: Entry-point group of verbs a workspace package adds (each names a module with ``register(subparsers)``).
-VERB_ENTRY_POINTS = 'acds.verbs'
+VERB_ENTRY_POINTS = VERBS
 
 
 def _verb_modules() -> list:
-    """Verb groups in ``acds_cli/verbs/`` (one module each, with ``register(subparsers)``), then the modules
-    other packages declare in the entry-point group :data:`VERB_ENTRY_POINTS`, by name."""
+    """(package, module) of the verb groups in ``acds_cli/verbs/`` (one module each, with ``register(subparsers)``),
+    then of the modules other packages declare in the entry-point group :data:`VERB_ENTRY_POINTS`, by name."""
     import importlib
     import pkgutil
-    from importlib.metadata import entry_points
 
     from . import verbs
     ordered = sorted(pkgutil.iter_modules(verbs.__path__), key=lambda m: (m.name != 'run', m.name))  # run first
-    own = [importlib.import_module(f'{verbs.__name__}.{m.name}') for m in ordered]
-    return own + [ep.load() for ep in sorted(entry_points(group=VERB_ENTRY_POINTS), key=lambda e: e.name)]
+    own = [('acds_cli', importlib.import_module(f'{verbs.__name__}.{m.name}')) for m in ordered]
+    return own + [(p.package, p.module) for p in plugins(VERB_ENTRY_POINTS)]
 
 
 class Stopped(KeyboardInterrupt):
@@ -121,7 +124,14 @@ def main(argv: list[str] | None = None) -> int:
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, _terminate)
     signal.signal(signal.SIGHUP, _terminate)
-    parser = build_parser()
+    try:  # the installed packages' plug-ins agree, before any verb (and any process) starts
+        parser = build_parser()
+        from acds_runtime.summary import COMMON_KEYS
+        check_summary_keys(COMMON_KEYS)
+        plugins(PLOTS)
+    except PluginConflict as exc:
+        print(f'acds: plug-in conflict: {exc}', file=sys.stderr)
+        return 2
     args = parser.parse_args(argv)
     try:
         code = args.func(args)

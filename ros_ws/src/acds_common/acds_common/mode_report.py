@@ -147,6 +147,20 @@ def mode_state(value: Sequence[Status] | None) -> tuple[str, str, bool] | None:
     return (status.message if mode is None else mode), cause or '', captured == _FLAG[True]
 
 
+def transitions(history: list[tuple[float, str, str, bool]]) -> list[dict[str, object]]:
+    """Mode changes and the acquisition capture as [{t_min, from, to, cause}] (capture: to = 'capture') from the
+    (t s, mode, cause, captured) of each step (:func:`mode_state`): a run summary's list and a plot's marks."""
+    out: list[dict[str, object]] = []
+    prev_mode, prev_captured = None, None
+    for t, mode, cause, captured in history:
+        if prev_mode is not None and mode != prev_mode:
+            out.append({'t_min': t / 60, 'from': prev_mode, 'to': mode, 'cause': cause or None})
+        if captured and prev_captured is False and (prev_mode == mode or prev_mode is None):
+            out.append({'t_min': t / 60, 'from': mode, 'to': 'capture', 'cause': cause or None})
+        prev_mode, prev_captured = mode, captured
+    return out
+
+
 def run_complete(value: Sequence[Status] | None) -> bool:
     """Whether the step's ``mode`` value asks the time owner to end the run (read each step: the one key alone)."""
     status = _mode_status(value)

@@ -2,7 +2,7 @@
 
 The schema checks types, units and ranges; a model's core knows more (an inertia tensor
 must be positive definite and obey the triangle inequality, an apogee lies above the
-perigee, a ground-command schedule reads "T_S: command", the SSS polarity level is above
+perigee, a ground-command schedule reads "T_S: command", a comparator level is above
 zero, ...). The pre-flight writes the parameters the nodes will get, builds the graph
 declaration from them (one publisher per per-step topic, no lag-0 cycle) and constructs
 each node's stepper from its parameters — the very code a node process runs on start-up —

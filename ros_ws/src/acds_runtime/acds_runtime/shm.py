@@ -54,7 +54,7 @@ def lock_held(path: Path, *, probe: bool = False) -> bool:
     tries an exclusive lock, then a shared one, and gives the port up when both fail, and the participant then
     never receives what a writer sends to that port. Measured: the end-of-run cleaning of one run, probing the
     lock files of another run starting beside it, left that run's monitor without a message from its time owner
-    (1 run in 77 of two loops of ``acds run free_tumble_heao_b`` side by side, 0 in 80 after; once in a
+    (1 run in 77 of two loops of the same free-tumble ``acds run`` side by side, 0 in 80 after; once in a
     fresh-clone suite). With ``probe`` (a file only this project locks: a domain lease, a sample folder), a file
     /proc/locks does not list is also tried with LOCK_EX|LOCK_NB and released at once. A file that cannot be
     looked at counts as held."""

@@ -3,8 +3,9 @@
 A :class:`RunObserver` is fed every message of a run — serialized bytes by the run monitor
 (per-process graph) or values by the direct engine — decodes only the topics its summary
 modules read (a module summarises single-vehicle runs, or formations when it sets
-``FORMATIONS = True``), joins them by step and hands complete steps, in step order, to each module in
-``acds_runtime/summaries/`` (``Accumulator(scenario)`` with ``step(k, values)``, ``event(topic,
+``FORMATIONS = True``), joins them by step and hands complete steps, in step order, to each summary module the
+installed packages declare (entry-point group ``acds.summaries``, :mod:`acds_common.plugins`:
+``Accumulator(scenario)`` with ``step(k, values)``, ``event(topic,
 value)`` and ``contribute(summary)``). It keeps only what the summaries keep (running peaks,
 change points), never the messages, so its memory does not grow with the run's length.
 ``print_tables`` lets each module print its tables.
@@ -30,7 +31,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from acds_common import topics
+from acds_common import plugins, topics
 from acds_common.attitude import dcm
 from acds_common.cdr import Codec
 from acds_common.environment import orbit_from_section
@@ -46,21 +47,18 @@ ODOMETRY, B_BODY, WHEEL_H, WHEEL_HDOT, TORQUE_MAG, TORQUE_GG = (topics.resolve(t
     topics.TRUTH_TORQUE_GG))
 
 
-#: Entry-point group of summary modules other packages contribute (the same protocol as ``summaries/``' modules:
-#: ``applies(scenario)``, ``Accumulator(scenario)``, ``null_keys(summary)``, ``print_tables(summary)``), in name order
-#: after this package's own.
-SUMMARY_PLUGINS = 'acds.summaries'
+#: The summary keys of the runtime itself (:meth:`RunObserver.summary`, :class:`DynamicsSummary`): no package's
+#: summary module may declare them (:func:`acds_common.plugins.check_summary_keys`).
+COMMON_KEYS = ('scenario', 'steps', 'sim_minutes', 'wall_seconds', 'step_angle_max_rad', 'integration', 'torque_free',
+               'momentum_drift_rel', 'energy_drift_rel', 'final_rates_deg_s', 'final_momentum_ftlbs', 'b_min_gauss',
+               'b_max_gauss', 'truth_messages', 'truth_digest')
 
 
 def _summary_modules() -> list:
-    import importlib
-    import pkgutil
-    from importlib.metadata import entry_points
-
-    from . import summaries
-    return ([importlib.import_module(f'{summaries.__name__}.{m.name}')
-             for m in sorted(pkgutil.iter_modules(summaries.__path__), key=lambda m: m.name)]
-            + [ep.load() for ep in sorted(entry_points(group=SUMMARY_PLUGINS), key=lambda e: e.name)])
+    """The summary modules the installed packages declare (:data:`acds_common.plugins.SUMMARIES`, in name order),
+    after checking that no two declare the same key."""
+    plugins.check_summary_keys(COMMON_KEYS)
+    return plugins.modules(plugins.SUMMARIES)
 
 
 class DynamicsSummary:
@@ -78,7 +76,7 @@ class DynamicsSummary:
 
     @staticmethod
     def applies(scenario: Any) -> bool:
-        """A single vehicle's run (a formation's vehicles are summarised by ``summaries.emff``)."""
+        """A single vehicle's run (a formation's vehicles are summarised by a summary module with ``FORMATIONS``)."""
         return not scenario.formation
 
     def __init__(self, scenario: Any) -> None:

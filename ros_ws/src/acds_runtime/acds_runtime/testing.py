@@ -178,3 +178,20 @@ def read_until(proc: subprocess.Popen[str], wanted: Callable[[str], bool]) -> st
         if wanted(line):
             return ''.join(said)
     pytest.fail(f'the process ended (exit {proc.wait()}) before the line waited for; it said:\n{"".join(said)}')
+
+
+def install_outside(source: Path, tmp: Path) -> Path:
+    """Install the package folder ``source`` (a fixture package outside the workspace) as a user would, into
+    ``tmp/site`` (``pip install --target``: its dist-info with its entry points, its console scripts in
+    ``bin/``), from a copy of it in ``tmp/src``; the site folder, to put on ``PYTHONPATH`` of a fresh process."""
+    import shutil
+    import sys
+
+    src = tmp / 'src'
+    shutil.copytree(source, src, ignore=shutil.ignore_patterns('build', '*.egg-info', '__pycache__'))
+    site = tmp / 'site'
+    proc = subprocess.run([sys.executable, '-m', 'pip', 'install', '--quiet', '--disable-pip-version-check',
+                           '--no-deps', '--no-build-isolation', '--no-index', '--target', str(site), str(src)],
+                          capture_output=True, text=True, timeout=300, check=False)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return site

@@ -23,6 +23,8 @@ TIMING_TOPIC, SETPOINT_TOPIC = topics.resolve(TIMING), topics.resolve(SETPOINT)
 NAMED_LATE_STEPS = 20
 KEYS = ('can_sensor_lateness_ms', 'can_sdo_latency_ms', 'can_setpoint_age_ms', 'can_late_steps', 'can_late_step_list',
         'can_setpoint_changes', 'can_first_setpoint_step', 'can_peak_setpoint_ma')
+#: The summary keys this module contributes (:data:`acds_common.plugins.KEYS_ATTRIBUTE`).
+SUMMARY_KEYS = KEYS
 
 
 def applies(scenario: Any) -> bool:

@@ -8,7 +8,7 @@ off→on edge). The corrected eq. 4-28 is shown beside it for comparison.
 Constants are those of Fig. 4-10: E = 28 V, V_ces = 0.35 V, R_L = 30 Ω,
 ED = 0.6 V, ε = 0.01, with L = 20.3 H (Table 4-3).
 
-The table and its plots are printed and drawn by ``acds duty-curve`` (``acds_cli.verbs.duty_curve``).
+The table and its plots are printed and drawn by ``acds duty-curve`` (``heao_mission.duty_curve_cli``).
 """
 
 from __future__ import annotations

@@ -31,11 +31,10 @@ from typing import Any
 import numpy as np
 import yaml
 from acds_common import topics, units
-from acds_common.mode_report import ModeReport
+from acds_common.mode_report import ModeReport, transitions
 from acds_common.parameters import ConfigError, normalize, section
 from acds_runtime.bag.reader import Bag, open_bag
 from acds_runtime.bag.writer import BagError, check_out_dir, typestore
-from acds_runtime.summaries.heao import transitions
 
 from . import FORMATS, mission_plots
 
@@ -134,7 +133,7 @@ class RunContext:
     params: dict[str, dict[str, Any]] = field(default_factory=dict)
     #: Every node that ran, as the bag records its parameters (a vehicle's: ``<vehicle>/<node>``).
     nodes: tuple[str, ...] = ()
-    #: Mode transitions and capture: [{t_min, from, to, cause}] (``acds_runtime.summaries.heao.transitions``).
+    #: Mode transitions and capture: [{t_min, from, to, cause}] (:func:`acds_common.mode_report.transitions`).
     events: list[dict[str, Any]] = field(default_factory=list)
 
     @property

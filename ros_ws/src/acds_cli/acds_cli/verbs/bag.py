@@ -254,7 +254,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser('plot', help="the study's figures from a bag (PNG, SVG or PDF)",
                        description='Direction cosines, body rates, wheel momenta, magnetic moments, field/momentum '
-                                   'angle, sun angle, mode timeline (and SSS spin rate/torque), study units; every '
+                                   "angle, sun angle, mode timeline (and each mission plug-in's figures), study units; every "
                                    'time plot marks the mode transitions and capture, the limits where they apply.')
     p.add_argument('bag')
     p.add_argument('--out', help='output folder (default: plots/ beside the bag)')

@@ -295,9 +295,11 @@ def mark_complete(out: Path, spec: dict[str, Any], complete: bool) -> None:
 
 def cmd_montecarlo(args: argparse.Namespace) -> int:
     """Draw, run (appending each sample to the journal), summarise (module doc)."""
+    from acds_common.plugins import SUMMARIES, plugins
     from acds_common.scenario import load_scenario
     from acds_runtime import dispersion_report as dr
-    from acds_runtime.summaries import heao as heao_summary
+
+    heao_summary = next(p.module for p in plugins(SUMMARIES) if p.name == 'heao')  # the acquisition quantities' summary
 
     base = load_scenario(args.scenario)
     from ..fsw_study import cmd_fsw_study, flown_by_user

@@ -4,7 +4,7 @@ The same dump :class:`~acds_runtime.launcher.GraphRun` writes to a run's ``param
 (:func:`acds_common.parameters.parameters_yaml` of
 :func:`~acds_common.parameters.node_parameters`), so any node can be started by hand::
 
-    ./scripts/acds params heao_b_acquisition --node reaction_wheels > rw.yaml
+    ./scripts/acds params SCENARIO --node reaction_wheels > rw.yaml
     .venv/bin/reaction_wheels --ros-args --params-file rw.yaml
 
 With ``--node`` the file starts with comments saying what that node then waits for.

@@ -34,8 +34,9 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
+from cold_gas.study import STUDY_ACQUISITION_MIN, STUDY_THREE_ACQUISITIONS_LB
+
 from ..arguments import UsageError, check_output_file, positive_int, positive_minutes
-from .cold_gas import STUDY_ACQUISITION_MIN, STUDY_THREE_ACQUISITIONS_LB
 from .montecarlo import (
     add_execution_options,
     add_sample_options,

@@ -1,6 +1,7 @@
-"""Per-mission figures of ``acds plot``: plug-ins, as the run summaries are (:mod:`acds_runtime.summaries`).
+"""Per-mission figures of ``acds plot``: plug-ins, as the run summaries are (:mod:`acds_common.plugins`).
 
-Every module of this package is one mission's figures and defines
+A package declares its missions' figures in the entry-point group ``acds.plots`` (setup.py), each a module
+that defines
 
 * ``applies(ctx) -> bool``: whether the run is of its mission, decided from what the bag says ran — the
   nodes and the scenario sections they received (:class:`~acds_cli.bag.plots.RunContext`, the parameters
@@ -9,19 +10,20 @@ Every module of this package is one mission's figures and defines
   pass over the bag; a getter turns a message into a list of floats);
 * ``plot(kit)``: its figures, drawn with the :class:`PlotKit`.
 
-Adding a mission's figures is adding a module here; :func:`chosen` finds it.
+Adding a mission's figures is adding such a module to the mission's package and naming it in its setup.py;
+:func:`chosen` finds it. The CLI names no mission.
 """
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
 from typing import Any
 
 import numpy as np
+from acds_common.plugins import PLOTS, Plugin
+from acds_common.plugins import plugins as declared
 
 
 @dataclass
@@ -43,12 +45,11 @@ class PlotKit:
     finish: Callable[[Any, list[Any], str, str], None]
 
 
-def plugins() -> list[ModuleType]:
-    """Every mission-plot module, by name."""
-    return [importlib.import_module(f'{__name__}.{m.name}')
-            for m in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name)]
+def plugins() -> tuple[Plugin, ...]:
+    """Every mission-plot plug-in the installed packages declare, by name."""
+    return declared(PLOTS)
 
 
 def chosen(ctx: Any) -> list[ModuleType]:
-    """The plug-ins that apply to the run ``ctx`` describes."""
-    return [p for p in plugins() if p.applies(ctx)]
+    """The plug-in modules that apply to the run ``ctx`` describes."""
+    return [p.module for p in plugins() if p.module.applies(ctx)]

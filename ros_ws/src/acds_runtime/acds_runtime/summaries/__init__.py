@@ -1,1 +1,0 @@
-"""Summary contributors: each module defines ``contribute(result, summary)`` and ``print_tables(summary)``."""
