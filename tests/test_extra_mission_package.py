@@ -1,4 +1,4 @@
-"""A mission is added by installing a package, with no edit in the runtime or the CLI (README "Adding a mission").
+"""A mission is added by installing a package, with no edit in the runtime or the CLI (docs/architecture.md "Adding a mission").
 
 ``tests/fixtures/extra_mission_pkg`` lives outside ``ros_ws/src`` and nothing the workspace ships names it: a
 peak-body-rate mission that declares, in its setup.py alone, a summary section with its report line

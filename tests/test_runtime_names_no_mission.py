@@ -1,5 +1,5 @@
 """The runtime and the CLI name no mission, no seed system and no mission topic: the missions are plug-ins of
-their packages (README "Adding a mission"; :mod:`acds_common.plugins`).
+their packages (docs/architecture.md "Adding a mission"; :mod:`acds_common.plugins`).
 
 Every source file of ``acds_runtime`` and ``acds_cli`` is searched (case-insensitive) for the names of the
 shipped missions and their seed systems (:data:`WORDS`) and for the mission topics of
