@@ -18,6 +18,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'acds.summaries': [f'heao = {package_name}.heao_summary'],
-        'acds.verbs': [f'cold_gas = {package_name}.cold_gas_budget_cli', f'duty_curve = {package_name}.duty_curve_cli'],
+        'acds.verbs': [f'cold_gas = {package_name}.cold_gas_budget_cli', f'duty_curve = {package_name}.duty_curve_cli',
+                       f'explain_sample = {package_name}.explain_cli'],
     },
 )

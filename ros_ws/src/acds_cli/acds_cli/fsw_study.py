@@ -69,7 +69,7 @@ def add_fsw_options(p: argparse.ArgumentParser) -> None:
                         '{run_dir}')
     p.add_argument('--can-port', type=int, metavar='PORT',
                    help='a study on a CAN bus: serve every sample\'s bus on this TCP port (default: a free one per '
-                        'sample), for a flight computer that connects to one port only, as the OreSat C3 (29536); '
+                        'sample), for a flight computer that connects to one port only, e.g. a fixed port of its own; '
                         'one sample at a time (--jobs 1)')
     p.add_argument('--paired', action='store_true',
                    help='also run the same draws with the built-in node (direct engine) and report them side by side')

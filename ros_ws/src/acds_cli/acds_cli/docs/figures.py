@@ -1,8 +1,8 @@
 """Sphinx extension: the ``acds-run`` directive puts a real run's figures and numbers on a page.
 
-```{acds-run} oresat_detumble
+```{acds-run} SCENARIO
 :until-min: 30
-:figures: oresat_rates, oresat_omega_norm
+:figures: PLOT_NAME, OTHER_PLOT_NAME
 ```
 
 runs the shipped scenario on the direct engine (bit-identical to the graph) with ``acds run``, and shows the

@@ -295,11 +295,10 @@ def mark_complete(out: Path, spec: dict[str, Any], complete: bool) -> None:
 
 def cmd_montecarlo(args: argparse.Namespace) -> int:
     """Draw, run (appending each sample to the journal), summarise (module doc)."""
-    from acds_common.plugins import SUMMARIES, plugins
     from acds_common.scenario import load_scenario
     from acds_runtime import dispersion_report as dr
 
-    heao_summary = next(p.module for p in plugins(SUMMARIES) if p.name == 'heao')  # the acquisition quantities' summary
+    heao_summary = _acquisition_summary()
 
     base = load_scenario(args.scenario)
     from ..fsw_study import cmd_fsw_study, flown_by_user
@@ -366,12 +365,17 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     return 1 if failed else 0
 
 
+def _acquisition_summary() -> Any:
+    """The summary plug-in whose keys are the dispersion report's acquisition quantities (entry point ``heao``)."""
+    from acds_common.plugins import SUMMARIES, plugins
+    return next(p.module for p in plugins(SUMMARIES) if p.name == 'heao')
+
+
 def _not_captured(base: Scenario, out: Path, rows: list[dict[str, Any]], samples: list[Any]) -> list[str]:
     """The samples that did not reach capture, with their drawn conditions (HEAO acquisitions only; markdown)."""
     from acds_runtime import dispersion_report as dr
-    from acds_runtime.summaries import heao as heao_summary
 
-    if not heao_summary.applies(base):
+    if not _acquisition_summary().applies(base):
         return []
     explain = f'./scripts/acds explain-sample {shlex.quote(str(out))} {{index}}'
     return dr.not_captured_lines(rows, list(dr.flatten(samples[0].drawn)), explain)

@@ -28,8 +28,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from ..arguments import UsageError, check_output_dir
+from acds_cli.arguments import UsageError, check_output_dir
 
 #: |cos| of the B/h angle above which h counts as along the field (within 30° of ±B).
 ALONG_B_COS = math.cos(math.radians(30.0))
@@ -99,11 +98,12 @@ def _segment_share(mask: np.ndarray) -> float:
 
 def facts_of(bag_path: Path, scenario: Any) -> dict[str, Any]:
     """What the acquisition acted through, from the bag (module doc): modes, capture test, wheels, field geometry."""
+    from acds_cli.bag.plots import _common, _gather, _series, _v3, mode_of, odometry_values, run_context, sun_angle_deg
     from acds_common import topics, units
+    from acds_common.mode_report import transitions
     from acds_runtime.bag.reader import open_bag
-    from acds_runtime.summaries.heao import Accumulator, transitions
 
-    from ..bag.plots import _common, _gather, _series, _v3, mode_of, odometry_values, run_context, sun_angle_deg
+    from .heao_summary import Accumulator
 
     bag = open_bag(bag_path)
     ctx = run_context(bag)
