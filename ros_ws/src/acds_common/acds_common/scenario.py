@@ -34,6 +34,8 @@ its package declares it reads (:attr:`acds_common.graph.Node.sections`).
 from __future__ import annotations
 
 import datetime
+import functools
+import json
 import math
 import os
 import re
@@ -164,6 +166,20 @@ def _shipped_dir() -> Path:
 
 #: Where shipped scenarios live (override with ACDS_SCENARIO_DIR).
 SCENARIO_DIR = _shipped_dir()
+#: The file beside the shipped scenarios naming their roles: ``main_job`` (what ``acds run`` runs with no argument)
+#: and ``bench_flight_software`` (the flight-software sample of ``acds bench``: scenario, node, command).
+ROLES_FILE = 'roles.json'
+
+
+@functools.cache
+def shipped_role(role: str) -> Any:
+    """What :data:`ROLES_FILE` gives ``role``: which shipped scenario plays it is data, so the runtime and the CLI name
+    no scenario of a mission."""
+    path = SCENARIO_DIR / ROLES_FILE
+    try:
+        return json.loads(path.read_text())[role]
+    except (OSError, ValueError, KeyError) as exc:
+        raise ScenarioError(f'{path}: no role {role!r} of the shipped scenarios ({exc})') from exc
 
 
 @dataclass(frozen=True)

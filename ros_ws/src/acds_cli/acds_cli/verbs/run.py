@@ -9,7 +9,7 @@ import sys
 import time
 from pathlib import Path
 
-from acds_common.scenario import MAX_STEPS, load_scenario
+from acds_common.scenario import MAX_STEPS, load_scenario, shipped_role
 
 from ..arguments import (
     UsageError,
@@ -25,7 +25,8 @@ from ..arguments import (
 from ..workspace import new_run_dir, workspace
 from .montecarlo import add_sample_options, sample_for_run
 
-DEFAULT_SCENARIO = 'heao_b_acquisition'
+#: The main job (``scenarios/roles.json``), what ``acds run``, ``acds params`` and ``acds contract`` take with no argument.
+DEFAULT_SCENARIO = shipped_role('main_job')
 #: Entry-point group of run plug-ins: a package's own ``acds run`` options and what the run holds for its nodes while
 #: it goes (a bus, a device). Each entry names a module with
 #:   ``add_arguments(parser)``: its options (they default to None);
