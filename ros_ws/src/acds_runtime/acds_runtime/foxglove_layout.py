@@ -16,7 +16,7 @@ from __future__ import annotations
 import foxglove.layouts as fl
 from acds_common import topics
 from acds_common.parameters import node_parameters
-from acds_common.scenario import load_scenario
+from acds_common.scenario import load_scenario, shipped_role
 
 from .foxglove_bridge import (
     VIEW_MODE,
@@ -26,9 +26,6 @@ from .foxglove_bridge import (
     VIEW_WHEEL_MOMENTUM,
     frames_of,
 )
-
-#: The scenario whose graph names the frames (every scenario's graph declares the same ones).
-MAIN_JOB = 'heao_b_acquisition'
 
 #: Axis colours (x, y, z), as the 3D panel draws frame axes.
 COLORS = ('#e5533d', '#3fb950', '#4a90e2')
@@ -67,7 +64,8 @@ def layout() -> fl.Layout:
     mode = fl.StateTransitionsPanel(title='mode', config=fl.StateTransitionsConfig(
         paths=[fl.StateTransitionsSeries(value=f'{VIEW_MODE}.mode', label='mode')], is_synced=True,
         time_window_mode='sliding', x_axis_range=WINDOW_S, playback_bar_position='right'))
-    frames = frames_of(node_parameters(load_scenario(MAIN_JOB), 1, 0.0))
+    # the main job's graph names the frames (every scenario's graph declares the same ones)
+    frames = frames_of(node_parameters(load_scenario(shipped_role('main_job')), 1, 0.0))
     scene = fl.ThreeDeePanel(title=f'attitude: {frames.body} frame tumbling, sun line = {frames.sun} z, {frames.world} '
                                    'axes', config=fl.ThreeDeeConfig(
         fixed_frame=frames.world, follow_tf=frames.world, follow_mode='follow-none',
