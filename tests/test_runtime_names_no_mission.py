@@ -38,9 +38,6 @@ NOT_MOVED_YET = {
     'acds_runtime/dispersion_report.py': "the HEAO acquisition quantities of the dispersion report",
     'acds_cli/bag/plots.py': 'the HEAO rate thresholds and capture cone on the common figures',
     'acds_runtime/foxglove_bridge.py': 'the HEAO rate thresholds on the Foxglove layout',
-    'acds_runtime/foxglove_layout.py': 'the main job scenario of the layout',
-    'acds_cli/verbs/run.py': 'the default scenario of acds run (the main job)',
-    'acds_cli/bench.py': 'the benchmark scenarios',
 }
 
 

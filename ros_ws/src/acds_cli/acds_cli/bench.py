@@ -1,6 +1,6 @@
 """``acds bench``: measured speed of what users run, printed (never asserted in tests), one run.
 
-1. graph: the six-node ``heao_b_acquisition`` (every node its own process, recording on),
+1. graph: the six-node main job (``scenarios/roles.json``; every node its own process, recording on),
    steady-state lockstep steps/s after the first 10 % of the steps, CPU ms per step of
    every node process and of the launcher (its run monitor and recorder), and the
    deliveries per step (each message published × the subscriptions that receive it);
@@ -14,8 +14,8 @@
 5. dispersion: a fixed 20-sample study of the same scenario (case 1), samples 0–19 of seed
    :data:`DISPERSION_SEED` with the default draws, each run to acquisition capture on the direct engine,
    one after the other in this process (``montecarlo --jobs 1``): samples/s;
-6. flight-software sample: ``oresat_detumble`` with ``acds_controller`` left to the example node
-   (``examples/oresat_detumble_fsw``), started and stopped per sample as ``montecarlo --external ... --fsw-command``
+6. flight-software sample: the scenario with one node left to an example node, started and stopped per sample as
+   ``montecarlo --external ... --fsw-command`` (``bench_flight_software`` of ``scenarios/roles.json``)
    does (:func:`acds_runtime.flight_software.run_fsw_sample`): the overhead of a sample (wall seconds of a
    :data:`FSW_SHORT_STEPS`-step sample, the median of :data:`FSW_REPEATS`: the graph's processes and the user's node
    started, joined, stopped) and the steps/s of a :data:`FSW_STEPS`-step sample beyond it.
@@ -45,7 +45,10 @@ import time
 from pathlib import Path
 from typing import Any
 
-SCENARIO = 'heao_b_acquisition'
+from acds_common.scenario import shipped_role
+
+#: The graph, direct, kernel and dispersion lines' scenario: the main job.
+SCENARIO = shipped_role('main_job')
 #: Fewest steps a measurement takes: the graph line measures from the tenth step to MONITOR_LAG (50) + 2 steps
 #: before the end, while every node process lives (:func:`graph_rate`).
 MIN_STEPS = 500
@@ -53,8 +56,7 @@ MIN_STEPS = 500
 DISPERSION_SEED, DISPERSION_SAMPLES = 1, 20
 #: The flight-software sample line: its scenario, node and command (docs/flight_software.md's), the short sample's steps, how
 #: many short samples (their median is the overhead), the long sample's steps.
-FSW_SCENARIO, FSW_NODE = 'oresat_detumble', 'acds_controller=oresat_detumble_fsw'
-FSW_COMMAND = 'oresat_detumble_fsw --ros-args --params-file {params}'
+FSW_SCENARIO, FSW_NODE, FSW_COMMAND = (shipped_role('bench_flight_software')[k] for k in ('scenario', 'node', 'command'))
 FSW_SHORT_STEPS, FSW_REPEATS, FSW_STEPS = 2, 3, 2000
 
 
