@@ -20,5 +20,6 @@ setup(
         'acds.summaries': [f'heao = {package_name}.heao_summary'],
         'acds.verbs': [f'cold_gas = {package_name}.cold_gas_budget_cli', f'duty_curve = {package_name}.duty_curve_cli',
                        f'explain_sample = {package_name}.explain_cli'],
+        'acds.limits': [f'heao = {package_name}.limits'],
     },
 )

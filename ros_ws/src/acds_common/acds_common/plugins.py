@@ -10,6 +10,8 @@ plots and verbs" and name no mission:
 * ``acds.plots``: figures of ``acds plot`` (:mod:`acds_cli.bag.mission_plots`): ``applies(ctx)``, ``vectors(ctx)``,
   ``plot(kit)``;
 * ``acds.verbs``: verbs of ``acds`` (:mod:`acds_cli.verbs`): ``register(subparsers)``.
+* ``acds.limits``: limits the common figures and the live view draw beside a value (:func:`limits`):
+  ``limits(params)``, from a run's node parameters.
 
 Modules of a group load in entry-point name order. Two packages that declare the same entry-point name in a
 group, the same summary key or the same verb are a :class:`PluginConflict`: one line naming both packages,
@@ -22,8 +24,9 @@ import functools
 from dataclasses import dataclass
 from importlib.metadata import entry_points
 from types import ModuleType
+from typing import Any
 
-SUMMARIES, PLOTS, VERBS = 'acds.summaries', 'acds.plots', 'acds.verbs'
+SUMMARIES, PLOTS, VERBS, LIMITS = 'acds.summaries', 'acds.plots', 'acds.verbs', 'acds.limits'
 #: The attribute of a summary module listing the top-level summary keys it contributes.
 KEYS_ATTRIBUTE = 'SUMMARY_KEYS'
 
@@ -96,3 +99,13 @@ class VerbRegistry:
         """Let ``module`` (of ``package``) register its verbs."""
         self.package = package
         module.register(self)
+
+
+def limits(params: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """The limits the :data:`LIMITS` plug-ins give a run from its node parameters (SI; a key absent: none applies):
+    ``rate_thresholds`` (rad/s per body axis, the mode logic compares |ω_i| with them) and ``capture_cone`` (rad,
+    body z to the sun line at capture)."""
+    out: dict[str, Any] = {}
+    for module in modules(LIMITS):
+        out.update(module.limits(params))
+    return out

@@ -1,19 +1,19 @@
 """``acds plot``: a bag → figures in the layout and units of the study's figures (PNG, SVG or PDF).
 
-HEAO (seed 002): Fig. 4-14 (direction cosines B33, B23, B13 against the sun
-frame), Figs. 4-15 … 4-17 (roll/pitch/yaw responses: body rate deg/s, wheel
-momentum ft-lb-sec, magnetic moment A·m²), Fig. 4-18 / 4-43 / 4-51 (magnetic
-moments and the angle between the Earth field and the momentum vector), the
-sun angle (body z to the sun line, with the capture cone), plus the mode
-timeline. A figure whose topics are absent is skipped. Each mission's own figures (SSS spin
-rate and torque, torque-rod detumble, cold-gas acquisition, formations) are plug-ins,
-:mod:`acds_cli.bag.mission_plots`, chosen by the nodes that ran and the sections they received.
+The common figures (after seed 002's): Fig. 4-14 (direction cosines B33, B23, B13 against the sun frame),
+Figs. 4-15 … 4-17 (roll/pitch/yaw responses: body rate deg/s, wheel momentum ft-lb-sec, magnetic moment A·m²),
+Fig. 4-18 / 4-43 / 4-51 (magnetic moments and the angle between the Earth field and the momentum vector), the
+sun angle (body z to the sun line),
+plus the mode timeline. A figure whose topics are absent is skipped. Each mission's own figures are plug-ins
+(entry-point group ``acds.plots``, :mod:`acds_cli.bag.mission_plots`), chosen by the nodes that ran and the
+sections they received.
 
 What an ACS engineer reads at a glance: every time plot marks the mode
 transitions and the acquisition capture (labelled vertical lines, from the
-``mode`` stream), the rate plots carry the Mode 1A → 1B rate thresholds, the
+``mode`` stream), the rate plots carry the mode logic's rate thresholds, the
 moment plots ± the maximum moment, the sun-angle plot the capture cone — all
-taken from the parameters the nodes ran with (stored in the bag). Each title
+taken from the parameters the nodes ran with (stored in the bag; the thresholds and the cone as the
+missions' ``acds.limits`` plug-ins read them, :func:`acds_common.plugins.limits`). Each title
 names the scenario and the run. Time axes are sim minutes. The series are
 gathered in one streaming pass over the bag (only the plotted fields are kept),
 and the output folder is checked before the bag is read.
@@ -33,6 +33,7 @@ import yaml
 from acds_common import topics, units
 from acds_common.mode_report import ModeReport, transitions
 from acds_common.parameters import ConfigError, normalize, section
+from acds_common.plugins import limits
 from acds_runtime.bag.reader import Bag, open_bag
 from acds_runtime.bag.writer import BagError, check_out_dir, typestore
 
@@ -139,7 +140,7 @@ class RunContext:
     @property
     def vehicles(self) -> list[str]:
         """The formation's vehicles, by name; [] for a single vehicle: those the formation dynamics flew
-        (``formation_vehicles``, with vehicles that run no node, e.g. the airtrack's passive slider) and the
+        (``formation_vehicles``, with vehicles that run no node, e.g. a passive vehicle) and the
         prefixes of the vehicles' nodes."""
         flown = self.params.get('formation_dynamics', {}).get('formation_vehicles') or ()
         return sorted({*flown, *(node.rpartition('/')[0] for node in self.nodes if '/' in node)})
@@ -148,19 +149,16 @@ class RunContext:
         """{field: SI value} of scenario section ``name`` as node ``node`` received it (None: not recorded)."""
         return section(self.params[node], name) if node in self.params else None
 
-    @property
-    def heao(self) -> bool:
-        """Whether the HEAO mode manager ran (rate thresholds and the capture cone apply)."""
-        modes = self.section('ascs_mode_manager', 'modes')
-        return modes is not None and modes['system'] == 'heao'
-
     def rate_thresholds_deg_s(self) -> np.ndarray | None:
-        """Mode 1A → 1B body-rate thresholds per axis, deg/s (HEAO runs)."""
-        return np.degrees(self.section('ascs_mode_manager', 'modes')['rate_thresholds']) if self.heao else None
+        """The body-rate thresholds the mode logic compares |ω_i| with, deg/s per axis (None: no mission's
+        :func:`acds_common.plugins.limits` gives them for this run)."""
+        thresholds = limits(self.params).get('rate_thresholds')
+        return None if thresholds is None else np.degrees(thresholds)
 
     def capture_cone_deg(self) -> float | None:
-        """The acquisition capture cone, deg (HEAO runs)."""
-        return math.degrees(self.section('ascs_mode_manager', 'modes')['capture_cone']) if self.heao else None
+        """The acquisition capture cone, deg (None: no mission's :func:`acds_common.plugins.limits` gives one)."""
+        cone = limits(self.params).get('capture_cone')
+        return None if cone is None else math.degrees(cone)
 
     def max_moment_am2(self) -> tuple[np.ndarray, str] | None:
         """± the maximum moment per axis (A·m²) and what it is: the controller's command saturation, else the
