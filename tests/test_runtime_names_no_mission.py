@@ -36,8 +36,6 @@ NOT_MOVED_YET = {
     'acds_cli/verbs/sweep.py': 'the Table 4-7 HEAO sweep group and the cold-gas study figures',
     'acds_cli/verbs/montecarlo.py': "the HEAO acquisition quantities of the dispersion report",
     'acds_runtime/dispersion_report.py': "the HEAO acquisition quantities of the dispersion report",
-    'acds_cli/bag/plots.py': 'the HEAO rate thresholds and capture cone on the common figures',
-    'acds_runtime/foxglove_bridge.py': 'the HEAO rate thresholds on the Foxglove layout',
 }
 
 

@@ -15,7 +15,8 @@ bag). What a client sees:
   shows the body tumbling about the sun line; the orbit position stays in ``truth/odometry``;
 * ``/acds/view/*`` (JSON): what the layout plots in the study's units, with the scenario's limits beside
   each value so a plot draws them as lines: body rates and their magnitudes (deg/s) with the Mode 1A → 1B
-  thresholds (HEAO; the mode logic compares |ω_i| with them), the sun
+  thresholds (where the mode logic compares |ω_i| with them: the missions' ``acds.limits`` plug-ins,
+  :func:`acds_common.plugins.limits`), the sun
   angle (z body to the sun line, deg) with the capture cone, wheel momentum (ft-lb-s), the moment command
   (A·m²) with ±its saturation, and the mode. They are derived for the view only (never recorded).
 
@@ -43,6 +44,7 @@ from acds_common.environment import Sun, SunConfig, ecliptic_normal_eci, sun_fra
 from acds_common.frames import SUN_FRAME
 from acds_common.graph import build_graph
 from acds_common.mode_report import ModeReport
+from acds_common.plugins import limits
 from acds_common.scenario import SCHEMA
 from foxglove.channels import FrameTransformsChannel
 from foxglove.messages import FrameTransform, FrameTransforms, Quaternion, Timestamp, Vector3
@@ -138,9 +140,8 @@ class FoxgloveBridge:
             name=ty, encoding='ros2msg', data=store.generate_msgdef(ty, ros_version=2)[0].encode()))
             for topic, ty in sorted(types.items())}
         self._tf = FrameTransformsChannel(TF_TOPIC, context=self._context)
-        heao = _param(params, 'ascs_mode_manager', 'modes', 'system') == 'heao'
-        self._limits = {  # None: not in this graph (or not this system's)
-            'rates': _param(params, 'ascs_mode_manager', 'modes', 'rate_thresholds') if heao else None,
+        self._limits = {  # None: not in this graph (or not this mode logic's)
+            'rates': limits(params).get('rate_thresholds'),
             'cone': _param(params, 'ascs_mode_manager', 'modes', 'capture_cone'),
             'max_moment': _param(params, 'acds_controller', 'controller', 'max_moment_am2'),
         }
