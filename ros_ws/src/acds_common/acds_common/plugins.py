@@ -6,7 +6,8 @@ plots and verbs" and name no mission:
 
 * ``acds.summaries``: a run-summary section (:mod:`acds_runtime.summary`): ``applies(scenario)``,
   ``Accumulator(scenario)``, ``null_keys(summary)``, ``print_tables(summary)`` (the report lines) and
-  :data:`KEYS_ATTRIBUTE`, the summary keys it contributes;
+  :data:`KEYS_ATTRIBUTE`, the summary keys it contributes, and optionally :data:`STUDY_ROW_ATTRIBUTE`, the dispersion
+  study's columns of a sample;
 * ``acds.plots``: figures of ``acds plot`` (:mod:`acds_cli.bag.mission_plots`): ``applies(ctx)``, ``vectors(ctx)``,
   ``plot(kit)``;
 * ``acds.verbs``: verbs of ``acds`` (:mod:`acds_cli.verbs`): ``register(subparsers)``.
@@ -29,6 +30,9 @@ from typing import Any
 SUMMARIES, PLOTS, VERBS, LIMITS = 'acds.summaries', 'acds.plots', 'acds.verbs', 'acds.limits'
 #: The attribute of a summary module listing the top-level summary keys it contributes.
 KEYS_ATTRIBUTE = 'SUMMARY_KEYS'
+#: The optional function of a summary module giving a dispersion study's row columns from one sample's summary
+#: (:func:`acds_runtime.dispersion_report.make_row`): ``study_row(summary) -> dict``.
+STUDY_ROW_ATTRIBUTE = 'study_row'
 
 
 class PluginConflict(ValueError):

@@ -2,7 +2,8 @@
 
 Rows. One per sample: its index and name, the drawn values (a vector key flattened to ``key[i]``),
 the derived geometry at t0 (:func:`acds_runtime.sampling.initial_geometry`), and the run summary's
-Table 4-7 keys in study units (minutes, ft-lb-sec, A·m²).
+study columns in study units (minutes, ft-lb-sec, A·m²), as the summary plug-in that declares them reads them
+(``study_row``, :data:`acds_common.plugins.STUDY_ROW_ATTRIBUTE`).
 
 Censoring. A sample that has not reached an event when its run ends is *censored* at the run's
 length, never dropped: for a time quantity its value is "> T" (T = the run's sim minutes), ordered
@@ -51,6 +52,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from acds_common.plugins import STUDY_ROW_ATTRIBUTE, SUMMARIES, modules
 
 from .summary import summary_json
 
@@ -112,30 +114,15 @@ def flatten(drawn: dict[str, Any]) -> dict[str, Any]:
 
 def make_row(index: int, name: str, drawn: dict[str, Any], geometry: dict[str, Any],
              summary: dict[str, Any]) -> dict[str, Any]:
-    """One sample's flat row (module doc)."""
+    """One sample's flat row (module doc): its index, name, draws and geometry, and the columns the summary plug-in
+    that declares a study row (:data:`acds_common.plugins.STUDY_ROW_ATTRIBUTE`) reads from its summary."""
     row: dict[str, Any] = {'index': index, 'name': name, **flatten(drawn), **geometry}
     if 'error' in summary:
         row['error'] = summary['error']
         return row
-    peak_h = summary.get('peak_wheel_momentum_ftlbs') or {}
-    peak_m = summary.get('peak_moment_am2') or {}
-    gas = 'gas_used_lb' in summary  # a cold-gas acquisition: no magnetics-only phase; Mode 1B from the hand-over
-    row.update({
-        **({} if gas else {'time_magnetics_only_min': summary.get('time_magnetics_only_min')}),
-        'time_wheels_magnetics_min': summary.get('time_wheels_magnetics_min'),
-        'acquisition_time_min': summary.get('acquisition_time_min'),
-        'mode_1b_reached': summary.get('gas_handover_min' if gas else 'time_magnetics_only_min') is not None,
-        'captured': summary.get('acquisition_time_min') is not None,
-        'sim_minutes': summary.get('sim_minutes'),
-        'final_wheel_momentum_ftlbs': summary.get('final_wheel_momentum_ftlbs'),
-        **{f'peak_wheel_momentum_{a}_ftlbs': peak_h.get(a) for a in ('x', 'y', 'z', 'rss')},
-        **{f'peak_moment_{a}_am2': peak_m.get(a) for a in ('x', 'y', 'z')},
-        'peak_moment_am2': max(peak_m.values()) if peak_m else None,
-        'wheel_saturation_time_min': summary.get('wheel_saturation_time_min'),
-        'final_mode': summary.get('final_mode'),
-        'truth_digest': summary.get('truth_digest'),
-        **{k: v for k, v in summary.items() if k.startswith('gas_')},  # a cold-gas acquisition's (summaries.cold_gas)
-    })
+    for module in modules(SUMMARIES):  # the summary's study columns, as the plug-in that declares them reads them
+        if hasattr(module, STUDY_ROW_ATTRIBUTE):
+            row.update(getattr(module, STUDY_ROW_ATTRIBUTE)(summary))
     return row
 
 

@@ -148,6 +148,31 @@ class Accumulator:
         summary['final_mode'] = self.history[-1][1] if self.history else None
 
 
+def study_row(summary: dict[str, Any]) -> dict[str, Any]:
+    """A Monte Carlo sample's columns from its summary (:func:`acds_runtime.dispersion_report.make_row`): the Table
+    4-7 quantities in study units, whether Mode 1B and capture were reached, the peaks and, for a cold-gas
+    acquisition (no magnetics-only phase; Mode 1B from the hand-over), its ``gas_*`` keys."""
+    peak_h = summary.get('peak_wheel_momentum_ftlbs') or {}
+    peak_m = summary.get('peak_moment_am2') or {}
+    gas = 'gas_used_lb' in summary
+    return {
+        **({} if gas else {'time_magnetics_only_min': summary.get('time_magnetics_only_min')}),
+        'time_wheels_magnetics_min': summary.get('time_wheels_magnetics_min'),
+        'acquisition_time_min': summary.get('acquisition_time_min'),
+        'mode_1b_reached': summary.get('gas_handover_min' if gas else 'time_magnetics_only_min') is not None,
+        'captured': summary.get('acquisition_time_min') is not None,
+        'sim_minutes': summary.get('sim_minutes'),
+        'final_wheel_momentum_ftlbs': summary.get('final_wheel_momentum_ftlbs'),
+        **{f'peak_wheel_momentum_{a}_ftlbs': peak_h.get(a) for a in ('x', 'y', 'z', 'rss')},
+        **{f'peak_moment_{a}_am2': peak_m.get(a) for a in ('x', 'y', 'z')},
+        'peak_moment_am2': max(peak_m.values()) if peak_m else None,
+        'wheel_saturation_time_min': summary.get('wheel_saturation_time_min'),
+        'final_mode': summary.get('final_mode'),
+        'truth_digest': summary.get('truth_digest'),
+        **{k: v for k, v in summary.items() if k.startswith('gas_')},
+    }
+
+
 def _fmt(x: float | None, spec: str = '.1f') -> str:
     return '—' if x is None else format(x, spec)
 
