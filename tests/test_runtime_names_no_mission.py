@@ -34,7 +34,6 @@ PATTERN = re.compile('|'.join([*WORDS, *(rf'\b{c}\b' for c in MISSION_TOPICS),
 #: Files that still name a mission, and why (what is left of moving the missions into their packages).
 NOT_MOVED_YET = {
     'acds_cli/verbs/sweep.py': 'the Table 4-7 HEAO sweep group and the cold-gas study figures',
-    'acds_cli/verbs/montecarlo.py': "the HEAO acquisition quantities of the dispersion report",
 }
 
 

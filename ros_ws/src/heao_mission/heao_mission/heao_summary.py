@@ -148,6 +148,11 @@ class Accumulator:
         summary['final_mode'] = self.history[-1][1] if self.history else None
 
 
+#: What a dispersion study of a scenario this summary does not apply to lacks (``acds montecarlo``'s note).
+STUDY_NOT_APPLICABLE = ('does not run the HEAO mode manager, so the acquisition quantities (times to Mode 1B and to '
+                        'capture, wheel momentum at capture) stay empty')
+
+
 def study_row(summary: dict[str, Any]) -> dict[str, Any]:
     """A Monte Carlo sample's columns from its summary (:func:`acds_runtime.dispersion_report.make_row`): the Table
     4-7 quantities in study units, whether Mode 1B and capture were reached, the peaks and, for a cold-gas

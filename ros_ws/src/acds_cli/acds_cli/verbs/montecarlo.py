@@ -35,7 +35,7 @@ from ..workspace import new_run_dir, workspace
 #: The quantity and percentile of the baseline rule (docs: Studies, "Choosing the baseline's open conditions").
 BASELINE_QUANTITY, BASELINE_PERCENTILE = 'acquisition_time_min', 90.0
 #: What one sample leaves on disk, bytes: its journal line, its samples.json entry and its samples.csv row, twice over
-#: what heao_b_acquisition's measure (1.5 + 2.0 + 0.5 kB; a sample with more mode changes writes more).
+#: what the main job's measure (1.5 + 2.0 + 0.5 kB; a sample with more mode changes writes more).
 BYTES_PER_SAMPLE = 8_000
 #: What a study leaves besides its samples, bytes: the PNGs, report.md, percentiles.json (0.4 MB measured).
 BYTES_PER_STUDY = 2_000_000
@@ -298,7 +298,7 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     from acds_common.scenario import load_scenario
     from acds_runtime import dispersion_report as dr
 
-    heao_summary = _acquisition_summary()
+    study = _study_summary()
 
     base = load_scenario(args.scenario)
     from ..fsw_study import cmd_fsw_study, flown_by_user
@@ -321,9 +321,8 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
                            {('', s.index): s for s in samples}, bool(args.resume))
     print(f'[montecarlo] {base.name}: {args.runs} samples of seed {args.seed} ({"; ".join(variables)}), '
           f'{run_length}, engine {args.engine}; output {out}', file=sys.stderr, flush=True)
-    if not heao_summary.applies(base):
-        print(f'[montecarlo] note: {base.name} does not run the HEAO mode manager, so the acquisition quantities (times '
-              'to Mode 1B and to capture, wheel momentum at capture) stay empty; samples.json keeps each run\'s whole '
+    if not study.applies(base):
+        print(f'[montecarlo] note: {base.name} {study.STUDY_NOT_APPLICABLE}; samples.json keeps each run\'s whole '
               'summary', file=sys.stderr, flush=True)
     t0 = time.monotonic()
     kept = len(journal.done)
@@ -365,17 +364,18 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     return 1 if failed else 0
 
 
-def _acquisition_summary() -> Any:
-    """The summary plug-in whose keys are the dispersion report's acquisition quantities (entry point ``heao``)."""
-    from acds_common.plugins import SUMMARIES, plugins
-    return next(p.module for p in plugins(SUMMARIES) if p.name == 'heao')
+def _study_summary() -> Any:
+    """The summary plug-in that gives the dispersion report's columns (:data:`acds_common.plugins.STUDY_ROW_ATTRIBUTE`);
+    its ``STUDY_NOT_APPLICABLE`` says what stays empty for a scenario it does not apply to."""
+    from acds_common.plugins import STUDY_ROW_ATTRIBUTE, SUMMARIES, modules
+    return next(m for m in modules(SUMMARIES) if hasattr(m, STUDY_ROW_ATTRIBUTE))
 
 
 def _not_captured(base: Scenario, out: Path, rows: list[dict[str, Any]], samples: list[Any]) -> list[str]:
-    """The samples that did not reach capture, with their drawn conditions (HEAO acquisitions only; markdown)."""
+    """The samples that did not reach capture, with their drawn conditions (where the study's summary applies; markdown)."""
     from acds_runtime import dispersion_report as dr
 
-    if not _acquisition_summary().applies(base):
+    if not _study_summary().applies(base):
         return []
     explain = f'./scripts/acds explain-sample {shlex.quote(str(out))} {{index}}'
     return dr.not_captured_lines(rows, list(dr.flatten(samples[0].drawn)), explain)
