@@ -166,8 +166,10 @@ def _shipped_dir() -> Path:
 
 #: Where shipped scenarios live (override with ACDS_SCENARIO_DIR).
 SCENARIO_DIR = _shipped_dir()
-#: The file beside the shipped scenarios naming their roles: ``main_job`` (what ``acds run`` runs with no argument)
-#: and ``bench_flight_software`` (the flight-software sample of ``acds bench``: scenario, node, command).
+#: The file beside the shipped scenarios naming their roles: ``main_job`` (what ``acds run`` runs with no argument),
+#: ``bench_flight_software`` (the flight-software sample of ``acds bench``: scenario, node, command),
+#: ``sweep_groups`` (``acds sweep``'s group names → scenarios) and ``paired_case_vary`` (a case's own draws in a
+#: paired sweep).
 ROLES_FILE = 'roles.json'
 
 

@@ -34,6 +34,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
+from acds_common.scenario import shipped_role
 from cold_gas.study import STUDY_ACQUISITION_MIN, STUDY_THREE_ACQUISITIONS_LB
 
 from ..arguments import UsageError, check_output_file, positive_int, positive_minutes
@@ -49,18 +50,13 @@ from .montecarlo import (
     study_folder,
 )
 
-#: Shorthands for scenario lists.
-GROUPS = {
-    'table-4-7': ['heao_b_acquisition', 'heao_a_acquisition', *(f'heao_b_case{i}' for i in range(3, 12))],
-    'normal-mode': ['heao_a_scan_no_unloading', 'heao_a_scan_unloading',
-                    'heao_b_point_no_unloading', 'heao_b_point_unloading'],
-    # seed 002 §3.1: magnetic against cold-gas sun acquisition of HEAO-B on the same separations (paired: --runs N)
-    'acquisition-trade': ['heao_b_acquisition', 'heao_b_acquisition_cold_gas'],
-}
-
-
-#: Draws a paired study adds for a case, beyond the default open conditions (module doc).
-CASE_VARY = {'heao_b_case4': ['spacecraft.initial_quaternion_xyzw=h_parallel_b()']}
+#: Shorthands for scenario lists (``sweep_groups`` of ``scenarios/roles.json``: Table 4-7's eleven acquisition cases,
+#: the normal-mode cases, and the acquisition trade of seed 002 §3.1, magnetic against the other design on the same
+#: separations, paired with --runs N).
+GROUPS = shipped_role('sweep_groups')
+#: Draws a paired study adds for a case, beyond the default open conditions (module doc; ``paired_case_vary`` of
+#: ``scenarios/roles.json``).
+CASE_VARY = shipped_role('paired_case_vary')
 #: The paired study's quantities: (row key, column title).
 PAIRED = (('time_magnetics_only_min', 'time on magnetics only'), ('acquisition_time_min', 'acquisition time'))
 #: ... when a case acquires on gas (no magnetics-only phase): the acquisition time only.
