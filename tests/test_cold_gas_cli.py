@@ -40,18 +40,18 @@ def test_bad_cold_gas_input_is_one_line_exit_2_before_any_process(tmp_path, sect
 def test_trade_gas_budget_counts_acquisitions_at_the_90th_percentile():
     """The trade's cold-gas lines: percentiles of the GN₂ per acquisition over the draws, the worst draw, and the
     acquisitions the 4.6 lb load supports at the 90th percentile (whole load, and the gas above the set point)."""
-    from acds_cli.verbs.sweep import gas_budget, gas_table
     from acds_common.scenario import load_scenario
+    from cold_gas.cold_gas_summary import study_budget, study_budget_table
 
     rows = [{'index': i, 'gas_used_lb': 0.9 + 0.01 * i, 'gas_valve_cycles': 250 + i, 'gas_handover_min': 5.0 + i,
              'acquisition_time_min': 5.0 + i} for i in range(11)] + [{'index': 11, 'error': 'exit 1'}]
-    g = gas_budget(rows, load_scenario('heao_b_acquisition_cold_gas'))
+    g = study_budget(rows, load_scenario('heao_b_acquisition_cold_gas'))
     assert g['n'] == 11 and g['gas_used_lb']['p90'] == 0.99 and g['gas_used_lb']['worst_index'] == 10
     assert g['gas_handover_min']['median'] == 10.0 and g['gas_valve_cycles']['worst'] == 260
     assert g['acquisitions_at_p90'] == 4  # 4.6 // 0.99
     assert abs(g['residual_at_set_point_lb'] - 4.6 * 150 / 3493.57) < 1e-3
     assert g['acquisitions_at_p90_regulated'] == 4  # (4.6 − 0.198) // 0.99
-    text = gas_table({'scenario': 'heao_b_acquisition_cold_gas', 'cold_gas': g})
+    text = study_budget_table('heao_b_acquisition_cold_gas', g)
     assert 'the 4.60 lb load supports 4 acquisitions at the 90th percentile' in text
     w = g['within_study_time']  # captured within §2's ten minutes: 5…10 min, 6 of 11; Wilson 95 % 0.280–0.787
     assert (w['count'], w['n']) == (6, 11) and w['interval'] == pytest.approx([0.2801, 0.7873], abs=1e-4)

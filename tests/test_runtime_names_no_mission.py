@@ -7,9 +7,6 @@ shipped missions and their seed systems (:data:`WORDS`) and for the mission topi
 truth, sensor, wheel, magnetometer, dipole and mode topics are the mechanism's). ``formation`` is not in the
 list: several vehicles in one graph is a feature of the mechanism (:mod:`acds_common.graph`'s vehicle
 namespaces, ``Scenario.formation``), not of one mission.
-
-:data:`NOT_MOVED_YET` names the files that still do, each with what keeps it there; the test fails on a hit
-in any other file and on an entry that no longer has a hit (the list only shrinks).
 """
 
 from __future__ import annotations
@@ -31,11 +28,6 @@ MISSION_TOPICS = ('CMG_TORQUE', 'SAMPLED_MOMENTUM', 'GAS_ON_TIME', 'COLD_GAS_WRE
 PATTERN = re.compile('|'.join([*WORDS, *(rf'\b{c}\b' for c in MISSION_TOPICS),
                                *(re.escape(getattr(topics, c)) for c in MISSION_TOPICS)]), re.IGNORECASE)
 
-#: Files that still name a mission, and why (what is left of moving the missions into their packages).
-NOT_MOVED_YET = {
-    'acds_cli/verbs/sweep.py': 'the Table 4-7 HEAO sweep group and the cold-gas study figures',
-}
-
 
 def _hits() -> dict[str, list[str]]:
     found: dict[str, list[str]] = {}
@@ -49,16 +41,10 @@ def _hits() -> dict[str, list[str]]:
 
 
 def test_the_runtime_and_the_cli_name_no_mission():
-    hits = _hits()
-    new = {f: lines[:3] for f, lines in hits.items() if f not in NOT_MOVED_YET}
-    assert not new, f'mission names in the runtime or the CLI: {new}'
-
-
-def test_the_list_of_files_not_moved_yet_only_shrinks():
-    stale = sorted(set(NOT_MOVED_YET) - set(_hits()))
-    assert not stale, f'no mission name left in {stale}: remove them from NOT_MOVED_YET'
+    hits = {f: lines[:3] for f, lines in _hits().items()}
+    assert not hits, f'mission names in the runtime or the CLI: {hits}'
 
 
 if __name__ == '__main__':
     for file, lines in _hits().items():
-        print(file, len(lines), '(not moved yet)' if file in NOT_MOVED_YET else 'NEW')
+        print(file, *lines, sep='\n  ')

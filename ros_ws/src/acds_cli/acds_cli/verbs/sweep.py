@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import subprocess
 import sys
@@ -34,8 +33,8 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
+from acds_common.plugins import SUMMARIES, plugins
 from acds_common.scenario import shipped_role
-from cold_gas.study import STUDY_ACQUISITION_MIN, STUDY_THREE_ACQUISITIONS_LB
 
 from ..arguments import UsageError, check_output_file, positive_int, positive_minutes
 from .montecarlo import (
@@ -59,8 +58,11 @@ GROUPS = shipped_role('sweep_groups')
 CASE_VARY = shipped_role('paired_case_vary')
 #: The paired study's quantities: (row key, column title).
 PAIRED = (('time_magnetics_only_min', 'time on magnetics only'), ('acquisition_time_min', 'acquisition time'))
-#: ... when a case acquires on gas (no magnetics-only phase): the acquisition time only.
-PAIRED_GAS = (('acquisition_time_min', 'acquisition time'),)
+#: The optional attributes of a summary plug-in (:data:`acds_common.plugins.SUMMARIES`) for a paired case it applies
+#: to: ``PAIRED_QUANTITIES`` (the quantities the study compares instead of :data:`PAIRED`), ``study_budget(rows,
+#: scenario)`` (the case's budget over its draws, kept under the plug-in's name) and ``study_budget_table(scenario_name,
+#: budget)`` (its lines under the table).
+BUDGET_ATTRIBUTE = 'study_budget'
 
 
 def expand(names: list[str]) -> list[str]:
@@ -198,8 +200,9 @@ def cmd_paired(args: argparse.Namespace) -> int:
 
     names = expand(args.scenarios)
     scenarios = [load_scenario(n) for n in names]
-    gas = [sc for sc in scenarios if 'cold_gas' in sc.get('', 'nodes')]
-    paired = PAIRED_GAS if gas else PAIRED
+    budgets = [p for p in plugins(SUMMARIES) if hasattr(p.module, BUDGET_ATTRIBUTE)]
+    own = [p for p in budgets if any(p.module.applies(sc) for sc in scenarios)]
+    paired = own[0].module.PAIRED_QUANTITIES if own else PAIRED
     out = study_folder('sweep', names[0] if len(names) == 1 else f'{len(names)}cases', args)
     if args.json:
         check_output_file('--json', Path(args.json))
@@ -245,11 +248,10 @@ def cmd_paired(args: argparse.Namespace) -> int:
         failed = sum('error' in r for r in rows)
         case = {'scenario': name, 'n': len(rows) - failed, 'failed': failed, 'quantities': quantities}
         sc = scenarios[names.index(name)]
-        if sc in gas:
-            case['cold_gas'] = gas_budget(rows, sc)
+        case.update({p.name: p.module.study_budget(rows, sc) for p in budgets if p.module.applies(sc)})
         cases.append(case)
     text = paired_table(cases, args.runs, args.seed, paired) + ''.join(
-        '\n\n' + gas_table(c) for c in cases if 'cold_gas' in c)
+        '\n\n' + p.module.study_budget_table(c['scenario'], c[p.name]) for c in cases for p in budgets if p.name in c)
     print(text)
     print(f'\n[sweep] {len(names)} case(s) × {args.runs} draws in {wall:.0f} s wall ({_execution(execution)})',
           file=sys.stderr)
@@ -265,81 +267,6 @@ def cmd_paired(args: argparse.Namespace) -> int:
     dr.write_rows(out, all_rows, all_records)
     (out / 'report.md').write_text(f'# Paired perturbation study\n\n`{result["command"]}`\n\n```\n{text}\n```\n')
     return 0 if all(c['failed'] == 0 for c in cases) else 1
-
-
-def gas_budget(rows: list[dict[str, Any]], sc: Any) -> dict[str, Any]:
-    """A cold-gas case's propellant and valve use over its draws, and how many acquisitions its load supports.
-
-    Per acquisition (the run ends at capture): the time on gas (start → hand-over to the wheels, min; not reached:
-    +∞), GN₂ used (lb) and valve cycles, median, 10–90 % and worst, with the
-    draw of the worst; the acquisitions the load supports at the 90th percentile of the GN₂ used, counting the whole
-    load and counting only the gas above the regulator's set point (below it the regulator drops out and the thrust
-    falls with the tank: blowdown, seed 002 §5.2.1 regulation lost); three acquisitions at the worst draw and at the
-    90th percentile beside the study's 4.3 lb (§3.2); the draws captured within the study's ten minutes (§2: "the
-    cold gas system selected will permit sun acquisition within ten minutes"), with a Wilson 95 % interval.
-    """
-    import numpy as np
-    from acds_common.units import LB_KG
-    from acds_runtime import dispersion_report as dr
-
-    done = [r for r in rows if 'error' not in r and r.get('gas_used_lb') is not None]
-    out: dict[str, Any] = {'n': len(done)}
-    for key in ('gas_handover_min', 'gas_used_lb', 'gas_valve_cycles'):
-        vals = np.array([math.inf if r[key] is None else float(r[key]) for r in done])
-        worst = max(done, key=lambda r: math.inf if r[key] is None else r[key]) if done else None
-        out[key] = {'median': dr.percentile(vals, 50), 'p10': dr.percentile(vals, 10), 'p90': dr.percentile(vals, 90),
-                    'worst': dr.percentile(vals, 100), 'worst_index': None if worst is None else worst['index']}
-    c = sc.values['cold_gas']
-    load_lb = c['load_mass'] / LB_KG
-    residual_lb = load_lb * c['regulator_set_pressure'] / _tank_pressure_pa(c)
-    p90 = out['gas_used_lb']['p90']
-    out.update(load_lb=load_lb, residual_at_set_point_lb=residual_lb,
-               acquisitions_at_p90=None if not p90 else int(load_lb // p90),
-               acquisitions_at_p90_regulated=None if not p90 else int((load_lb - residual_lb) // p90))
-    within = sum(1 for r in done if r.get('acquisition_time_min') is not None
-                 and r['acquisition_time_min'] <= STUDY_ACQUISITION_MIN)
-    interval = dr.wilson_interval(within, len(done))
-    out['within_study_time'] = {'minutes': STUDY_ACQUISITION_MIN, 'count': within, 'n': len(done),
-                                'interval': None if interval is None else list(interval)}
-    return out
-
-
-def _tank_pressure_pa(c: dict[str, Any]) -> float:
-    """The loaded tanks' pressure at t0 (the cold_gas core's isothermal ideal gas, :mod:`cold_gas.rcs`)."""
-    from cold_gas.configuration import rcs_config
-
-    cfg = rcs_config(c)
-    return cfg.tank_pressure_pa(cfg.load_mass_kg)
-
-
-def gas_table(case: dict[str, Any]) -> str:
-    """The cold-gas case's propellant lines (:func:`gas_budget`)."""
-    g = case['cold_gas']
-
-    def line(key: str, title: str, spec: str) -> str:
-        q = g[key]
-
-        def f(v: float | None) -> str:
-            return '—' if v is None else format(v, spec)
-        return (f'  {title:34s} median {f(q["median"]):>7s}   p10–p90 {f(q["p10"])}–{f(q["p90"])}   worst '
-                f'{f(q["worst"])} (sample {q["worst_index"]})')
-    at = g['acquisitions_at_p90']
-    w, used = g['within_study_time'], g['gas_used_lb']
-    lo, hi = w['interval'] or (math.nan, math.nan)
-    three = ('—' if used['worst'] is None else
-             f'{3 * used["worst"]:.2f} lb at the worst draw (sample {used["worst_index"]}), '
-             f'{3 * used["p90"]:.2f} lb at the 90th percentile ({g["n"]} draws); study (§3.2) '
-             f'{STUDY_THREE_ACQUISITIONS_LB} lb')
-    return '\n'.join([
-        f'{case["scenario"]}: cold gas per acquisition ({g["n"]} draws)',
-        line('gas_handover_min', 'on gas: start → hand-over, min', '.2f'),
-        line('gas_used_lb', 'GN₂ used, lb', '.3f'), line('gas_valve_cycles', 'valve cycles (all six valves)', '.0f'),
-        f'  the {g["load_lb"]:.2f} lb load supports {"—" if at is None else at} acquisitions at the 90th percentile '
-        f'({g["acquisitions_at_p90_regulated"]} on the gas above the regulator set point; '
-        f'{g["residual_at_set_point_lb"]:.3f} lb is left when the tanks reach it)',
-        f'  three acquisitions: {three}',
-        f'  captured within the study\'s {w["minutes"]:g} min (§2): {w["count"]} of {w["n"]} '
-        f'(Wilson 95 % interval {100 * lo:.1f}–{100 * hi:.1f} %)'])
 
 
 def _execution(execution: Any) -> str:
