@@ -41,7 +41,7 @@ def test_trade_gas_budget_counts_acquisitions_at_the_90th_percentile():
     """The trade's cold-gas lines: percentiles of the GN₂ per acquisition over the draws, the worst draw, and the
     acquisitions the 4.6 lb load supports at the 90th percentile (whole load, and the gas above the set point)."""
     from acds_common.scenario import load_scenario
-    from cold_gas.cold_gas_summary import study_budget, study_budget_table
+    from heao_mission.cold_gas_trade import study_budget, study_budget_table
 
     rows = [{'index': i, 'gas_used_lb': 0.9 + 0.01 * i, 'gas_valve_cycles': 250 + i, 'gas_handover_min': 5.0 + i,
              'acquisition_time_min': 5.0 + i} for i in range(11)] + [{'index': 11, 'error': 'exit 1'}]

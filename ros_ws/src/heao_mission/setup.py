@@ -21,5 +21,6 @@ setup(
         'acds.verbs': [f'cold_gas = {package_name}.cold_gas_budget_cli', f'duty_curve = {package_name}.duty_curve_cli',
                        f'explain_sample = {package_name}.explain_cli'],
         'acds.limits': [f'heao = {package_name}.limits'],
+        'acds.study_budgets': [f'cold_gas = {package_name}.cold_gas_trade'],
     },
 )

@@ -13,6 +13,8 @@ plots and verbs" and name no mission:
 * ``acds.verbs``: verbs of ``acds`` (:mod:`acds_cli.verbs`): ``register(subparsers)``.
 * ``acds.limits``: limits the common figures and the live view draw beside a value (:func:`limits`):
   ``limits(params)``, from a run's node parameters.
+* ``acds.study_budgets``: a paired sweep's budget of a case (:mod:`acds_cli.verbs.sweep`): ``applies(scenario)``,
+  ``PAIRED_QUANTITIES``, ``study_budget(rows, scenario)``, ``study_budget_table(scenario_name, budget)``.
 
 Modules of a group load in entry-point name order. Two packages that declare the same entry-point name in a
 group, the same summary key or the same verb are a :class:`PluginConflict`: one line naming both packages,
@@ -28,6 +30,8 @@ from types import ModuleType
 from typing import Any
 
 SUMMARIES, PLOTS, VERBS, LIMITS = 'acds.summaries', 'acds.plots', 'acds.verbs', 'acds.limits'
+#: A paired sweep's per-case budgets (``acds sweep --runs N``).
+STUDY_BUDGETS = 'acds.study_budgets'
 #: The attribute of a summary module listing the top-level summary keys it contributes.
 KEYS_ATTRIBUTE = 'SUMMARY_KEYS'
 #: The optional function of a summary module giving a dispersion study's row columns from one sample's summary

@@ -33,7 +33,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
-from acds_common.plugins import SUMMARIES, plugins
+from acds_common.plugins import STUDY_BUDGETS, plugins
 from acds_common.scenario import shipped_role
 
 from ..arguments import UsageError, check_output_file, positive_int, positive_minutes
@@ -58,11 +58,6 @@ GROUPS = shipped_role('sweep_groups')
 CASE_VARY = shipped_role('paired_case_vary')
 #: The paired study's quantities: (row key, column title).
 PAIRED = (('time_magnetics_only_min', 'time on magnetics only'), ('acquisition_time_min', 'acquisition time'))
-#: The optional attributes of a summary plug-in (:data:`acds_common.plugins.SUMMARIES`) for a paired case it applies
-#: to: ``PAIRED_QUANTITIES`` (the quantities the study compares instead of :data:`PAIRED`), ``study_budget(rows,
-#: scenario)`` (the case's budget over its draws, kept under the plug-in's name) and ``study_budget_table(scenario_name,
-#: budget)`` (its lines under the table).
-BUDGET_ATTRIBUTE = 'study_budget'
 
 
 def expand(names: list[str]) -> list[str]:
@@ -200,7 +195,7 @@ def cmd_paired(args: argparse.Namespace) -> int:
 
     names = expand(args.scenarios)
     scenarios = [load_scenario(n) for n in names]
-    budgets = [p for p in plugins(SUMMARIES) if hasattr(p.module, BUDGET_ATTRIBUTE)]
+    budgets = plugins(STUDY_BUDGETS)  # a case's budget over its draws, kept under the plug-in's name
     own = [p for p in budgets if any(p.module.applies(sc) for sc in scenarios)]
     paired = own[0].module.PAIRED_QUANTITIES if own else PAIRED
     out = study_folder('sweep', names[0] if len(names) == 1 else f'{len(names)}cases', args)
