@@ -2,9 +2,9 @@
 
     .venv/bin/python scripts/igrf_wall_ratio.py [--steps 3000] [--engine graph|direct] [--repeats 2] [--epoch 2025.5]
 
-Runs ``heao_b_acquisition`` shortened to ``--steps`` control steps, without recording, alternately with
-``earth.model: dipole`` (as shipped) and ``earth.model: igrf``, and prints each wall time and the ratio of
-the medians. The graph engine is the main job's (six processes); ``direct`` runs the same steppers in
+Runs the main job (``main_job`` of ``scenarios/roles.json``) shortened to ``--steps`` control steps, without
+recording, alternately with ``earth.model: dipole`` (as shipped) and ``earth.model: igrf``, and prints each wall
+time and the ratio of the medians. The graph engine is the main job's (six processes); ``direct`` runs the same steppers in
 this process.
 """
 
@@ -15,11 +15,11 @@ import statistics
 import tempfile
 from pathlib import Path
 
-from acds_common.scenario import load_scenario
+from acds_common.scenario import load_scenario, shipped_role
 from acds_runtime.direct import DirectRun
 from acds_runtime.launcher import GraphRun
 
-MAIN_JOB = 'heao_b_acquisition'
+MAIN_JOB = shipped_role('main_job')
 
 
 def wall_s(scenario_path: str, steps: int, engine: str, run_dir: Path) -> float:
