@@ -85,6 +85,11 @@ def enable() -> None:
     _enabled = True
 
 
+def enabled() -> bool:
+    """Whether this process compiles its kernels (:func:`enable` was called)."""
+    return _enabled
+
+
 def compiled(fn: F) -> F:
     """The form of kernel ``fn`` this process runs: compiled once :func:`enable` was called, else ``fn``."""
     if not _enabled:

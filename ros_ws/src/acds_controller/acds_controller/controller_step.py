@@ -35,6 +35,7 @@ from typing import Any
 
 from acds_common import kernels
 from acds_common.commands import GainCommand, LawCommand, decode
+from acds_common.fused import FusedStage, Output
 from acds_common.messages import WARN, diagnostic, xyz
 from acds_common.mode_report import ModeStatusReader
 from acds_common.modes import HEAO_MODES
@@ -121,6 +122,20 @@ class DpaStep(Stepper):
             del result['volts']
         return warned(self, k, result, warnings) if warnings else result
 
+    def fused(self, stage: str, held: dict[str, Any]) -> FusedStage | None:
+        """Stage ``control`` as :func:`control_fused` (:mod:`acds_common.fused`) with every source in the graph and the
+        wheels driven; None with telemetry wanted, or when the block's ``mode`` forwards commands or is not a mode
+        the DPA knows."""
+        mode, commands = self._mode_status(held.get('mode'))
+        if (stage != 'control' or self.telemetry_wanted or commands or mode not in _MODE_INDEX or not self.drives_wheels
+                or not all(self.present(n) for n in ('magnetometer_sim', 'rigid_body', 'em_driver'))):
+            return None
+        return FusedStage(control_fused, (self.ta.params, self.dpa.params, _MODE_INDEX[mode], self._dt),
+                          (self.dpa.state,), FUSED_INPUTS, (Output('moment', 3), Output('volts', 3)), self._restore)
+
+    def _restore(self, s: tuple) -> None:
+        self.dpa.state = s[0]
+
     def apply_commands(self, k: int, commands: list[str], warnings: list[tuple[str, dict[str, str]]]) -> None:
         """Apply the forwarded law/gain commands to the DPA; a refusal becomes a warning."""
         for text in commands:
@@ -202,6 +217,7 @@ def finite_xyz(v: Sequence[float]) -> bool:
     return math.isfinite(v[0]) and math.isfinite(v[1]) and math.isfinite(v[2])
 
 
+@kernels.helper
 def dpa_control(ta: tuple[float, float, float], params: tuple, state: DpaState, mode: int, volts: Sequence[float],
                 bias: Sequence[float], omega: Sequence[float], sun: Sequence[float], wheel_h: Sequence[float],
                 wheel_hdot: Sequence[float], q: Sequence[float], q_given: bool, coil: Sequence[float], dt: float
@@ -219,3 +235,20 @@ def dpa_control(ta: tuple[float, float, float], params: tuple, state: DpaState, 
         return NOT_FINITE, state, NO_FIGURES
     b = field_xyz(volts, bias, ta[0], ta[1], ta[2])
     return dpa_step(params, state, mode, b, omega, sun, h, q, q_given, dt)
+
+
+#: The inputs :func:`control_fused` takes, in order.
+FUSED_INPUTS = ('mag_volts', 'mag_bias', 'gyro', 'sun', 'odometry', 'wheel_h', 'wheel_hdot', 'coil_current')
+
+
+@kernels.helper
+def control_fused(p: tuple, s: tuple, _k: int, _t: float, volts: Any, bias: Any, gyro: Any, sun: Any, odometry: Any,
+                  wheel_h: Any, wheel_hdot: Any, coil: Any) -> tuple:
+    """Stage ``control`` as a kernel (:mod:`acds_common.fused`): :func:`dpa_control` in the block's mode, quiet when
+    it is done (a non-finite input or a refusal is the Python stage's). ``p``: (the TA's and the DPA's parameters,
+    the mode's index, Δt); ``s``: (the DPA's state,)."""
+    ta, params, mode, dt = p
+    status, state, figures = dpa_control(ta, params, s[0], mode, volts, bias, gyro[0], sun, wheel_h, wheel_hdot,
+                                         odometry[1], True, coil, dt)
+    quiet = status == DONE
+    return quiet, ((state,) if quiet else s), figures[0], figures[1]

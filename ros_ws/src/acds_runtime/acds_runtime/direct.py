@@ -11,6 +11,11 @@ Without a bag or a live view, a node's periodic telemetry that no input and no s
 built at all (:attr:`~acds_common.stepper.Stepper.telemetry_wanted`).
 The run summary is the same streaming :class:`~acds_runtime.summary.RunObserver` the run monitor
 feeds, given values instead of bytes (and the bytes of the truth topics, for the digest).
+
+Without a bag or a live view, when every stage of the graph declares a fused form (:mod:`acds_common.fused`), the
+quiet steps run in blocks inside one compiled loop composed from those declarations
+(:mod:`acds_runtime.fused_step`); every step that is not quiet (a transition, an event, a fault, a command, a
+refused input, the run's end) runs through the step program above, so the data are the same bits either way.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ from acds_common.parameters import node_parameters, normalize
 from acds_common.scenario import Scenario
 from acds_common.stepper import Stepper, load_stepper
 
+from .fused_step import BLOCK_STEPS, FusedLoop
 from .launcher import LaunchError, RunResult
 from .step_program import Input, Route, Stage, StepProgram, compile_step
 from .summary import RunObserver
@@ -44,6 +50,9 @@ def build_steppers(graph: Graph, params: dict[str, dict[str, Any]],
 
 #: Steps between two prunings of the values no input reads any more (memory stays bounded either way).
 PRUNE_EVERY = 64
+#: After a step from which no block of fused steps could start, the engine tries again after 1, 2, 4, … steps,
+#: at most this many (a run whose stages cannot fuse for a while pays little for asking).
+FUSED_RETRY_MAX = 256
 
 
 class DirectRun:
@@ -53,8 +62,13 @@ class DirectRun:
                  progress: Callable[[int, int, float], None] | None = None, record: Path | None = None,
                  record_storage: str = 'mcap', record_compression: str | None = None,
                  overrides: dict[str, dict[str, Any]] | None = None,
-                 live: Callable[[dict[str, dict[str, Any]]], Any] | None = None, run_id: str | None = None) -> None:
+                 live: Callable[[dict[str, dict[str, Any]]], Any] | None = None, run_id: str | None = None,
+                 fused: bool = True) -> None:
         self.scenario = scenario
+        #: Whether the quiet steps may run in the fused loop (module docstring; False: every step in Python).
+        self.fused = fused
+        #: The fused loop of this run, once it runs (None: not used).
+        self.fused_loop: FusedLoop | None = None
         #: The run folder's name, stored with the bag for the plots' titles (as the graph's launcher stores it).
         self.run_id = run_id
         self.steps = steps if steps is not None else scenario.total_steps()
@@ -170,25 +184,46 @@ class DirectRun:
                             pending=self.observer.pending, per_step_count=self.observer.per_step_count,
                             drain=self.observer.drain, publish=self._publish if self._bytes_out else None)
 
+    def _fused_loop(self) -> FusedLoop | None:
+        """The fused loop when this run may use it (no bag, no live view, every stage with a fused form)."""
+        if not self.fused or self._bytes_out:
+            return None
+        loop = FusedLoop(self.graph, self.steppers, self._routes, self._store, self.observer.feed_value, self.dt_ns,
+                         self._max_lag)
+        return loop if loop.possible else None
+
     def _loop(self, t0: float) -> int:
         owner = self.steppers[self.graph.time_owner]
         program = self._program()
         step, progress, steps, bytes_out = program.step, self.progress, self.steps, self._bytes_out
         buffers = list(self._store.values())
         flush_truth = self.observer.flush_truth
+        fused = self.fused_loop = self._fused_loop()
         self._clock_tick(0)
         program.initial(owner.start())
         k = 0
+        prune_at = PRUNE_EVERY
+        retry_at, retry_wait = self._max_lag + 1, 1  # a block starts once every lagged input has a value
         while True:
-            step(k)
-            if owner.finished:
-                return k
-            k += 1
-            if bytes_out:
-                self._clock_tick(k)
+            n = 0
+            if fused is not None and k >= retry_at:
+                n = fused.block(k)
+                if n:
+                    k += n
+                    retry_at, retry_wait = k, 1
+                else:
+                    retry_at, retry_wait = k + retry_wait, min(2 * retry_wait, FUSED_RETRY_MAX)
+            if n != BLOCK_STEPS:  # a full block goes on with the next one; else step k is the step program's
+                step(k)
+                if owner.finished:
+                    return k
+                k += 1
+                if bytes_out:
+                    self._clock_tick(k)
             if progress is not None:
                 progress(k, steps, time.monotonic() - t0)
-            if not k % PRUNE_EVERY:  # values no input can still read; the truth kept for the digest hashed
+            if k >= prune_at:  # values no input can still read; the truth kept for the digest hashed
+                prune_at = k + PRUNE_EVERY
                 flush_truth()
                 oldest = k - self._max_lag
                 for buf in buffers:

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 
-from acds_common import units
+from acds_common import kernels, units
 from acds_common.environment import Orbit
 
 #: Step angle above which a run is warned (one line): drift 2.5e-9 of |H| per radian turned.
@@ -46,6 +46,7 @@ def orbit_rate_max_rad_s(orbit: Orbit) -> float:
     return math.sqrt(units.EARTH_MU_M3_S2 * a * (1.0 - e * e)) / (rp * rp)
 
 
+@kernels.helper
 def step_angle_rad(omega_rad_s: float, orbit_rate_rad_s: float, control_period_s: float, substeps: int) -> float:
     """θ = (|ω| + 2 ω_orbit) · Δt / substeps (module docstring)."""
     return (omega_rad_s + 2.0 * orbit_rate_rad_s) * control_period_s / substeps

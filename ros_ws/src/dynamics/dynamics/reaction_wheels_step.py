@@ -12,17 +12,32 @@ torque-commanded wheels (:mod:`dynamics.torque_wheels_step`) and the Workshop's 
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
+from acds_common import kernels
+from acds_common.fused import FusedStage, Output
 from acds_common.messages import WARN, diagnostic, xyz
 from acds_common.stepper import Stepper
 from acds_common.validation import all_finite
 
 from dynamics.configuration import build_wheels
 from dynamics.errors import positive_dt
+from dynamics.wheels_model import wheels_step
 
 #: Wheel telemetry on ``diagnostics`` every this many steps.
 TELEMETRY_EVERY = 20
+
+
+@kernels.helper
+def drive_fused(p: tuple, s: tuple, _k: int, _t: float, volts: Any) -> tuple:
+    """Stage ``drive`` as a kernel (:mod:`acds_common.fused`): quiet unless the volts are non-finite (the Python
+    stage then warns). ``p``: (wheel parameters, Δt); ``s``: (momenta, torques, last valid volts)."""
+    params, dt = p
+    h, torque, _last = s
+    quiet = math.isfinite(volts[0] + volts[1] + volts[2])
+    h1, torque1, start, hdot = wheels_step(params, h, volts, dt)
+    return quiet, ((h1, torque1, volts) if quiet else s), start, hdot
 
 
 class ReactionWheelsStep(Stepper):
@@ -35,6 +50,18 @@ class ReactionWheelsStep(Stepper):
         self.wheels = build_wheels(self.section('wheels'))
         self._last_volts = (0.0, 0.0, 0.0)
         self._dt = positive_dt(self.control_period_s)
+
+    def fused(self, stage: str, _held: dict[str, Any]) -> FusedStage | None:
+        """Stage ``drive`` as :func:`drive_fused` (:mod:`acds_common.fused`); None with telemetry wanted."""
+        if stage != 'drive' or self.telemetry_wanted or not self.present('acds_controller'):
+            return None
+        params, (h, torque) = self.wheels.kernel_parts()
+        return FusedStage(drive_fused, (params, self._dt), (h, torque, self._last_volts), ('volts',),
+                          (Output('momentum', 3), Output('torque', 3)), self._restore)
+
+    def _restore(self, s: tuple) -> None:
+        h, torque, self._last_volts = s
+        self.wheels.set_kernel_state(h, torque)
 
     def drive(self, k: int, _t: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Apply the step-k drive volts for one control period."""

@@ -375,6 +375,7 @@ def advanced(q: Quat, w: Vec3, smag: Vec3, sgg: Vec3, n: int, end: tuple[Vec3, V
                                    (sgg[0] / w6, sgg[1] / w6, sgg[2] / w6), sun)
 
 
+@kernels.helper
 def advance_circular_dipole(p: BodyParams, orbit: CircularDipole, q: Quat, w: Vec3, t0: float, dt: float, start: _Env,
                             m: Vec3, h0: Vec3, hdot: Vec3, td: Vec3, field: bool) -> tuple[bool, Vec3, TruthValues]:
     """One :meth:`RigidBodyModel.advance` in the circular orbit and tilted dipole ``orbit``
@@ -569,6 +570,22 @@ class RigidBodyModel:
         self._t = t1
         self._values = values
         return values
+
+    def kernel_parts(self) -> tuple[BodyParams, CircularDipole, tuple[float, Vec3, TruthValues]] | None:
+        """What a compiled caller needs to run :func:`advance_circular_dipole` in place of :meth:`advance_unchecked`
+        (the direct engine's fused loop, :mod:`acds_common.fused`): the per-model parameters, the circular orbit and
+        tilted dipole, and the state (t, B_eci at t, the truth's values at t); None when another path would run (no
+        circular dipole, a disturbance torque) or before the first ``advance``."""
+        cache = self._env_cache
+        if (self._circular_dipole is None or self.disturbance is not None or self._values is None or cache is None
+                or cache[0] != self._t):
+            return None
+        return self._params, self._circular_dipole, (self._t, cache[3], self._values)
+
+    def set_kernel_state(self, t: float, b: Vec3, values: TruthValues) -> None:
+        """The state :meth:`kernel_parts` gave, advanced by a compiled caller: t, B_eci at t, the truth's values."""
+        self._t, self._q, self._w, self._values = t, values[1], values[3], values
+        self._env_cache = (t, values[0], values[2], b)
 
     def truth(self, wheel_h_body_nms: Sequence[float]) -> Truth:
         """Truth at the current time; ``wheel_h_body_nms`` (N·m·s, body) for the total momentum."""

@@ -35,8 +35,9 @@ import time
 from typing import Any
 
 import numpy as np
-from acds_common import topics
+from acds_common import kernels, topics
 from acds_common.cdr import OdometryValue
+from acds_common.fused import FusedStage, Output
 from acds_common.messages import OK, WALL_CLOCK_PREFIX, WARN, diagnostic, xyz
 from acds_common.mode_report import ModeValueReader, run_complete
 from acds_common.stepper import StepError, Stepper
@@ -44,7 +45,7 @@ from acds_common.stepper import StepError, Stepper
 from dynamics import integration_accuracy as accuracy
 from dynamics.configuration import RIGID_BODY_SECTIONS, actuator_limits, build_rigid_body
 from dynamics.errors import DynamicsError, positive_dt
-from dynamics.rigid_body_model import Truth, TruthValues
+from dynamics.rigid_body_model import Truth, TruthValues, advance_circular_dipole
 
 #: ``angular_velocity_covariance`` of the ideal gyros, rad²/s² (row-major 3×3).
 GYRO_COVARIANCE = (0.0,) * 9
@@ -70,6 +71,58 @@ def truth_outputs(values: TruthValues) -> dict[str, Any]:
         'gyro': (omega, GYRO_COVARIANCE),
         'sun_sensor': sun_body if sun_present else _ZERO,
     }
+
+
+#: The truth outputs of the fused stage (:func:`integrate_fused`), their shapes and values (:func:`truth_outputs`).
+FUSED_OUTPUTS = (Output('odometry', (3, 4, 3, 3), OdometryValue._make), Output('b_body', (3, 9)),
+                 Output('sun_cosines', 3), Output('torque_mag', 3), Output('torque_gg', 3), Output('gyro', (3, 9)),
+                 Output('sun_sensor', 3))
+
+
+@kernels.helper
+def integrate_fused(p: tuple, s: tuple, k: int, _t: float, dipole: Any, wheel_h: Any, wheel_hdot: Any) -> tuple:
+    """Stage ``integrate`` of step k as a kernel (:mod:`acds_common.fused`) in the circular orbit and tilted dipole,
+    no disturbance, no thrusters, no telemetry: quiet unless the run ends at step k, an actuator input is
+    non-finite or beyond the hardware, the state diverges, or the step angle passes the warning bound (the Python
+    stage then does what it does). ``p``: (body parameters, orbit, Δt, total steps, the dipole and wheel bounds,
+    the orbit rate, control period, substeps); ``s``: (t, B_eci at t, the truth's values at t, the wheels'
+    momentum at t, torque-free so far, the largest |ω| checked, the largest step angle)."""
+    body, orbit, dt, total_steps, bounds, orbit_rate, period, substeps = p
+    t0, b0, values, _h_end, torque_free, omega_checked, theta_max = s
+    h, hdot, m = wheel_h, wheel_hdot, dipole
+    quiet = k < total_steps
+    h_end = (h[0] + hdot[0] * dt, h[1] + hdot[1] * dt, h[2] + hdot[2] * dt)
+    (m0, m1, m2), (w0, w1, w2) = bounds
+    if not (-m0 <= m[0] <= m0 and -m1 <= m[1] <= m1 and -m2 <= m[2] <= m2
+            and -w0 <= h[0] <= w0 and -w1 <= h[1] <= w1 and -w2 <= h[2] <= w2
+            and -w0 <= h_end[0] <= w0 and -w1 <= h_end[1] <= w1 and -w2 <= h_end[2] <= w2):
+        quiet = False
+    new = s
+    if quiet:
+        r = values[0]
+        need_field = m[0] != 0.0 or m[1] != 0.0 or m[2] != 0.0
+        finite, b1, v1 = advance_circular_dipole(body, orbit, values[1], values[3], t0, dt,
+                                                 (r[0], r[1], r[2], b0[0], b0[1], b0[2]), m, h, hdot,
+                                                 (0.0, 0.0, 0.0), need_field)
+        w = v1[3]
+        omega = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+        checked, largest = omega_checked, theta_max
+        if omega > omega_checked:  # RigidBodyStep._check_step below the warning bound
+            checked = omega
+            theta = accuracy.step_angle_rad(omega, orbit_rate, period, substeps)
+            if theta > largest:
+                largest = theta
+            if theta > accuracy.STEP_ANGLE_WARN_RAD:
+                quiet = False
+        free = torque_free and not (m[0] or m[1] or m[2] or hdot[0] or hdot[1] or hdot[2])
+        if not finite:
+            quiet = False
+        if quiet:
+            values = v1
+            new = (t0 + dt, b1, v1, h_end, free, checked, largest)
+    r, q, v, w, b_body, cosines, tmag, tgg, sun_body, present = values
+    return (quiet, new, (r, q, v, w), (b_body, _ZERO_COV), cosines, tmag, tgg, (w, GYRO_COVARIANCE),
+            sun_body if present else _ZERO)
 
 
 def _within(value: Any, bound: tuple[float, ...]) -> bool:
@@ -154,6 +207,29 @@ class RigidBodyStep(Stepper):
         values[f'{WALL_CLOCK_PREFIX}mean_step_ms'] = f'{self._wall_s / max(self._wall_steps, 1) * 1e3:.3f}'
         self._wall_s, self._wall_steps = 0.0, 0
         return diagnostic(self.instance, values, '; '.join(problems) or 'integration healthy', WARN if problems else OK)
+
+    def fused(self, stage: str, held: dict[str, Any]) -> FusedStage | None:
+        """Stage ``integrate`` as :func:`integrate_fused` (:mod:`acds_common.fused`), or None when it does not cover
+        the step: thrusters in the graph, telemetry wanted, no circular dipole, a disturbance, before the first
+        step, or a ``mode`` that ends the run."""
+        parts = self.model.kernel_parts()
+        if (stage != 'integrate' or parts is None or self.present('cold_gas') or self.telemetry_wanted
+                or self._h0_eci is None or self._run_complete(held.get('mode'))):
+            return None
+        body, orbit, (t, b, values) = parts
+        params = (body, orbit, self._dt, self.total_steps, self._bounds, self._orbit_rate, self.control_period_s,
+                  self.model.substeps)
+        state = (t, b, values, self._wheel_h, self.torque_free, self._omega_checked, self.step_angle_max_rad)
+        inputs = tuple(key for key, node in (('dipole', 'em_driver'), ('wheel_h', 'reaction_wheels'),
+                                             ('wheel_hdot', 'reaction_wheels')) if self.present(node))
+        if len(inputs) != 3:
+            return None
+        return FusedStage(integrate_fused, params, state, inputs, FUSED_OUTPUTS, self._restore)
+
+    def _restore(self, s: tuple) -> None:
+        """A state of :func:`integrate_fused` into the stepper and its model."""
+        t, b, values, self._wheel_h, self.torque_free, self._omega_checked, self.step_angle_max_rad = s
+        self.model.set_kernel_state(t, b, values)
 
     def integrate(self, k: int, _t: float, inp: dict[str, Any]) -> dict[str, Any]:
         """All actuator outputs of step k are in: integrate to t_k+1 and return its truth."""

@@ -106,6 +106,7 @@ def _limit(x: float, c: float) -> float:
 WheelParams = tuple[float, float, bool, tuple[tuple[float, float, float], ...], tuple[Slots, Slots, Slots], Slots]
 
 
+@kernels.helper
 def wheels_step(p: WheelParams, h: Slots, volts: Sequence[float], dt: float) -> tuple[Slots, Slots, tuple[
         float, float, float], tuple[float, float, float]]:
     """One step of :meth:`ReactionWheels.step_xyz_unchecked` on the wheels' momenta ``h`` (per slot, N·m·s):
@@ -285,6 +286,15 @@ class ReactionWheels:
                                                                       tuple[float, float, float]]:
         """:meth:`step` on floats: (h at step start, mean ḣ) in body axes as float triples."""
         return self.step_xyz_unchecked(finite_xyz("volts_body_axes_v", volts_body_axes_v), positive_dt(dt_s))
+
+    def kernel_parts(self) -> tuple[WheelParams, tuple[Slots, Slots]]:
+        """:func:`wheels_step`'s parameters and the state it steps (momenta, torques): for a compiled caller (the
+        direct engine's fused loop, :mod:`acds_common.fused`)."""
+        return self._params, (self._h, self._torque)
+
+    def set_kernel_state(self, h: Slots, torque: Slots) -> None:
+        """The state :meth:`kernel_parts` gave, stepped by a compiled caller."""
+        self._h, self._torque = h, torque
 
     def step_xyz_unchecked(self, volts: Sequence[float], dt: float) -> tuple[tuple[float, float, float],
                                                                            tuple[float, float, float]]:

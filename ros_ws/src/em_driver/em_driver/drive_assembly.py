@@ -306,6 +306,7 @@ def axis_step(units, k: int, p, axis, command: float, duration_s: float
     return figures, axis_monitor(axis, figures, p, duration_s)
 
 
+@kernels.helper
 def drive_step(units, params, axes, command: tuple[float, float, float], duration_s: float) -> tuple:
     """One control period of the assembly (spec §6): each axis's :func:`axis_step`. ``units`` the six units'
     rows (axis k's units A and B at 2k, 2k + 1), ``axes`` the three axes' monitor rows (both tables updated in
@@ -428,6 +429,17 @@ class DriveAssembly:
         """The failure injected into one unit, or None."""
         self._check_unit(unit)
         return self._axis(axis).units[unit].fault
+
+    def kernel_parts(self) -> tuple[Any, Any, Any]:
+        """:func:`drive_step`'s unit table, parameter rows and monitor table, for a compiled caller (the direct
+        engine's fused loop, :mod:`acds_common.fused`); it hands the tables it stepped to :meth:`set_kernel_state`."""
+        return self._state, self._params, self._monitor
+
+    def set_kernel_state(self, units: Any, monitor: Any) -> None:
+        """The unit and monitor tables a compiled caller stepped (copied into this assembly's own tables, which its
+        units' rows view); alarms and active units are unchanged (the caller steps only while they are)."""
+        self._state[:] = units
+        self._monitor[:] = monitor
 
     def step(self, moment_command_am2: np.ndarray, dt_s: float) -> AssemblyResult:
         """Drive the three axes for dt_s (s) toward moment_command_am2 (A·m², body axes).

@@ -20,8 +20,11 @@ torque-rod kind also returns, every step, the net bus power (W) and |PWM duty| o
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
+from acds_common import kernels
+from acds_common.fused import FusedStage, Output
 from acds_common.messages import ERROR, OK, WARN, diagnostic, vector3
 from acds_common.mode_report import ModeStatusReader
 from acds_common.stepper import Stepper
@@ -29,7 +32,24 @@ from acds_common.validation import scenario_key
 
 from em_driver.bridge_switch import EmDriverError
 from em_driver.configuration import apply_command, build_assembly, parse_command
-from em_driver.drive_assembly import AssemblyResult
+from em_driver.drive_assembly import AssemblyResult, DriveAssembly, drive_step
+
+
+@kernels.helper
+def drive_fused(p: tuple, s: tuple, _k: int, t_s: float, command: Any) -> tuple:
+    """Stage ``drive`` as a kernel (:mod:`acds_common.fused`) for the electromagnets' assembly: quiet unless the
+    scenario failure is due, a command is non-finite, or an alarm changes or switches a unit (the Python stage then
+    reports it). ``p``: (:func:`~em_driver.drive_assembly.drive_step`'s parameter rows, Δt, the time of the pending
+    failure: infinite for none); ``s``: (unit table, monitor table, and a scratch copy of each: the step runs on
+    the scratch tables, which become the state when it is quiet)."""
+    params, dt, failure_time = p
+    units, monitor, units1, monitor1 = s
+    units1[:, :] = units
+    monitor1[:, :] = monitor
+    changed, figures = drive_step(units1, params, monitor1, command, dt)
+    quiet = not changed and math.isfinite(command[0] + command[1] + command[2]) and t_s < failure_time
+    return (quiet, ((units1, monitor1, units, monitor) if quiet else s), figures[0], figures[1], figures[2],
+            figures[4])
 
 
 class EmDriverStep(Stepper):
@@ -51,6 +71,22 @@ class EmDriverStep(Stepper):
         self._commanded = self.present(self.source)
         self._alarms = (False, False, False)
         self._mode_status = ModeStatusReader(self.node)
+
+    def fused(self, stage: str, held: dict[str, Any]) -> FusedStage | None:
+        """Stage ``drive`` as :func:`drive_fused` (:mod:`acds_common.fused`): the electromagnets commanded by a node
+        of the graph; None for the torque rods, with telemetry wanted, or commands forwarded in the block's ``mode``."""
+        if (stage != 'drive' or self._electrical or not self._commanded or self.telemetry_wanted
+                or not isinstance(self.assembly, DriveAssembly) or self._mode_status(held.get('mode'))[1]):
+            return None
+        units, params, monitor = self.assembly.kernel_parts()
+        failure_time = float(self._failure_time_s) if self._failure_pending else math.inf
+        return FusedStage(drive_fused, (params, float(self.control_period_s), failure_time),
+                          (units.copy(), monitor.copy(), units.copy(), monitor.copy()), ('command',),
+                          (Output('dipole_avg', 3), Output('dipole_end', 3), Output('coil_current', 3),
+                           Output('e_ft', 3)), self._restore)
+
+    def _restore(self, s: tuple) -> None:
+        self.assembly.set_kernel_state(s[0], s[1])
 
     def drive(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Apply commands and failures due at step k, drive the coils for one control period."""

@@ -174,6 +174,7 @@ def unit_sample(b_sensed_t: Vec3, noise_g: Vec3, unit: tuple[Vec3, Vec3, bool],
     return unit_output(unit_volts(unit_field_g(b_sensed_t, unit, noise_g), faults[0], curve), last_v, faults)
 
 
+@kernels.helper
 def magnetometer_sample(params: tuple, faults: tuple, last_v: tuple[Vec3, Vec3], b_true_t: Vec3, dipole_am2: Vec3,
                         noise_g: tuple[Vec3, Vec3], active: int) -> tuple[tuple[Vec3, Vec3], tuple[Vec3, ...]]:
     """Both assemblies' sample of one step (:meth:`Magnetometer.sample_xyz`, spec §5): the field at the sensor
@@ -388,6 +389,20 @@ class Magnetometer:
         #: ``tolist`` floats, the field and dipole are made float tuples in :meth:`sample_xyz`, and ``_active`` is an int.
         self._sample = kernels.bound(magnetometer_sample, self._params, (a.faults, b.faults), (a.last_v, b.last_v),
                                      ZERO, ZERO, self._quiet, 0)
+
+    def kernel_parts(self) -> tuple[tuple, tuple, int, tuple[Vec3, Vec3]] | None:
+        """What a compiled caller needs to run :func:`magnetometer_sample` in place of :meth:`sample_xyz` (the direct
+        engine's fused loop, :mod:`acds_common.fused`): the parameters, both units' faults, the active unit and the
+        state (both units' last volts); None when the units draw noise (drawn here, in Python)."""
+        a, b = self._pair
+        if a.unit[2] or b.unit[2]:
+            return None
+        return self._params, (a.faults, b.faults), self._active, (a.last_v, b.last_v)
+
+    def set_kernel_state(self, last_v: tuple[Vec3, Vec3]) -> None:
+        """Both units' last volts (:meth:`kernel_parts`' state) after a compiled caller sampled."""
+        a, b = self._pair
+        a.last_v, b.last_v = last_v
 
     def select_unit(self, unit: str) -> None:
         """Make ``unit`` ('A' or 'B') the active assembly."""

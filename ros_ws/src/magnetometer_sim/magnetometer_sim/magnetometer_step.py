@@ -13,18 +13,36 @@ diagnostic and the last valid one is held.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
+from acds_common import kernels
+from acds_common.fused import FusedStage, Output
 from acds_common.messages import ERROR, OK, WARN, diagnostic, xyz
 from acds_common.mode_report import ModeStatusReader
 from acds_common.stepper import Stepper
 from acds_common.validation import all_finite, scenario_key
 
 from magnetometer_sim.configuration import apply_command, build_magnetometer, parse_command
-from magnetometer_sim.fluxgate import MagnetometerError, MagnetometerReading
+from magnetometer_sim.fluxgate import ZERO, MagnetometerError, MagnetometerReading, magnetometer_sample
 
 #: Telemetered bias voltage further than this from 2.5 V raises a WARN (a shift reads as field).
 BIAS_WARN_V = 0.02
+
+
+@kernels.helper
+def sample_fused(p: tuple, s: tuple, _k: int, t_s: float, b_true: Any, dipole: Any) -> tuple:
+    """Stage ``sample`` as a kernel (:mod:`acds_common.fused`) for noiseless units: quiet unless the scenario fault is
+    due or an input is non-finite. ``p``: (:func:`~magnetometer_sim.fluxgate.magnetometer_sample`'s parameters, the
+    units' faults, the active unit, the time of the pending fault (infinite: none), the active unit's covariance); ``s``: (both units' last
+    volts, the last valid field and dipole)."""
+    params, faults, active, fault_time, covariance = p
+    last, b_held, d_held = s
+    b = b_true[0]
+    quiet = math.isfinite(b[0] + b[1] + b[2] + dipole[0] + dipole[1] + dipole[2]) and t_s < fault_time
+    last1, out = magnetometer_sample(params, faults, last, b, dipole, (ZERO, ZERO), active)
+    volts, bias, field, _sensed = out
+    return quiet, ((last1, b, dipole) if quiet else s), volts, bias, (field, covariance)
 
 
 class MagnetometerStep(Stepper):
@@ -41,6 +59,23 @@ class MagnetometerStep(Stepper):
         self._b_true = (0.0, 0.0, 0.0)
         self._dipole = (0.0, 0.0, 0.0)
         self._mode_status = ModeStatusReader(self.node)
+
+    def fused(self, stage: str, held: dict[str, Any]) -> FusedStage | None:
+        """Stage ``sample`` as :func:`sample_fused` (:mod:`acds_common.fused`); None with telemetry wanted, noise on,
+        a source absent or commands forwarded in the ``mode`` the block reads."""
+        parts = self.mag.kernel_parts()
+        if (stage != 'sample' or parts is None or self.telemetry_wanted or not self.present('rigid_body')
+                or not self.present('em_driver') or self._mode_status(held.get('mode'))[1]):
+            return None
+        params, faults, active, last = parts
+        fault_time = float(self.cfg['fault_time']) if self._fault_pending else math.inf
+        return FusedStage(sample_fused, (params, faults, active, fault_time, self.mag.covariance9),
+                          (last, self._b_true, self._dipole), ('b_true', 'dipole'),
+                          (Output('volts', 3), Output('bias_volts', 3), Output('field', (3, 9))), self._restore)
+
+    def _restore(self, s: tuple) -> None:
+        last, self._b_true, self._dipole = s
+        self.mag.set_kernel_state(last)
 
     def sample(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Apply commands and faults due at step k, sample both units, return the active one."""

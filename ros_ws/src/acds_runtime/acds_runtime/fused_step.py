@@ -1,0 +1,329 @@
+"""The direct engine's fused loop: the quiet steps of a run in one compiled loop, composed from the stages' declarations.
+
+Every stage of the graph may declare a fused form (:mod:`acds_common.fused`: a kernel on floats, its parameters
+and state, the inputs it takes and the outputs it gives). When all of them do, :class:`FusedLoop` writes out
+(as :mod:`~acds_runtime.step_program` writes the Python step) the source of one function that runs steps k0,
+k0 + 1, … of the graph: the stages in :meth:`~acds_common.graph.Graph.firing_order`, each kernel handed its
+inputs of step k − lag through local variables (a lag-0 input the value its producer gave earlier in the same
+step; a producer's stamp offset counted, so the time owner's truth of step k is its stage's output of step
+k − 1), every output that something outside the loop reads (an input's store, the truth digest, the per-step
+summaries) written into a float64 row of a preallocated buffer. It compiles that function with numba
+(:mod:`acds_common.kernels`: no ``fastmath``, the same operations in the same order give the same bits as each
+kernel's plain form and the Python stage it replaces). The loop ends when a stage says its step is not quiet
+(a transition, an event, a refused input, the run's end: the stages' states are then those at the start of that
+step, which runs through the Python step program as always) or the buffers are full.
+
+After a block, each stage's state goes back into its stepper (``restore``), and the rows become the values the
+Python path would have routed: the inputs' stores (the steps later steps read), the truth topics' messages for
+the digest and the summaries' per-step values, step by step and topic by topic as the step program routes them,
+so the data, the digest and the summaries are the same bits with or without the loop.
+
+Which inputs a stage's kernel does not take (the mode report: a Python object) are *held*: the producer's
+declaration names the object it returns at every quiet step, the consumer is asked for its form knowing that
+object, and the block starts only when every step it reads before the block gave that very object.
+The loop runs only without a bag and a live view (:class:`~acds_runtime.direct.DirectRun` decides).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from acds_common import kernels
+from acds_common.fused import FusedStage, Output, leaves, nested, unflatten, width
+from acds_common.graph import Graph
+from acds_common.stepper import Stepper
+
+from .step_program import Route
+
+#: Steps of one block at most (the rows of each buffer).
+BLOCK_STEPS = 2048
+#: The block functions compiled in this process, by structure (:meth:`_Plan.key`): (function, source).
+_COMPILED: dict[Any, tuple[Any, str]] = {}
+
+
+@dataclass(frozen=True)
+class _Read:
+    """One input of a stage whose source runs: its key, topic, producer node and output key, lag."""
+
+    key: str
+    topic: str
+    source: str
+    output: str
+    lag: int
+
+
+@dataclass(frozen=True)
+class _Produced:
+    """An output a fused stage gives: the stage's index, the output's index in the kernel's outputs, its declaration,
+    the producer's stamp offset and where it goes outside the loop."""
+
+    stage: int
+    index: int
+    output: Output
+    offset: int
+    route: Route | None
+
+
+class FusedLoop:
+    """The fused loop of one direct run (module docstring): :meth:`block` runs a block of quiet steps from step k0."""
+
+    def __init__(self, graph: Graph, steppers: dict[str, Stepper], routes: dict[str, dict[str, Route]],
+                 stores: dict[str, dict[int, Any]], feed_step: Callable[[str, int, Any], None], dt_ns: int,
+                 max_lag: int) -> None:
+        self.graph = graph
+        self.steppers = steppers
+        self.routes = routes
+        self.dt_ns = dt_ns
+        self.max_lag = max_lag
+        self._feed_step = feed_step
+        self.stages: list[tuple[str, str]] = [(name, stage.name) for name, stage in graph.firing_order()]
+        present = set(graph.nodes)
+        self._reads: list[tuple[_Read, ...]] = []
+        for name, stage in graph.firing_order():
+            spec = graph.nodes[name]
+            reads = []
+            for inp in stage.inputs:
+                if inp.source not in present:
+                    continue
+                topic = spec.topic(inp.topic)
+                producer = graph.nodes[inp.source]
+                key = next(out.key for out in producer.outputs if producer.topic(out.topic) == topic)
+                reads.append(_Read(inp.key, topic, inp.source, key, inp.lag))
+            self._reads.append(tuple(reads))
+        self._offsets = {(spec.instance, out.key): out.stamp_offset for spec, out in graph.outputs()}
+        self._stores = stores
+        self._buffers: dict[Any, list[np.ndarray]] = {}
+        self._possible = all(hasattr(steppers[name], 'fused') for name, _stage in self.stages)
+        #: Steps run fused so far, and blocks (for a reader of the bench).
+        self.fused_steps = 0
+        self.blocks = 0
+
+    @property
+    def possible(self) -> bool:
+        """Whether every stepper of the graph has a fused form at all."""
+        return self._possible
+
+    # ---- one block ---------------------------------------------------------------------------------
+    def _value_at(self, topic: str, index: int) -> Any:
+        return self._stores[topic][index]
+
+    def _declare(self, k0: int) -> list[FusedStage] | None:
+        """Every stage's fused form for a block from step k0, or None when one has none or a held input moves."""
+        declared: list[FusedStage] = []
+        for (name, stage), reads in zip(self.stages, self._reads, strict=True):
+            held = {}
+            for r in reads:
+                last = k0 - 1 + self._offsets[(r.source, r.output)]  # the last index its producer wrote
+                index = min(k0 - r.lag, last)
+                store = self._stores.get(r.topic)
+                if store is None or index not in store:
+                    return None
+                held[r.key] = store[index]
+            fs = self.steppers[name].fused(stage, held)  # type: ignore[attr-defined]
+            if fs is None:
+                return None
+            declared.append(fs)
+        by_node = dict(zip((name for name, _stage in self.stages), declared, strict=True))
+        for fs, reads in zip(declared, self._reads, strict=True):
+            for r in reads:
+                producer = by_node[r.source]
+                if r.key in fs.inputs:
+                    if not any(o.key == r.output for o in producer.outputs):
+                        return None
+                    continue
+                if r.output not in producer.held:
+                    return None
+                obj = producer.held[r.output]
+                offset = self._offsets[(r.source, r.output)]
+                store = self._stores[r.topic]
+                if any(store.get(i, obj) is not obj for i in range(min(k0 - r.lag, k0 - 1 + offset), k0 + offset)):
+                    return None
+        return declared
+
+    def block(self, k0: int) -> int:
+        """Run the quiet steps from k0 in the compiled loop; return how many ran (0: none could)."""
+        declared = self._declare(k0)
+        if declared is None:
+            return 0
+        plan = self._plan(declared)
+        fn, buffers = self._function(plan)
+        args: list[Any] = [k0, BLOCK_STEPS]
+        for fs in declared:
+            args += [fs.params, fs.state]
+        for topic, (shape, depth, offset) in plan.registers.items():
+            args += [nested(self._value_at(topic, k0 + offset - 1 - j), shape) for j in range(depth)]
+        args += buffers
+        result = fn(*args)
+        n = result[0]
+        for fs, state in zip(declared, result[1:], strict=True):
+            fs.restore(state)
+        if n:
+            self._route(plan, declared, buffers, k0, n)
+            self.fused_steps += n
+            self.blocks += 1
+        return n
+
+    # ---- composition -------------------------------------------------------------------------------
+    def _plan(self, declared: list[FusedStage]) -> _Plan:
+        """The structure of the loop for these declarations (what the compiled function depends on)."""
+        names = [name for name, _stage in self.stages]
+        produced: dict[tuple[str, str], _Produced] = {}
+        for i, (name, fs) in enumerate(zip(names, declared, strict=True)):
+            for j, out in enumerate(fs.outputs):
+                produced[(name, out.key)] = _Produced(i, j, out, self._offsets[(name, out.key)],
+                                                      self.routes[name].get(out.key))
+        position = {name: i for i, name in enumerate(names)}
+        registers: dict[str, tuple[Any, int, int]] = {}
+        args: list[list[tuple[str, Any]]] = []  # per stage: (how, what) of each kernel input
+        for i, (fs, reads) in enumerate(zip(declared, self._reads, strict=True)):
+            by_key = {r.key: r for r in reads}
+            stage_args = []
+            for key in fs.inputs:
+                r = by_key[key]
+                p = produced[(r.source, r.output)]
+                back = p.offset + r.lag - 1
+                if back < 0:  # lag 0, no offset: the producer's output earlier in this step
+                    if position[r.source] >= i:
+                        raise ValueError(f'{names[i]} reads {r.topic} of this step before {r.source} fires')
+                    stage_args.append(('new', (p.stage, p.index)))
+                    continue
+                shape, depth, _offset = registers.get(r.topic, (p.output.shape, 0, p.offset))
+                registers[r.topic] = (shape, max(depth, back + 1), p.offset)
+                stage_args.append(('reg', (r.topic, back)))
+            args.append(stage_args)
+        topics_of = {p.route.topic: key for key, p in produced.items() if p.route is not None}
+        written = tuple(key for key, p in produced.items() if p.route is not None and p.route.read())
+        register_producers = {topic: (produced[topics_of[topic]].stage, produced[topics_of[topic]].index)
+                              for topic in registers}
+        kernels_ = tuple(fs.kernel for fs in declared)
+        return _Plan(names, kernels_, args, registers, register_producers, written, produced,
+                     tuple(tuple(o.key for o in fs.outputs) for fs in declared))
+
+    def _function(self, plan: _Plan) -> tuple[Any, list[np.ndarray]]:
+        """The compiled block function of ``plan`` (composed once per structure and process) and its row buffers."""
+        key = plan.key()
+        known = _COMPILED.get(key)
+        if known is None:
+            if not kernels.enabled():
+                raise RuntimeError('the fused loop runs compiled only (acds_common.kernels.enable)')
+            source, ns = compose(plan, self.dt_ns)
+            exec(compile(source, f'<fused loop: {len(plan.names)} stages>', 'exec'), ns)  # noqa: S102 (our source)
+            from numba import njit
+            known = _COMPILED[key] = (njit(ns['fused_block']), source)
+        buffers = self._buffers.get(key)
+        if buffers is None:
+            buffers = self._buffers[key] = [np.zeros((BLOCK_STEPS, width(plan.produced[w].output.shape)))
+                                            for w in plan.written]
+        return known[0], buffers
+
+    def source(self) -> list[str]:
+        """The sources of the block functions this loop ran (for a reader and a failing test)."""
+        return [_COMPILED[key][1] for key in self._buffers]
+
+    # ---- after a block ------------------------------------------------------------------------------
+    def _route(self, plan: _Plan, declared: list[FusedStage], buffers: list[np.ndarray], k0: int, n: int) -> None:
+        """The n steps' outputs where the Python step program routes them (module docstring)."""
+        keep_from = max(0, n - self.max_lag - 1)  # the steps a later step reads from the stores
+        dt = self.dt_ns
+        for key, buf in zip(plan.written, buffers, strict=True):
+            p = plan.produced[key]
+            route = p.route
+            assert route is not None
+            out, offset = p.output, p.offset
+            rows = buf[:n].tolist()
+            values = [out.value(unflatten(row, out.shape)) for row in rows]
+            if route.store is not None:
+                for i in range(keep_from, n):
+                    route.store[k0 + i + offset] = values[i]
+            if route.truth is not None:
+                encode, sink = route.codec.encode, route.truth
+                for i, v in enumerate(values):
+                    sink(encode((k0 + i + offset) * dt, v))
+            if route.per_step:
+                for i, v in enumerate(values):
+                    self._feed_step(route.topic, k0 + i + offset, v)
+        for name, fs in zip(plan.names, declared, strict=True):
+            for key, obj in fs.held.items():
+                route = self.routes[name].get(key)
+                if route is None:
+                    continue
+                offset = self._offsets[(name, key)]
+                if route.store is not None:
+                    for i in range(keep_from, n):
+                        route.store[k0 + i + offset] = obj
+                if route.truth is not None:
+                    for i in range(n):
+                        route.truth(route.codec.encode((k0 + i + offset) * dt, obj))
+                if route.per_step:
+                    for i in range(n):
+                        self._feed_step(route.topic, k0 + i + offset, obj)
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """A block function's structure: stage names and kernels, each kernel input's source (``args``: a register
+    ``('reg', (topic, back))`` or an output of this step ``('new', (stage, index))``), the registers (topic →
+    (shape, depth, producer's offset)) and their producers, the outputs written to buffers, every output produced,
+    and each stage's output keys."""
+
+    names: list[str]
+    kernels: tuple[Callable[..., Any], ...]
+    args: list[list[tuple[str, Any]]]
+    registers: dict[str, tuple[Any, int, int]]
+    register_producers: dict[str, tuple[int, int]]
+    written: tuple[tuple[str, str], ...]
+    produced: dict[tuple[str, str], _Produced]
+    outputs: tuple[tuple[str, ...], ...]
+
+    def key(self) -> Any:
+        return (tuple(self.names), self.kernels, tuple(tuple(a) for a in self.args),
+                tuple(sorted((t, repr(s), d, o) for t, (s, d, o) in self.registers.items())), self.written,
+                self.outputs)
+
+
+def compose(plan: _Plan, dt_ns: int) -> tuple[str, dict[str, Any]]:
+    """The source of ``fused_block(k0, n_max, params0, state0, …, registers…, buffers…)`` and its namespace:
+    steps k0, k0 + 1, … until a stage is not quiet or n_max steps ran; returns (steps run, every stage's state)."""
+    ns: dict[str, Any] = {'DT': dt_ns}
+    reg_names = {topic: [f'R{t}_{j}' for j in range(depth)] for t, (topic, (_s, depth, _o)) in
+                 enumerate(plan.registers.items())}
+    params = [f'P{i}' for i in range(len(plan.names))]
+    states = [f'S{i}' for i in range(len(plan.names))]
+    signature = ['k0', 'n_max'] + [x for pair in zip(params, states, strict=True) for x in pair]
+    signature += [r for names in reg_names.values() for r in names]
+    buffers = [f'B{i}' for i in range(len(plan.written))]
+    signature += buffers
+    lines = [f'def fused_block({", ".join(signature)}):', '    i = 0', '    while i < n_max:',
+             '        k = k0 + i', '        t_s = k * DT / 1e9']
+    for i, (name, kernel) in enumerate(zip(plan.names, plan.kernels, strict=True)):
+        ns[f'K{i}'] = kernel
+        inputs = []
+        for how, what in plan.args[i]:
+            if how == 'new':
+                stage, index = what
+                inputs.append(f'o{stage}[{2 + index}]')
+            else:
+                topic, back = what
+                inputs.append(reg_names[topic][back])
+        lines.append(f'        # {name}')
+        lines.append(f'        o{i} = K{i}(P{i}, S{i}, k, t_s{"".join(", " + a for a in inputs)})')
+        lines.append(f'        if not o{i}[0]:')
+        lines.append('            break')
+    lines.append('        # every stage quiet: step k is committed')
+    for i in range(len(plan.names)):
+        lines.append(f'        S{i} = o{i}[1]')
+    for topic, names in reg_names.items():
+        stage, index = plan.register_producers[topic]
+        for j in range(len(names) - 1, 0, -1):
+            lines.append(f'        {names[j]} = {names[j - 1]}')
+        lines.append(f'        {names[0]} = o{stage}[{2 + index}]')
+    for b, key in zip(buffers, plan.written, strict=True):
+        p = plan.produced[key]
+        for c, path in enumerate(leaves(p.output.shape)):
+            lines.append(f'        {b}[i, {c}] = o{p.stage}[{2 + p.index}]{path}')
+    lines.append('        i += 1')
+    lines.append(f'    return i, {", ".join(states)}')
+    return '\n'.join(lines) + '\n', ns
