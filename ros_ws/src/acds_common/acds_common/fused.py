@@ -31,13 +31,13 @@ them (its Python method reads them as None).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Union
+from typing import Any
 
 #: How an output's value is laid out as floats: an int n is a tuple of n floats, a tuple of shapes a tuple
 #: of their values (``(3, 9)``: a vector and a 3×3 covariance; ``3``: a vector).
-Shape = Union[int, tuple['Shape', ...]]
+Shape = int | tuple['Shape', ...]
 
 
 @dataclass(frozen=True)
@@ -87,19 +87,3 @@ def nested(value: Any, shape: Shape) -> tuple:
     if isinstance(shape, int):
         return tuple(float(x) for x in value)
     return tuple(nested(v, s) for v, s in zip(value, shape, strict=True))
-
-
-def unflatten(row: Sequence[float], shape: Shape) -> tuple:
-    """The nested tuple of ``shape`` from its floats in row order (:func:`leaves`)."""
-    out, _ = _take(list(row), 0, shape)
-    return out
-
-
-def _take(row: list[float], at: int, shape: Shape) -> tuple[tuple, int]:
-    if isinstance(shape, int):
-        return tuple(row[at:at + shape]), at + shape
-    items = []
-    for s in shape:
-        item, at = _take(row, at, s)
-        items.append(item)
-    return tuple(items), at

@@ -188,7 +188,7 @@ class DirectRun:
         """The fused loop when this run may use it (no bag, no live view, every stage with a fused form)."""
         if not self.fused or self._bytes_out:
             return None
-        loop = FusedLoop(self.graph, self.steppers, self._routes, self._store, self.observer.feed_value, self.dt_ns,
+        loop = FusedLoop(self.graph, self.steppers, self._routes, self._store, self.observer, self.dt_ns,
                          self._max_lag)
         return loop if loop.possible else None
 

@@ -26,13 +26,18 @@ The loop runs only without a bag and a live view (:class:`~acds_runtime.direct.D
 
 from __future__ import annotations
 
+import hashlib
+import importlib.util
+import os
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from acds_common import kernels
-from acds_common.fused import FusedStage, Output, leaves, nested, unflatten, width
+from acds_common.fused import FusedStage, Output, leaves, nested, width
 from acds_common.graph import Graph
 from acds_common.stepper import Stepper
 
@@ -71,14 +76,14 @@ class FusedLoop:
     """The fused loop of one direct run (module docstring): :meth:`block` runs a block of quiet steps from step k0."""
 
     def __init__(self, graph: Graph, steppers: dict[str, Stepper], routes: dict[str, dict[str, Route]],
-                 stores: dict[str, dict[int, Any]], feed_step: Callable[[str, int, Any], None], dt_ns: int,
-                 max_lag: int) -> None:
+                 stores: dict[str, dict[int, Any]], observer: Any, dt_ns: int, max_lag: int) -> None:
         self.graph = graph
         self.steppers = steppers
         self.routes = routes
         self.dt_ns = dt_ns
         self.max_lag = max_lag
-        self._feed_step = feed_step
+        #: The run observer's steps waiting for values (step → {topic: value}), its drain and its truth-block sink.
+        self._pending, self._drain, self._truth_block = observer.pending, observer.drain, observer.truth_block
         self.stages: list[tuple[str, str]] = [(name, stage.name) for name, stage in graph.firing_order()]
         present = set(graph.nodes)
         self._reads: list[tuple[_Read, ...]] = []
@@ -209,10 +214,8 @@ class FusedLoop:
         if known is None:
             if not kernels.enabled():
                 raise RuntimeError('the fused loop runs compiled only (acds_common.kernels.enable)')
-            source, ns = compose(plan, self.dt_ns)
-            exec(compile(source, f'<fused loop: {len(plan.names)} stages>', 'exec'), ns)  # noqa: S102 (our source)
-            from numba import njit
-            known = _COMPILED[key] = (njit(ns['fused_block']), source)
+            source = compose(plan, self.dt_ns)
+            known = _COMPILED[key] = (_load(source), source)
         buffers = self._buffers.get(key)
         if buffers is None:
             buffers = self._buffers[key] = [np.zeros((BLOCK_STEPS, width(plan.produced[w].output.shape)))
@@ -225,41 +228,96 @@ class FusedLoop:
 
     # ---- after a block ------------------------------------------------------------------------------
     def _route(self, plan: _Plan, declared: list[FusedStage], buffers: list[np.ndarray], k0: int, n: int) -> None:
-        """The n steps' outputs where the Python step program routes them (module docstring)."""
-        keep_from = max(0, n - self.max_lag - 1)  # the steps a later step reads from the stores
-        dt = self.dt_ns
+        """The n steps' outputs where the Python step program routes them (module docstring): the stores (the steps
+        a later step reads), the truth digest (a block of messages from the rows, when the topic's codec lays its
+        values out as the kernel's rows, else message by message), the summaries' per-step values."""
+        keep_from = max(0, n - self.max_lag - 1)
+        pending = self._pending
         for key, buf in zip(plan.written, buffers, strict=True):
             p = plan.produced[key]
             route = p.route
             assert route is not None
-            out, offset = p.output, p.offset
-            rows = buf[:n].tolist()
-            values = [out.value(unflatten(row, out.shape)) for row in rows]
+            first = k0 + p.offset
+            from_row = _from_row(p.output)
+            block = route.truth is not None and _same_rows(route.codec, p.output)
+            values = None
+            if route.per_step or (route.truth is not None and not block):
+                values = [from_row(row) for row in buf[:n].tolist()]
             if route.store is not None:
                 for i in range(keep_from, n):
-                    route.store[k0 + i + offset] = values[i]
+                    route.store[first + i] = values[i] if values is not None else from_row(buf[i].tolist())
             if route.truth is not None:
-                encode, sink = route.codec.encode, route.truth
-                for i, v in enumerate(values):
-                    sink(encode((k0 + i + offset) * dt, v))
+                if block:
+                    stamps = (np.arange(first, first + n, dtype=np.int64)) * self.dt_ns
+                    self._truth_block(route.topic, route.codec.encode_block(stamps, buf[:n]), n)
+                else:
+                    encode, sink, dt = route.codec.encode, route.truth, self.dt_ns
+                    for i, v in enumerate(values):
+                        sink(encode((first + i) * dt, v))
             if route.per_step:
+                topic = route.topic
                 for i, v in enumerate(values):
-                    self._feed_step(route.topic, k0 + i + offset, v)
+                    step = pending.get(first + i)
+                    if step is None:
+                        step = pending[first + i] = {}
+                    step[topic] = v
         for name, fs in zip(plan.names, declared, strict=True):
             for key, obj in fs.held.items():
                 route = self.routes[name].get(key)
                 if route is None:
                     continue
-                offset = self._offsets[(name, key)]
+                first = k0 + self._offsets[(name, key)]
                 if route.store is not None:
                     for i in range(keep_from, n):
-                        route.store[k0 + i + offset] = obj
+                        route.store[first + i] = obj
                 if route.truth is not None:
                     for i in range(n):
-                        route.truth(route.codec.encode((k0 + i + offset) * dt, obj))
+                        route.truth(route.codec.encode((first + i) * self.dt_ns, obj))
                 if route.per_step:
+                    topic = route.topic
                     for i in range(n):
-                        self._feed_step(route.topic, k0 + i + offset, obj)
+                        step = pending.get(first + i)
+                        if step is None:
+                            step = pending[first + i] = {}
+                        step[topic] = obj
+        self._drain()
+
+
+def _from_row(out: Output) -> Callable[[list[float]], Any]:
+    """The stage's value of ``out`` from its row (a list of floats):  the floats in :func:`~acds_common.fused.leaves` order
+    nested by the shape, then ``make``, written out once per output (this runs for every step of a block)."""
+    fn = _FROM_ROW.get(out)
+    if fn is None:
+        counter = iter(range(width(out.shape)))
+
+        def text(shape: Any) -> str:
+            if isinstance(shape, int):
+                return '(' + ''.join(f'r[{next(counter)}], ' for _ in range(shape)) + ')'
+            return '(' + ''.join(text(s) + ', ' for s in shape) + ')'
+        body = text(out.shape)
+        fn = _FROM_ROW[out] = eval(f'lambda r: {body}' if out.make is None else f'lambda r: make({body})',  # noqa: S307
+                                   {'make': out.make})
+    return fn
+
+
+#: :func:`_from_row` of each output declared so far.
+_FROM_ROW: dict[Output, Callable[[list[float]], Any]] = {}
+
+
+def _same_rows(codec: Any, out: Output) -> bool:
+    """Whether ``codec`` lays a value of ``out`` out as the kernel's row (:attr:`acds_common.cdr.Codec.layout`):
+    then the truth messages of a block are encoded from the rows at once."""
+    known = _SAME_ROWS.get((id(codec), out))
+    if known is None:
+        layout = getattr(codec, 'layout', None)
+        n = width(out.shape)
+        row = [float(i + 1) for i in range(n)]
+        known = layout is not None and layout.width == n and list(layout.flatten(_from_row(out)(row))) == row
+        _SAME_ROWS[(id(codec), out)] = known
+    return known
+
+
+_SAME_ROWS: dict[tuple[int, Output], bool] = {}
 
 
 @dataclass(frozen=True)
@@ -284,10 +342,15 @@ class _Plan:
                 self.outputs)
 
 
-def compose(plan: _Plan, dt_ns: int) -> tuple[str, dict[str, Any]]:
-    """The source of ``fused_block(k0, n_max, params0, state0, …, registers…, buffers…)`` and its namespace:
-    steps k0, k0 + 1, … until a stage is not quiet or n_max steps ran; returns (steps run, every stage's state)."""
-    ns: dict[str, Any] = {'DT': dt_ns}
+def compose(plan: _Plan, dt_ns: int) -> str:
+    """The source of a module defining ``fused_block(k0, n_max, params0, state0, …, registers…, buffers…)``: steps
+    k0, k0 + 1, … until a stage is not quiet or n_max steps ran; it returns (steps run, every stage's state). The
+    kernels are imported by name (their modules' own, so numba's disk cache follows their sources,
+    :mod:`acds_common.kernel_cache`)."""
+    lines = ['"""The direct engine\'s fused loop for one graph (written by acds_runtime.fused_step.compose)."""', '']
+    for i, kernel in enumerate(plan.kernels):
+        lines.append(f'from {kernel.__module__} import {kernel.__qualname__} as K{i}')
+    lines += ['', f'DT = {int(dt_ns)}', '', '']
     reg_names = {topic: [f'R{t}_{j}' for j in range(depth)] for t, (topic, (_s, depth, _o)) in
                  enumerate(plan.registers.items())}
     params = [f'P{i}' for i in range(len(plan.names))]
@@ -296,10 +359,9 @@ def compose(plan: _Plan, dt_ns: int) -> tuple[str, dict[str, Any]]:
     signature += [r for names in reg_names.values() for r in names]
     buffers = [f'B{i}' for i in range(len(plan.written))]
     signature += buffers
-    lines = [f'def fused_block({", ".join(signature)}):', '    i = 0', '    while i < n_max:',
-             '        k = k0 + i', '        t_s = k * DT / 1e9']
-    for i, (name, kernel) in enumerate(zip(plan.names, plan.kernels, strict=True)):
-        ns[f'K{i}'] = kernel
+    lines += [f'def fused_block({", ".join(signature)}):', '    i = 0', '    while i < n_max:',
+              '        k = k0 + i', '        t_s = k * DT / 1e9']
+    for i, name in enumerate(plan.names):
         inputs = []
         for how, what in plan.args[i]:
             if how == 'new':
@@ -326,4 +388,36 @@ def compose(plan: _Plan, dt_ns: int) -> tuple[str, dict[str, Any]]:
             lines.append(f'        {b}[i, {c}] = o{p.stage}[{2 + p.index}]{path}')
     lines.append('        i += 1')
     lines.append(f'    return i, {", ".join(states)}')
-    return '\n'.join(lines) + '\n', ns
+    return '\n'.join(lines) + '\n'
+
+
+#: Where the composed modules are written (one file per source, named by its hash), so that numba caches their
+#: machine code on disk as it caches the kernels': beside the source.
+LOOP_DIR = Path(__file__).resolve().parent / '__pycache__' / 'fused_loops'
+
+
+def _load(source: str) -> Any:
+    """``fused_block`` of ``source`` compiled: from a module file written once per source (numba's disk cache then
+    keeps its machine code across processes), or, where that folder cannot be written, from the source in memory
+    (compiled in every process)."""
+    from numba import njit
+
+    name = 'fused_' + hashlib.sha256(source.encode()).hexdigest()[:24]
+    path = LOOP_DIR / f'{name}.py'
+    try:
+        if not path.exists() or path.read_text() != source:
+            LOOP_DIR.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_suffix(f'.{os.getpid()}.tmp')
+            tmp.write_text(source)
+            os.replace(tmp, path)
+    except OSError:
+        ns: dict[str, Any] = {}
+        exec(compile(source, '<fused loop>', 'exec'), ns)  # noqa: S102 (our source)
+        return njit(ns['fused_block'])
+    module = sys.modules.get(name)
+    if module is None:  # registered before it runs: numba's cached code names its module
+        spec = importlib.util.spec_from_file_location(name, path)
+        assert spec is not None and spec.loader is not None
+        module = sys.modules[name] = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    return njit(cache=True)(module.fused_block)

@@ -195,6 +195,17 @@ class RunObserver:
             return None
         return self._truth_buffers.setdefault(topic, []).append
 
+    def truth_block(self, topic: str, data: bytes, count: int) -> None:
+        """For the direct engine's fused loop: ``count`` serialized messages of truth ``topic`` in one ``data``
+        (:meth:`acds_common.cdr.Codec.encode_block`), after the ones :meth:`truth_sink` kept (the same digest)."""
+        buffer = self._truth_buffers.get(topic)
+        if buffer:
+            self._digests[topic].update(b''.join(buffer))
+            self.truth_messages += len(buffer)
+            buffer.clear()
+        self._digests[topic].update(data)
+        self.truth_messages += count
+
     def flush_truth(self) -> None:
         """Hash and count the messages :meth:`truth_sink` kept (the engine calls it now and then: bounded memory)."""
         for topic, buffer in self._truth_buffers.items():

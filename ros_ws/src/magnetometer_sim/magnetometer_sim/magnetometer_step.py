@@ -34,8 +34,8 @@ BIAS_WARN_V = 0.02
 def sample_fused(p: tuple, s: tuple, _k: int, t_s: float, b_true: Any, dipole: Any) -> tuple:
     """Stage ``sample`` as a kernel (:mod:`acds_common.fused`) for noiseless units: quiet unless the scenario fault is
     due or an input is non-finite. ``p``: (:func:`~magnetometer_sim.fluxgate.magnetometer_sample`'s parameters, the
-    units' faults, the active unit, the time of the pending fault (infinite: none), the active unit's covariance); ``s``: (both units' last
-    volts, the last valid field and dipole)."""
+    units' faults, the active unit, the time of the pending fault (infinite: none), the active unit's covariance);
+    ``s``: (both units' last volts, the last valid field and dipole)."""
     params, faults, active, fault_time, covariance = p
     last, b_held, d_held = s
     b = b_true[0]
