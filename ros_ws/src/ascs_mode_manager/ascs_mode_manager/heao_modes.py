@@ -149,14 +149,6 @@ OTHER_MODE = -1
 ENTERED_1B, ENTRY_STAMPED, CAPTURED, AUTO_CRUISE = 1, 2, 4, 8
 
 
-def _nan_for_none(t: float | None) -> float:
-    return math.nan if t is None else t
-
-
-def _none_for_nan(t: float) -> float | None:
-    return None if math.isnan(t) else t
-
-
 @kernels.helper
 def sun_norm(sun: Sequence[float]) -> float:
     """|sun| of the sun sensor's vector (0 when the sun is absent)."""
@@ -242,7 +234,8 @@ def heao_logic(params: HeaoKernelParams, state: HeaoKernelState, t: float, omega
 
 def heao_advance(params: HeaoKernelParams, state: HeaoKernelState, t: float, omega: Sequence[float],
                  sun: Sequence[float]) -> tuple[bool, HeaoKernelState]:
-    """One step of the HEAO mode logic for a compiled caller (:mod:`acds_common.kernels`): ``(quiet, state)``.
+    """One step of the HEAO mode logic (spec §8; seed 002 Figure 4-3, §4.3.1: Mode 1A → 1B, capture in Mode 1B,
+    cruise) for a compiled caller (:mod:`acds_common.kernels`, :func:`heao_logic`): ``(quiet, state)``.
 
     ``quiet`` means :meth:`HeaoModeManager.advance` ``(t, omega, sun, True)`` from ``state`` returns no transition
     and leaves :meth:`HeaoModeManager.status_state`, the mode and the captured flag as they were, and the returned
@@ -354,8 +347,10 @@ class HeaoModeManager:
         """Everything :meth:`advance` reads and writes, as :func:`heao_logic` reads it: (mode index, or
         :data:`OTHER_MODE` for a variant's mode; captured; Mode 1B entry, capture, capture-condition-since and last
         step times (s, NaN for None: every time the logic stores is a finite step time); queued commands)."""
-        return (HEAO_MODE_INDEX.get(self.mode, OTHER_MODE), self.captured, _nan_for_none(self.mode_1b_entry_t_s),
-                _nan_for_none(self.capture_t_s), _nan_for_none(self._capture_since_t_s), _nan_for_none(self._last_t_s),
+        entry, capture, since, last = self.mode_1b_entry_t_s, self.capture_t_s, self._capture_since_t_s, self._last_t_s
+        nan = math.nan  # written out: the per-step path
+        return (HEAO_MODE_INDEX.get(self.mode, OTHER_MODE), self.captured, nan if entry is None else entry,
+                nan if capture is None else capture, nan if since is None else since, nan if last is None else last,
                 len(self._pending))
 
     def set_kernel_state(self, state: HeaoKernelState) -> None:
@@ -367,10 +362,11 @@ class HeaoModeManager:
         if mode != OTHER_MODE:
             self.mode = HEAO_MODES[mode]
         self.captured = captured
-        self.mode_1b_entry_t_s = _none_for_nan(entry)
-        self.capture_t_s = _none_for_nan(capture)
-        self._capture_since_t_s = _none_for_nan(since)
-        self._last_t_s = _none_for_nan(last)
+        # x != x: x is NaN (written out: the per-step path)
+        self.mode_1b_entry_t_s = None if entry != entry else entry
+        self.capture_t_s = None if capture != capture else capture
+        self._capture_since_t_s = None if since != since else since
+        self._last_t_s = None if last != last else last
 
     # ----------------------------------------------------------- ground commands
     #: The commands this logic takes (:mod:`acds_common.commands`); a variant adds its own.
