@@ -11,6 +11,10 @@ from __future__ import annotations
 HEAO_MODES = ('standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point')
 #: The HEAO cruise modes (after acquisition capture).
 HEAO_CRUISE_MODES = ('celestial_scan', 'celestial_point')
+#: A HEAO mode as a compiled kernel reads it (:mod:`acds_common.kernels`: no strings inside): its index in HEAO_MODES.
+HEAO_MODE_INDEX = {mode: i for i, mode in enumerate(HEAO_MODES)}
+STANDBY, MODE_1A, MODE_1B, CELESTIAL_SCAN, CELESTIAL_POINT = (HEAO_MODE_INDEX[m] for m in (
+    'standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point'))
 #: Modes in which the cold-gas thrusters fly the spacecraft (seed 002 §3.1: sun acquisition and reacquisition on
 #: gas): rate damping on the gyros, then sun acquisition on the sun sensor and gyros. The heao_cold_gas mode logic
 #: sequences them and hands over to the wheels (Mode 1B); the controller's gas law runs in them.

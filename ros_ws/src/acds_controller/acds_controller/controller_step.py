@@ -38,7 +38,7 @@ from acds_common.commands import GainCommand, LawCommand, decode
 from acds_common.fused import FusedStage, Output
 from acds_common.messages import WARN, diagnostic, xyz
 from acds_common.mode_report import ModeStatusReader
-from acds_common.modes import HEAO_MODES
+from acds_common.modes import HEAO_MODE_INDEX, HEAO_MODES
 from acds_common.stepper import Stepper
 from acds_common.validation import all_finite
 
@@ -53,7 +53,6 @@ ZERO = (0.0, 0.0, 0.0)
 MID_SCALE_V = (2.5, 2.5, 2.5)
 #: :func:`dpa_control`'s status for a non-finite input (the DPA's own statuses: :data:`acds_controller.dpa.DONE`…).
 NOT_FINITE = -1
-_MODE_INDEX = {mode: i for i, mode in enumerate(HEAO_MODES)}
 
 
 #: The commands the DPA applies (forwarded in the ``mode`` report, key ``command/acds_controller``).
@@ -111,7 +110,7 @@ class DpaStep(Stepper):
         mode, commands = self._mode_status(inp['mode'])
         if commands:
             self.apply_commands(k, commands, warnings)
-        if mode not in _MODE_INDEX:  # before the mode manager speaks, or a mode the DPA does not know
+        if mode not in HEAO_MODE_INDEX:  # before the mode manager speaks, or a mode the DPA does not know
             mode = resolve_mode(mode, 'mode_1a', HEAO_MODES, warnings, 'unknown mode {!r} from the mode manager')
         try:
             result = self._dpa_step(k, mode, inp)
@@ -157,7 +156,7 @@ class DpaStep(Stepper):
         coil = ZERO if coil is None else coil
         q = None if odometry is None else odometry.orientation
         dpa = self.dpa
-        status, state, figures = self._control(self.ta.params, dpa.params, dpa.state, _MODE_INDEX[mode], volts, bias,
+        status, state, figures = self._control(self.ta.params, dpa.params, dpa.state, HEAO_MODE_INDEX[mode], volts, bias,
                                                omega, sun, wheel_h, wheel_hdot, NO_Q if q is None else q,
                                                q is not None, coil, self._dt)
         if status != DONE:

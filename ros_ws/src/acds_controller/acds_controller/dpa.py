@@ -40,7 +40,7 @@ import numpy as np
 from acds_common import kernels
 from acds_common.attitude import Quat, conj, to_body
 from acds_common.dpa_commands import AXES, GAIN_TABLE, LAW_CHOICES, SCALAR_GAINS
-from acds_common.modes import HEAO_CRUISE_MODES, HEAO_MODES
+from acds_common.modes import CELESTIAL_POINT, HEAO_CRUISE_MODES, HEAO_MODES, MODE_1A, MODE_1B, STANDBY
 from acds_common.units import FT_LB_NM, deg, nms_to_ftlbs, rad_s_to_rpm, rpm_to_rad_s, tesla_to_gauss
 from acds_common.vec3 import ZERO, Vec3, clip, mat3, mv, norm
 
@@ -194,9 +194,6 @@ class DpaOutput:
         return dpa_telemetry(*self._telemetry_args)
 
 
-#: A mode as the kernel reads it: its index in HEAO_MODES.
-STANDBY, MODE_1A, MODE_1B, CELESTIAL_SCAN, CELESTIAL_POINT = (HEAO_MODES.index(m) for m in (
-    'standby', 'mode_1a', 'mode_1b', 'celestial_scan', 'celestial_point'))
 #: A law as the kernel reads it: its index in LAW_CHOICES[slot].
 BXH, BDOT, B_CROSS_OMEGA = (LAW_CHOICES['acquisition'].index(law) for law in ('bxh', 'bdot', 'b_cross_omega'))
 UNLOAD_BXH, LEAD, NO_UNLOADING, B_CROSS_H = (LAW_CHOICES['unloading'].index(law)

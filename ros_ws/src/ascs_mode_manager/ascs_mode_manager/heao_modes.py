@@ -31,6 +31,12 @@ once the commands already queued are applied):
 A command accepted at sim time t is queued and applied at the start of the next
 :meth:`HeaoModeManager.step` (the next step boundary); routed commands are returned at once
 and the node layer forwards them so that their owner applies them at its next step.
+
+The on-board transfers are one kernel (:mod:`acds_common.kernels`), :func:`heao_logic`, on the core's state as
+a tuple (:meth:`HeaoModeManager.kernel_state`: the mode as its index in ``HEAO_MODES``, times NaN for None):
+:meth:`HeaoModeManager.advance` runs it (after the queued commands) and formats the transitions' causes; the
+direct engine's compiled step runs :func:`heao_advance`, which says whether the step is quiet (no transition, the
+same status), and on any other step the Python core runs it again (:mod:`ascs_mode_manager.heao_part`).
 """
 
 from __future__ import annotations
@@ -39,6 +45,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
+from acds_common import kernels
 from acds_common.commands import (
     AXES,
     Command,
@@ -49,9 +56,10 @@ from acds_common.commands import (
     ModeCommand,
     decode,
 )
-from acds_common.modes import HEAO_CRUISE_MODES, HEAO_MODES
+from acds_common.modes import CELESTIAL_POINT, CELESTIAL_SCAN, HEAO_CRUISE_MODES, HEAO_MODE_INDEX, HEAO_MODES, MODE_1A, MODE_1B
 from acds_common.units import deg, rad
 from acds_common.validation import finite_xyz
+from acds_common.vec3 import ZERO
 
 from ascs_mode_manager.ground_commands import CommandResult, refuse
 from ascs_mode_manager.spin_mechanizations import AscsError  # the package's one exception type
@@ -128,6 +136,120 @@ class Transition:
     kind: str = 'mode'
 
 
+#: :func:`heao_logic`'s configuration (:meth:`HeaoModeManager.kernel_params`) and state
+#: (:meth:`HeaoModeManager.kernel_state`).
+HeaoKernelParams = tuple[float, float, float, float, float, float, bool, int]
+HeaoKernelState = tuple[int, bool, float, float, float, float, int]
+#: The mode index of a mode the HEAO logic does not sequence (a variant's, e.g. the cold-gas modes): the kernel leaves
+#: it alone (no Mode 1A transfer, no capture check) and only stamps the step's time.
+OTHER_MODE = -1
+#: :func:`heao_logic`'s events, bits: Mode 1A → 1B on the rates and the sun (a transition); a run started in Mode 1B
+#: stamps its entry time (a status change, no transition); acquisition capture (a ``kind='capture'`` transition);
+#: the automatic transfer to cruise at capture (a transition).
+ENTERED_1B, ENTRY_STAMPED, CAPTURED, AUTO_CRUISE = 1, 2, 4, 8
+
+
+@kernels.helper
+def sun_norm(sun: Sequence[float]) -> float:
+    """|sun| of the sun sensor's vector (0 when the sun is absent)."""
+    return math.sqrt(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2])
+
+
+@kernels.helper
+def sun_angle(sun: Sequence[float], norm: float) -> float:
+    """Angle between body z and the sun line (rad) from the sun vector and its ``norm``; π when the sun is absent
+    (``norm`` not > 0)."""
+    if not norm > 0.0:
+        return math.pi
+    return math.acos(max(-1.0, min(1.0, sun[2] / norm)))
+
+
+@kernels.helper
+def rates_within(omega: Sequence[float], x: float, y: float, z: float) -> bool:
+    """|ω_x| ≤ x, |ω_y| ≤ y and |ω_z| ≤ z."""
+    return abs(omega[0]) <= x and abs(omega[1]) <= y and abs(omega[2]) <= z
+
+
+@kernels.helper
+def heao_enter(state: HeaoKernelState, t: float, to: int) -> HeaoKernelState:
+    """The state after entering mode index ``to`` at ``t`` (:data:`OTHER_MODE`: a variant's mode): capture is
+    latched in Mode 1B and kept in cruise only (the captured flag and the capture condition's start are cleared
+    entering any other mode); entering Mode 1B stamps its entry time."""
+    _mode, captured, entry, capture, since, last, pending = state
+    if to != CELESTIAL_SCAN and to != CELESTIAL_POINT:
+        captured = False
+        since = math.nan
+    if to == MODE_1B:
+        entry = t
+    return to, captured, entry, capture, since, last, pending
+
+
+@kernels.helper
+def heao_logic(params: HeaoKernelParams, state: HeaoKernelState, t: float, omega: Sequence[float],
+               sun: Sequence[float]) -> tuple[int, HeaoKernelState]:
+    """The on-board transfers of one step at ``t`` (s) with gyro rates ``omega`` (rad/s, body) and the sun sensor's
+    ``sun`` (the zero vector when absent), on a state with no command queued (seed 002 Figure 4-3, §4.3.1):
+
+    * Mode 1A → 1B when the sun is present and |ω_i| ≤ threshold_i on all three axes (baseline 0.573, 0.115,
+      0.115 deg/s);
+    * in Mode 1B (entered now or before; a run started in it stamps its entry time) and not yet captured, the
+      capture check: z within the capture cone (10°) of the sun line and every |ω_i| ≤ the capture rate
+      (0.01 deg/s, "rates nulled"), held for the dwell; at capture with ``auto_cruise`` the transfer to the cruise
+      target.
+
+    Returns the events (:data:`ENTERED_1B` … bits, 0 when the step only stamped its time and the capture
+    condition's start) and the state. A kernel helper (:mod:`acds_common.kernels`), the logic of
+    :meth:`HeaoModeManager.advance` and of the compiled :func:`heao_advance`.
+    """
+    thr_x, thr_y, thr_z, cone, rate, dwell, auto_cruise, cruise = params
+    mode, captured, entry, capture, since, _last, pending = state
+    state = (mode, captured, entry, capture, since, t, pending)
+    events = 0
+    norm = sun_norm(sun)
+    if mode == MODE_1A and norm > 0.0 and rates_within(omega, thr_x, thr_y, thr_z):
+        state = heao_enter(state, t, MODE_1B)
+        events |= ENTERED_1B
+    mode, captured, entry, capture, since, last, pending = state
+    if mode != MODE_1B:
+        return events, state
+    if math.isnan(entry):
+        entry = t
+        events |= ENTRY_STAMPED
+    if not captured:
+        if sun_angle(sun, norm) > cone or not rates_within(omega, rate, rate, rate):
+            since = math.nan
+        else:
+            if math.isnan(since):
+                since = t
+            if not t - since < dwell:
+                captured = True
+                capture = t
+                events |= CAPTURED
+    state = (mode, captured, entry, capture, since, last, pending)
+    if events & CAPTURED and auto_cruise:
+        state = heao_enter(state, t, cruise)
+        events |= AUTO_CRUISE
+    return events, state
+
+
+def heao_advance(params: HeaoKernelParams, state: HeaoKernelState, t: float, omega: Sequence[float],
+                 sun: Sequence[float]) -> tuple[bool, HeaoKernelState]:
+    """One step of the HEAO mode logic (spec §8; seed 002 Figure 4-3, §4.3.1: Mode 1A → 1B, capture in Mode 1B,
+    cruise) for a compiled caller (:mod:`acds_common.kernels`, :func:`heao_logic`): ``(quiet, state)``.
+
+    ``quiet`` means :meth:`HeaoModeManager.advance` ``(t, omega, sun, True)`` from ``state`` returns no transition
+    and leaves :meth:`HeaoModeManager.status_state`, the mode and the captured flag as they were, and the returned
+    state, taken by :meth:`HeaoModeManager.set_kernel_state`, is then exactly the core advance leaves (only the
+    step time and the capture condition's start change). Not quiet, the state is to be thrown away and the step run
+    in Python: a ground command waits (applied at this step: a transition and a status change), a non-finite
+    input or time (the stepper holds the logic and warns), a transfer, a capture or the Mode 1B entry stamp.
+    """
+    if state[6] != 0 or not math.isfinite(t + omega[0] + omega[1] + omega[2] + sun[0] + sun[1] + sun[2]):
+        return False, state
+    events, new = heao_logic(params, state, t, omega, sun)
+    return events == 0, new
+
+
 class HeaoModeManager:
     """On-board HEAO mode logic with ground command handling (spec §8; seed 002 Figure 4-3, §4.3.1)."""
 
@@ -141,6 +263,7 @@ class HeaoModeManager:
         self._capture_since_t_s: float | None = None
         self._last_t_s: float | None = None
         self._pending: list[tuple[str, float, str]] = []
+        self._kernel_params = self.kernel_params()
 
     # ----------------------------------------------------------------- stepping
     def step(
@@ -168,63 +291,82 @@ class HeaoModeManager:
     def advance(self, t: float, omega: tuple[float, float, float], sun: tuple[float, float, float],
                 sun_present: bool) -> list[Transition]:
         """:meth:`step` without its checks (the stepper's per-step path): ``t`` a finite float not before the last
-        step's, ``omega`` and ``sun`` finite float triples."""
-        self._last_t_s = t
-        sun_norm = math.sqrt(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2])
-        present = sun_present and sun_norm > 0.0
+        step's, ``omega`` and ``sun`` finite float triples.
 
+        The queued ground commands are applied here (:meth:`_enter`), the on-board logic is the kernel
+        :func:`heao_logic` on :meth:`kernel_state` (the one definition the compiled step runs too); its events
+        become the transitions, their causes formatted from the inputs."""
         out: list[Transition] = []
         if self._pending:
             for to_mode, t_accepted, text in self._pending:
                 out.append(self._enter(t, to_mode, f"ground command '{text}' accepted at t={t_accepted:.3f} s"))
             self._pending.clear()
-
-        mode = self.mode
-        if mode == 'mode_1a':
-            thr = self.config.rate_thresholds_rad_s
-            if present and abs(omega[0]) <= thr[0] and abs(omega[1]) <= thr[1] and abs(omega[2]) <= thr[2]:
-                rates = ', '.join(f'|ω{a}|={deg(abs(omega[i])):.4f}≤{deg(thr[i]):.4f}'
-                                  for i, a in enumerate(AXES))
-                out.append(self._enter(t, 'mode_1b', f'rates below thresholds ({rates} deg/s) and sun present'))
-                mode = self.mode
-        if mode == 'mode_1b':
-            if self.mode_1b_entry_t_s is None:
-                self.mode_1b_entry_t_s = t  # started in Mode 1B (wheels on from separation)
-            if not self.captured:
-                out.extend(self._check_capture(t, omega, sun[2] / sun_norm if present else None))
+        if not sun_present:
+            sun = ZERO  # the kernel reads the zero vector as the sun absent
+        events, state = heao_logic(self._kernel_params, self.kernel_state(), t, omega, sun)
+        self.set_kernel_state(state)
+        if events:
+            out.extend(self._transitions(events, t, omega, sun))
         return out
 
-    def _check_capture(self, t: float, omega: tuple[float, float, float], sun_z: float | None) -> list[Transition]:
-        """Capture check; ``sun_z`` is the z component of the sun unit vector (None: sun absent)."""
+    def _transitions(self, events: int, t: float, omega: tuple[float, float, float],
+                     sun: tuple[float, float, float]) -> list[Transition]:
+        """The transitions of :func:`heao_logic`'s ``events`` at ``t``, with their causes (from the step's inputs)."""
         cfg = self.config
-        angle = math.pi if sun_z is None else math.acos(max(-1.0, min(1.0, sun_z)))
-        rate = cfg.capture_rate_rad_s
-        if angle > cfg.capture_cone_rad or not (abs(omega[0]) <= rate and abs(omega[1]) <= rate
-                                                and abs(omega[2]) <= rate):
-            self._capture_since_t_s = None
-            return []
-        if self._capture_since_t_s is None:
-            self._capture_since_t_s = t
-        if t - self._capture_since_t_s < cfg.capture_dwell_s:
-            return []
-        self.captured = True
-        self.capture_t_s = t
-        out = [Transition(t, 'mode_1b', 'mode_1b',
-                          f'acquisition capture: z {deg(angle):.2f}° from the sun line, rates nulled '
-                          f'(max |ω| {deg(max(abs(w) for w in omega)):.4f} deg/s)', kind='capture')]
-        if cfg.auto_cruise:
-            out.append(self._enter(t, cfg.cruise_target, 'automatic transfer to cruise at acquisition capture'))
+        out: list[Transition] = []
+        if events & ENTERED_1B:
+            thr = cfg.rate_thresholds_rad_s
+            rates = ', '.join(f'|ω{a}|={deg(abs(omega[i])):.4f}≤{deg(thr[i]):.4f}' for i, a in enumerate(AXES))
+            out.append(Transition(t, 'mode_1a', 'mode_1b', f'rates below thresholds ({rates} deg/s) and sun present'))
+        if events & CAPTURED:
+            angle = sun_angle(sun, sun_norm(sun))
+            out.append(Transition(t, 'mode_1b', 'mode_1b',
+                                  f'acquisition capture: z {deg(angle):.2f}° from the sun line, rates nulled '
+                                  f'(max |ω| {deg(max(abs(w) for w in omega)):.4f} deg/s)', kind='capture'))
+        if events & AUTO_CRUISE:
+            out.append(Transition(t, 'mode_1b', cfg.cruise_target, 'automatic transfer to cruise at acquisition capture'))
         return out
 
     def _enter(self, t: float, to_mode: str, cause: str) -> Transition:
+        """Enter ``to_mode`` at ``t`` (:func:`heao_enter`; a variant's mode is entered by name) and say so."""
         from_mode = self.mode
+        self.set_kernel_state(heao_enter(self.kernel_state(), t, HEAO_MODE_INDEX.get(to_mode, OTHER_MODE)))
         self.mode = to_mode
-        if to_mode not in HEAO_CRUISE_MODES:  # capture is latched in Mode 1B and kept in cruise only
-            self.captured = False
-            self._capture_since_t_s = None
-        if to_mode == 'mode_1b':
-            self.mode_1b_entry_t_s = t
         return Transition(t, from_mode, to_mode, cause)
+
+    # ----------------------------------------------------------------- kernel
+    def kernel_params(self) -> HeaoKernelParams:
+        """The configuration as :func:`heao_logic` reads it: (rate thresholds x, y, z (rad/s), capture cone (rad),
+        capture rate (rad/s), capture dwell (s), auto cruise, cruise target's mode index)."""
+        cfg = self.config
+        thr = cfg.rate_thresholds_rad_s
+        return (float(thr[0]), float(thr[1]), float(thr[2]), float(cfg.capture_cone_rad), float(cfg.capture_rate_rad_s),
+                float(cfg.capture_dwell_s), bool(cfg.auto_cruise), HEAO_MODE_INDEX[cfg.cruise_target])
+
+    def kernel_state(self) -> HeaoKernelState:
+        """Everything :meth:`advance` reads and writes, as :func:`heao_logic` reads it: (mode index, or
+        :data:`OTHER_MODE` for a variant's mode; captured; Mode 1B entry, capture, capture-condition-since and last
+        step times (s, NaN for None: every time the logic stores is a finite step time); queued commands)."""
+        entry, capture, since, last = self.mode_1b_entry_t_s, self.capture_t_s, self._capture_since_t_s, self._last_t_s
+        nan = math.nan  # written out: the per-step path
+        return (HEAO_MODE_INDEX.get(self.mode, OTHER_MODE), self.captured, nan if entry is None else entry,
+                nan if capture is None else capture, nan if since is None else since, nan if last is None else last,
+                len(self._pending))
+
+    def set_kernel_state(self, state: HeaoKernelState) -> None:
+        """Take a state of :func:`heao_logic` / :func:`heao_advance` (a :meth:`kernel_state` stepped by the kernel):
+        the mode by name (an :data:`OTHER_MODE` leaves the variant's mode as it is: the kernel never enters one or
+        leaves one), the captured flag and the times (NaN → None). The queued commands are Python's (the kernel
+        never applies them: :func:`heao_advance` is not quiet while any wait), so their count is not taken."""
+        mode, captured, entry, capture, since, last, _pending = state
+        if mode != OTHER_MODE:
+            self.mode = HEAO_MODES[mode]
+        self.captured = captured
+        # x != x: x is NaN (written out: the per-step path)
+        self.mode_1b_entry_t_s = None if entry != entry else entry
+        self.capture_t_s = None if capture != capture else capture
+        self._capture_since_t_s = None if since != since else since
+        self._last_t_s = None if last != last else last
 
     # ----------------------------------------------------------- ground commands
     #: The commands this logic takes (:mod:`acds_common.commands`); a variant adds its own.

@@ -21,6 +21,23 @@ Stage ``heao`` of step k (inputs: gyro and sun sensor of step k from rigid_body)
 A live command received while step k is being computed is applied at step k+1 (the host
 is single-threaded). Only the scheduled commands are tied to a sim time: they are the
 deterministic way to command a run.
+
+Compiled steps. The on-board logic is the kernel :func:`~ascs_mode_manager.heao_modes.heao_advance`; a
+compiled caller stepping this part runs a step in the kernel only when the step would be *quiet* (outputs
+``{'mode': <the last step's encoded report, the same object>}`` and nothing else, logs nothing), and
+otherwise runs :meth:`HeaoPart.step` from the states at the start of the step. A step at t is NOT quiet when:
+
+* a ground command is due: ``host.commands.next_s <= t + DUE_SLACK_S`` (a scheduled one whose time has come,
+  or a live one received: ``next_s`` is then −inf); it is answered (``ack``), maybe forwarded or applied;
+* the kernel says so: a transfer, a capture (and with ``modes.stop_at_capture`` the run's end), the Mode 1B
+  entry stamp, a queued command, or a non-finite input (held here with a WARN diagnostic);
+* the last step's report carried a cause or forwarded commands (this step's report, without them, differs),
+  or there was no last step;
+* the core is a variant's (the cold-gas logic adds its gas phases to the HEAO ``advance``).
+
+:meth:`HeaoPart.fused_inputs` gives the caller what it needs (None when no step can be quiet now) and
+:meth:`HeaoPart.fused_quiet` takes back the state after quiet steps and gives a quiet step's output. An absent gyro
+or sun sensor is the zero vector, as :meth:`HeaoPart.step` reads it.
 """
 
 from __future__ import annotations
@@ -36,7 +53,7 @@ from acds_common.modes import HEAO_CRUISE_MODES
 from acds_common.validation import all_finite, scenario_key
 
 from ascs_mode_manager.ground_commands import DUE_SLACK_S
-from ascs_mode_manager.heao_modes import HeaoModeConfig, HeaoModeManager, Transition
+from ascs_mode_manager.heao_modes import HeaoKernelParams, HeaoKernelState, HeaoModeConfig, HeaoModeManager, Transition
 from ascs_mode_manager.spin_mechanizations import AscsError
 
 #: An absent gyro or sun sensor input: the zero vector (the sun then reads as absent).
@@ -137,3 +154,19 @@ class HeaoPart:
         if diagnostics:
             out['diagnostics'] = tuple(diagnostics)
         return out
+
+    def fused_inputs(self) -> tuple[HeaoKernelParams, HeaoKernelState, float] | None:
+        """For a compiled caller (module docstring, "Compiled steps"): the core's kernel parameters and state and
+        the time the next ground command is due (``host.commands.next_s``: a step at t with ``next_s <= t +
+        DUE_SLACK_S`` is not quiet); None when no step can be quiet now (a variant's core, or the last step's report
+        has a cause or forwarded commands, or there was none)."""
+        report = self._report
+        if type(self.core).advance is not HeaoModeManager.advance or not report or report[1] or report[5]:
+            return None
+        return self.core.kernel_params(), self.core.kernel_state(), self.host.commands.next_s
+
+    def fused_quiet(self, state: HeaoKernelState) -> dict[str, Any]:
+        """After quiet steps of :func:`~ascs_mode_manager.heao_modes.heao_advance` from :meth:`fused_inputs`: the
+        core takes the last one's ``state``; returns a quiet step's output (the last report, the same object)."""
+        self.core.set_kernel_state(state)
+        return {'mode': self._mode_value}
