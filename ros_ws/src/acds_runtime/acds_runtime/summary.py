@@ -6,7 +6,9 @@ modules read (a module summarises single-vehicle runs, or formations when it set
 ``FORMATIONS = True``), joins them by step and hands complete steps, in step order, to each summary module the
 installed packages declare (entry-point group ``acds.summaries``, :mod:`acds_common.plugins`:
 ``Accumulator(scenario)`` with ``step(k, values)``, ``event(topic,
-value)`` and ``contribute(summary)``). It keeps only what the summaries keep (running peaks,
+value)``, ``contribute(summary)`` and optionally ``step_block(k0, columns)``). The direct engine's
+compiled blocks of steps come as rows of float64 per topic (:meth:`RunObserver.feed_block`), the same
+summary and digest as their steps fed one by one. It keeps only what the summaries keep (running peaks,
 change points), never the messages, so its memory does not grow with the run's length.
 ``print_tables`` lets each module print its tables.
 
@@ -230,8 +232,8 @@ class RunObserver:
         #: topic a summary reads whose type has fixed layout (not the mode, a DiagnosticArray).
         self.block_topics = {t: c.layout for t, c in {**self.codecs, **self._truth_codecs}.items()
                              if c.layout is not None and (t in self._digests or t in self.per_step)}
-        self._block_parts = [part for part in self.parts if hasattr(part, 'step_block')]
-        self._row_parts = [part for part in self.parts if not hasattr(part, 'step_block')]
+        self._block_parts = [part for part in self.parts if hasattr(part, plugins.STEP_BLOCK_ATTRIBUTE)]
+        self._row_parts = [part for part in self.parts if not hasattr(part, plugins.STEP_BLOCK_ATTRIBUTE)]
 
     # ---- feeding ------------------------------------------------------------------------------------
     def feed_raw(self, topic: str, data: bytes) -> None:
