@@ -5,9 +5,10 @@ entry-point groups, each group one protocol; the runtime and the CLI read "the i
 plots and verbs" and name no mission:
 
 * ``acds.summaries``: a run-summary section (:mod:`acds_runtime.summary`): ``applies(scenario)``,
-  ``Accumulator(scenario)``, ``null_keys(summary)``, ``print_tables(summary)`` (the report lines) and
-  :data:`KEYS_ATTRIBUTE`, the summary keys it contributes, and optionally :data:`STUDY_ROW_ATTRIBUTE`, the dispersion
-  study's columns of a sample;
+  ``Accumulator(scenario)`` (``topics``, ``step(k, values)``, ``contribute(summary)``, optionally ``event_topics``
+  with ``event(topic, value)``, and optionally :data:`STEP_BLOCK_ATTRIBUTE`), ``null_keys(summary)``,
+  ``print_tables(summary)`` (the report lines) and :data:`KEYS_ATTRIBUTE`, the summary keys it contributes, and
+  optionally :data:`STUDY_ROW_ATTRIBUTE`, the dispersion study's columns of a sample;
 * ``acds.plots``: figures of ``acds plot`` (:mod:`acds_cli.bag.mission_plots`): ``applies(ctx)``, ``vectors(ctx)``,
   ``plot(kit)``;
 * ``acds.verbs``: verbs of ``acds`` (:mod:`acds_cli.verbs`): ``register(subparsers)``.
@@ -37,6 +38,12 @@ KEYS_ATTRIBUTE = 'SUMMARY_KEYS'
 #: The optional function of a summary module giving a dispersion study's row columns from one sample's summary
 #: (:func:`acds_runtime.dispersion_report.make_row`): ``study_row(summary) -> dict``.
 STUDY_ROW_ATTRIBUTE = 'study_row'
+#: The optional method of a summary module's ``Accumulator`` taking a block of steps at once
+#: (:meth:`acds_runtime.summary.RunObserver.feed_block`): ``step_block(k0, columns)``, ``columns`` per topic it reads
+#: the float64 rows of steps k0, k0 + 1, … (:class:`acds_common.cdr.RowLayout`; a topic without fixed layout, like the
+#: mode, absent: no step of a block changes it). It must leave the accumulator as ``step(k, values)`` row by row would
+#: (:mod:`acds_common.step_blocks`); without it the observer hands each step's values unflattened to ``step``.
+STEP_BLOCK_ATTRIBUTE = 'step_block'
 
 
 class PluginConflict(ValueError):

@@ -6,7 +6,9 @@ modules read (a module summarises single-vehicle runs, or formations when it set
 ``FORMATIONS = True``), joins them by step and hands complete steps, in step order, to each summary module the
 installed packages declare (entry-point group ``acds.summaries``, :mod:`acds_common.plugins`:
 ``Accumulator(scenario)`` with ``step(k, values)``, ``event(topic,
-value)`` and ``contribute(summary)``). It keeps only what the summaries keep (running peaks,
+value)``, ``contribute(summary)`` and optionally ``step_block(k0, columns)``). The direct engine's
+compiled blocks of steps come as rows of float64 per topic (:meth:`RunObserver.feed_block`), the same
+summary and digest as their steps fed one by one. It keeps only what the summaries keep (running peaks,
 change points), never the messages, so its memory does not grow with the run's length.
 ``print_tables`` lets each module print its tables.
 
@@ -31,12 +33,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from acds_common import plugins, topics
 from acds_common.attitude import dcm
 from acds_common.cdr import Codec
 from acds_common.environment import orbit_from_section
 from acds_common.graph import Graph
 from acds_common.inertia import inertia_tensor
+from acds_common.step_blocks import first, nonzero, norms, running_max, running_min
 from acds_common.units import nms_to_ftlbs, tesla_to_gauss
 from acds_common.vec3 import dot, mat3, mv, norm
 from dynamics import integration_accuracy as accuracy
@@ -45,6 +49,8 @@ from dynamics import integration_accuracy as accuracy
 ODOMETRY, B_BODY, WHEEL_H, WHEEL_HDOT, TORQUE_MAG, TORQUE_GG = (topics.resolve(t) for t in (
     topics.TRUTH_ODOMETRY, topics.TRUTH_B_BODY, topics.WHEEL_MOMENTUM, topics.WHEEL_TORQUE, topics.TRUTH_TORQUE_MAG,
     topics.TRUTH_TORQUE_GG))
+#: The rows of the odometry (:class:`acds_common.cdr.RowLayout`): position 0:3, q 3:7, velocity 7:10, ω 10:13.
+_ODOMETRY_ROWS = Codec(topics.type_of(ODOMETRY)).layout
 
 
 #: The summary keys of the runtime itself (:meth:`RunObserver.summary`, :class:`DynamicsSummary`): no package's
@@ -97,12 +103,13 @@ class DynamicsSummary:
         self.max_omega = 0.0
         self._last: tuple[Any, Any] | None = None  # (odometry, wheel momentum) of the last step
 
-    def _h_e(self, odom: Any, wheel: Any) -> tuple[float, float]:
-        """|H| in ECI (body + wheels) and the rotational energy of one step's truth (floats, vec3)."""
-        omega = odom.angular
+    def _h_e(self, omega: Any, q: Any, wheel: Any, sqrt: Callable[[Any], Any] = math.sqrt) -> tuple[Any, Any]:
+        """|H| in ECI (body + wheels) and the rotational energy of one step's truth (floats, vec3), or of each
+        row of a block (each component a column, ``sqrt=np.sqrt``: the same operations, so the same bits)."""
         iw = mv(self._inertia, omega)
         h_body = iw if wheel is None else (iw[0] + wheel[0], iw[1] + wheel[1], iw[2] + wheel[2])
-        return norm(mv(dcm(odom.orientation), h_body)), 0.5 * dot(omega, iw)
+        h = mv(dcm(q), h_body)
+        return sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]), 0.5 * dot(omega, iw)
 
     def step(self, _k: int, values: dict[str, Any]) -> None:
         """One step's truth. The drifts are kept while the run is torque-free only (they are reported only
@@ -116,7 +123,7 @@ class DynamicsSummary:
             if omega > self.max_omega:  # max(max_omega, omega), without the call (every step)
                 self.max_omega = omega
             if self.h0 is None or self.torque_free:
-                h, e = self._h_e(*self._last)
+                h, e = self._h_e(odom.angular, odom.orientation, self._last[1])
                 if self.h0 is None:
                     self.h0, self.e0 = h, e
                 self.max_dh = max(self.max_dh, abs(h - self.h0))
@@ -129,10 +136,54 @@ class DynamicsSummary:
             if g > self.b_max:
                 self.b_max = g
 
+    def step_block(self, _k0: int, columns: dict[str, np.ndarray]) -> None:
+        """:meth:`step` of each row of a block (:meth:`RunObserver.feed_block`), at once and to the same bits
+        (:mod:`acds_common.step_blocks`): the run stops being torque-free at the first row with a torque; the
+        drifts take the rows before it (H₀ and E₀, which only the drifts of a torque-free run read, from the first
+        of them)."""
+        free = self._free_rows(columns)
+        odom = columns.get(ODOMETRY)
+        if odom is not None and len(odom):
+            wheel = columns.get(WHEEL_H)
+            self._last = (_ODOMETRY_ROWS.unflatten(odom[-1].tolist()),
+                          None if wheel is None else tuple(wheel[-1].tolist()))
+            self.max_omega = running_max(self.max_omega, norms(odom[:, 10:13]))
+            self._drift_rows(odom[:free], wheel)
+        b = columns.get(B_BODY)
+        if b is not None:
+            g = tesla_to_gauss(norms(b))
+            self.b_min, self.b_max = running_min(self.b_min, g), running_max(self.b_max, g)
+
+    def _free_rows(self, columns: dict[str, np.ndarray]) -> int:
+        """How many rows of the block come while the run is still torque-free (0 once it is not); clears
+        :attr:`torque_free` at the first row with a torque (:meth:`step`'s ``any(v)`` of a vector)."""
+        if not self.torque_free:
+            return 0
+        rows = [nonzero(columns[t]) for t in self.topics[3:] if t in columns]
+        n = max((len(rows) for rows in columns.values()), default=0)
+        at = first(np.logical_or.reduce(rows)) if rows else None
+        if at is None:
+            return n
+        self.torque_free = False
+        return at
+
+    def _drift_rows(self, odom: np.ndarray, wheel: np.ndarray | None) -> None:
+        """The drifts of |H| and E over the rows ``odom`` (and ``wheel``) of a block, as :meth:`step` gives them
+        row by row (the first row of the run sets H₀ and E₀)."""
+        if not len(odom):
+            return
+        h, e = self._h_e(tuple(odom[:, 10:13].T), tuple(odom[:, 3:7].T),
+                         None if wheel is None else tuple(wheel[:len(odom)].T), np.sqrt)
+        if self.h0 is None:
+            self.h0, self.e0 = float(h[0]), float(e[0])
+        self.max_dh = running_max(self.max_dh, np.abs(h - self.h0))
+        self.max_de = running_max(self.max_de, np.abs(e - self.e0))
+
     def contribute(self, summary: dict[str, Any]) -> None:
         """Add the dynamics keys."""
         if self._last is not None:
-            self.final_rates, self.final_h = self._last[0].angular, self._h_e(*self._last)[0]
+            odom, wheel = self._last
+            self.final_rates, self.final_h = odom.angular, self._h_e(odom.angular, odom.orientation, wheel)[0]
         theta = (self.max_omega + 2.0 * self._orbit_rate) * self._substep_s
         summary.update({
             'step_angle_max_rad': theta,
@@ -174,6 +225,15 @@ class RunObserver:
         self.per_step_count = len(self.per_step)
         self._event_parts = [part for part in self.parts if hasattr(part, 'event')]
         self.truth_messages = 0
+        #: The codecs the truth topics are published with (their frame ids): what :meth:`feed_block` encodes.
+        self._truth_codecs = {spec.topic(out.topic): Codec(out.msg_type, out.frame_id, out.child_frame_id)
+                              for spec, out in graph.outputs() if spec.topic(out.topic) in self._digests}
+        #: Per topic a block of steps carries (:meth:`feed_block`), its rows: every truth topic and every per-step
+        #: topic a summary reads whose type has fixed layout (not the mode, a DiagnosticArray).
+        self.block_topics = {t: c.layout for t, c in {**self.codecs, **self._truth_codecs}.items()
+                             if c.layout is not None and (t in self._digests or t in self.per_step)}
+        self._block_parts = [part for part in self.parts if hasattr(part, plugins.STEP_BLOCK_ATTRIBUTE)]
+        self._row_parts = [part for part in self.parts if not hasattr(part, plugins.STEP_BLOCK_ATTRIBUTE)]
 
     # ---- feeding ------------------------------------------------------------------------------------
     def feed_raw(self, topic: str, data: bytes) -> None:
@@ -262,6 +322,48 @@ class RunObserver:
         if final and pending:  # steps after a gap (never in a complete run): in order
             self._next = min(pending)
             self._drain(final=True)
+
+    def feed_block(self, k0: int, n: int, columns: dict[str, np.ndarray]) -> None:
+        """Steps k0 … k0 + n − 1 at once (the direct engine's compiled blocks): ``columns`` holds, per topic of
+        :attr:`block_topics`, its float64 rows (n × width of its :class:`acds_common.cdr.RowLayout`; row i is the
+        value stamped step k0 + i). Exactly as feeding the same steps' values one by one: the truth messages are
+        encoded at once (:meth:`acds_common.cdr.Codec.encode_block`, the same bytes, so the same digest) and each
+        summary module takes the block (``Accumulator.step_block``) or, without one, each step's values unflattened.
+
+        A per-step topic without fixed layout (the mode) is not in a block: its steps carry no value of it, which a
+        summary reads as "no change". The engine runs the steps that change the mode in Python and feeds them one
+        by one (:meth:`feed_value`, :attr:`pending`), so the steps before k0 are all fed and complete, and none of
+        the block's steps is pending (a ValueError otherwise: a step fed twice or out of order)."""
+        self._drain(final=False)
+        if self._next != k0 or any(k0 <= k < k0 + n for k in self.pending):
+            raise ValueError(f'a block of steps {k0}…{k0 + n - 1} fed after step {self._next - 1} with steps '
+                             f'{sorted(self.pending)[:5]} pending: steps must be fed once each, in order')
+        missing = [t for t in self._digests if t not in columns]
+        if missing:
+            raise ValueError(f'a block of steps {k0}…{k0 + n - 1} lacks the truth topic(s) {", ".join(missing)}')
+        self._hash_block(k0, n, columns)
+        with np.errstate(all='ignore'):  # a NaN or an infinity goes on silently, as in Python's float arithmetic
+            for part in self._block_parts:
+                part.step_block(k0, columns)
+        if self._row_parts:
+            self._step_rows(k0, n, columns)
+        self._next = k0 + n
+
+    def _hash_block(self, k0: int, n: int, columns: dict[str, np.ndarray]) -> None:
+        """The truth messages of a block into the digests, after the messages kept before it (:meth:`flush_truth`)."""
+        self.flush_truth()
+        t_ns = np.arange(k0, k0 + n, dtype=np.int64) * self.dt_ns
+        for topic, digest in self._digests.items():
+            digest.update(self._truth_codecs[topic].encode_block(t_ns, columns[topic]))
+        self.truth_messages += n * len(self._digests)
+
+    def _step_rows(self, k0: int, n: int, columns: dict[str, np.ndarray]) -> None:
+        """Each step of a block as its values (the rows unflattened) to the summary modules without ``step_block``."""
+        rows = {t: (self.block_topics[t].unflatten, columns[t].tolist()) for t in self.per_step if t in columns}
+        for i in range(n):
+            values = {t: unflatten(r[i]) for t, (unflatten, r) in rows.items()}
+            for part in self._row_parts:
+                part.step(k0 + i, values)
 
     # ---- result -------------------------------------------------------------------------------------
     def truth_digest(self) -> str:

@@ -22,6 +22,7 @@ import numpy as np
 from acds_common import topics
 from acds_common.mode_report import ModeValueReader, mode_state, transitions
 from acds_common.modes import GAS_MODES
+from acds_common.step_blocks import first, norms, running_max, running_max_3
 from acds_common.units import nms_to_ftlbs
 
 _MODE, _WHEEL_MOMENTUM, _WHEEL_TORQUE, _MOMENT_COMMAND = (
@@ -128,6 +129,31 @@ class Accumulator:
             pm = self.peak_m or (0.0, 0.0, 0.0)
             mx, my, mz = abs(m[0]), abs(m[1]), abs(m[2])
             self.peak_m = (mx if mx > pm[0] else pm[0], my if my > pm[1] else pm[1], mz if mz > pm[2] else pm[2])
+
+    def step_block(self, k0: int, columns: dict[str, np.ndarray]) -> None:
+        """:meth:`step` of each row of a block of steps (``RunObserver.feed_block``), at once and to the same bits
+        (:mod:`acds_common.step_blocks`). A block carries no ``mode`` value (no step of it changes the mode), so
+        the mode history is :meth:`step`'s."""
+        h = columns.get(_WHEEL_MOMENTUM)
+        if h is not None and len(h):
+            self.last_h = (k0 + len(h) - 1, tuple(h[-1].tolist()))
+            self._wheel_rows(k0, h)
+        hdot = columns.get(_WHEEL_TORQUE)
+        if hdot is not None and len(hdot):
+            self.last_hdot = (k0 + len(hdot) - 1, tuple(hdot[-1].tolist()))
+        m = columns.get(_MOMENT_COMMAND)
+        if m is not None and len(m):
+            self.peak_m = running_max_3(self.peak_m or (0.0, 0.0, 0.0), np.abs(m))
+
+    def _wheel_rows(self, k0: int, h: np.ndarray) -> None:
+        """:meth:`_wheel` of each row of a block's wheel momenta (rows of steps k0, k0 + 1, …)."""
+        habs = np.abs(h)
+        self.peak_h = running_max_3(self.peak_h, habs)
+        self.peak_rss = running_max(self.peak_rss, norms(h))
+        if self.saturation_s is None:
+            at = first(np.any(habs >= np.array(self._saturation_at), axis=1))
+            if at is not None:
+                self.saturation_s = (k0 + at) * self.dt_s
 
     def contribute(self, summary: dict[str, Any]) -> None:
         """Add the HEAO keys (Table 4-7 columns, peaks, transitions)."""
