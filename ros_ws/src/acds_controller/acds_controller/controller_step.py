@@ -126,10 +126,11 @@ class DpaStep(Stepper):
         wheels driven; None with telemetry wanted, or when the block's ``mode`` forwards commands or is not a mode
         the DPA knows."""
         mode, commands = self._mode_status(held.get('mode'))
-        if (stage != 'control' or self.telemetry_wanted or commands or mode not in _MODE_INDEX or not self.drives_wheels
+        if (stage != 'control' or self.telemetry_wanted or commands or mode not in HEAO_MODE_INDEX
+                or not self.drives_wheels
                 or not all(self.present(n) for n in ('magnetometer_sim', 'rigid_body', 'em_driver'))):
             return None
-        return FusedStage(control_fused, (self.ta.params, self.dpa.params, _MODE_INDEX[mode], self._dt),
+        return FusedStage(control_fused, (self.ta.params, self.dpa.params, HEAO_MODE_INDEX[mode], self._dt),
                           (self.dpa.state,), FUSED_INPUTS, (Output('moment', 3), Output('volts', 3)), self._restore)
 
     def _restore(self, s: tuple) -> None:

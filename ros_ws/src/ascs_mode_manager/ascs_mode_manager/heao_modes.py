@@ -232,6 +232,7 @@ def heao_logic(params: HeaoKernelParams, state: HeaoKernelState, t: float, omega
     return events, state
 
 
+@kernels.helper
 def heao_advance(params: HeaoKernelParams, state: HeaoKernelState, t: float, omega: Sequence[float],
                  sun: Sequence[float]) -> tuple[bool, HeaoKernelState]:
     """One step of the HEAO mode logic (spec §8; seed 002 Figure 4-3, §4.3.1: Mode 1A → 1B, capture in Mode 1B,

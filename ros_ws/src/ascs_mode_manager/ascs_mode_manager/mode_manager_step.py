@@ -14,13 +14,16 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
+from acds_common import kernels
 from acds_common.cdr import Status
+from acds_common.fused import FusedStage
 from acds_common.messages import MODE_STATUS, WARN, diagnostic
 from acds_common.stepper import Stepper
 
 from ascs_mode_manager.aap_part import AapPart
 from ascs_mode_manager.cold_gas_part import ColdGasPart
 from ascs_mode_manager.ground_commands import (
+    DUE_SLACK_S,
     MAX_PENDING,
     CommandResult,
     GroundCommandQueue,
@@ -29,8 +32,21 @@ from ascs_mode_manager.ground_commands import (
     parse,
     refuse,
 )
+from ascs_mode_manager.heao_modes import heao_advance
 from ascs_mode_manager.heao_part import HeaoPart
 from ascs_mode_manager.sss_part import SssPart
+
+
+@kernels.helper
+def heao_logic_fused(p: tuple, s: tuple, _k: int, t_s: float, gyro: Any, sun: Any) -> tuple:
+    """Stage ``mode_logic`` of the HEAO part as a kernel (:mod:`acds_common.fused`;
+    :mod:`ascs_mode_manager.heao_part`, "Compiled steps"): quiet when no ground command is due and
+    :func:`~ascs_mode_manager.heao_modes.heao_advance` is quiet. ``p``: (the core's kernel parameters, the time the
+    next ground command is due); ``s``: the core's kernel state."""
+    params, next_s = p
+    quiet, new = heao_advance(params, s, t_s, gyro[0], sun)
+    quiet = quiet and next_s > t_s + DUE_SLACK_S
+    return quiet, (new if quiet else s)
 
 
 class ModeManagerStep(Stepper):
@@ -73,6 +89,20 @@ class ModeManagerStep(Stepper):
         """Answer a ground command on ``ground/ack`` (refusals carry the reason) and log it."""
         self._acks.append(line)
         self.log('info' if accepted else 'warn', f'ground command {line}')
+
+    def fused(self, stage: str, _held: dict[str, Any]) -> FusedStage | None:
+        """Stage ``mode_logic`` as :func:`heao_logic_fused` (:mod:`acds_common.fused`) for the HEAO part (its
+        ``fused_inputs``), or None: another part, answers waiting, or no gyro and sun sensor in the graph."""
+        inputs = getattr(self.logic, 'fused_inputs', None)
+        if stage != 'mode_logic' or inputs is None or self._acks or not self.present('rigid_body'):
+            return None
+        parts = inputs()
+        if parts is None:
+            return None
+        params, state, next_s = parts
+        held = self.logic.fused_quiet(state)  # the state as it is; a quiet step's output
+        return FusedStage(heao_logic_fused, (params, float(next_s)), state, ('gyro', 'sun'), (),
+                          self.logic.fused_quiet, held)
 
     def mode_logic(self, k: int, t_s: float, inp: dict[str, Any]) -> dict[str, Any]:
         """Stage ``mode_logic``: one step of the mode logic, with the answers to the commands it took."""
