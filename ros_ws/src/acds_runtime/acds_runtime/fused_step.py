@@ -82,8 +82,10 @@ class FusedLoop:
         self.routes = routes
         self.dt_ns = dt_ns
         self.max_lag = max_lag
-        #: The run observer's steps waiting for values (step → {topic: value}), its drain and its truth-block sink.
-        self._pending, self._drain, self._truth_block = observer.pending, observer.drain, observer.truth_block
+        #: The run observer, its steps waiting for values (step → {topic: value}) and its drain.
+        self._observer, self._pending, self._drain = observer, observer.pending, observer.drain
+        #: Per block structure, where the observer's rows come from (:meth:`_block_plan`).
+        self._block_sources: dict[Any, dict[str, tuple[int, int]]] = {}
         self.stages: list[tuple[str, str]] = [(name, stage.name) for name, stage in graph.firing_order()]
         present = set(graph.nodes)
         self._reads: list[tuple[_Read, ...]] = []
@@ -229,38 +231,28 @@ class FusedLoop:
     # ---- after a block ------------------------------------------------------------------------------
     def _route(self, plan: _Plan, declared: list[FusedStage], buffers: list[np.ndarray], k0: int, n: int) -> None:
         """The n steps' outputs where the Python step program routes them (module docstring): the stores (the steps
-        a later step reads), the truth digest (a block of messages from the rows, when the topic's codec lays its
-        values out as the kernel's rows, else message by message), the summaries' per-step values."""
+        a later step reads), then the run observer: the steps stamped k0 + 1 … k0 + n − 1, which the block alone
+        gives, as one block of rows (:meth:`~acds_runtime.summary.RunObserver.feed_block`: truth messages encoded
+        from the rows, the summaries' block forms), and the values stamped k0 and k0 + n (the time owner's truth of
+        step k0 came from the step before, its last one goes to the step after) one by one, as the step program
+        feeds them. Without a block form (a topic the observer takes as rows that the loop does not give as the
+        observer lays it out) every value goes one by one."""
         keep_from = max(0, n - self.max_lag - 1)
-        pending = self._pending
+        columns = self._columns(plan, buffers, k0, n)
+        lo, hi = (k0 + 1, k0 + n) if columns is not None else (k0, k0)  # stamps the block feeds: [lo, hi)
+        edges: list[tuple[Route, int, Any]] = []  # (route, stamp, value) of the values fed one by one
         for key, buf in zip(plan.written, buffers, strict=True):
             p = plan.produced[key]
             route = p.route
             assert route is not None
             first = k0 + p.offset
             from_row = _from_row(p.output)
-            block = route.truth is not None and _same_rows(route.codec, p.output)
-            values = None
-            if route.per_step or (route.truth is not None and not block):
-                values = [from_row(row) for row in buf[:n].tolist()]
             if route.store is not None:
                 for i in range(keep_from, n):
-                    route.store[first + i] = values[i] if values is not None else from_row(buf[i].tolist())
-            if route.truth is not None:
-                if block:
-                    stamps = (np.arange(first, first + n, dtype=np.int64)) * self.dt_ns
-                    self._truth_block(route.topic, route.codec.encode_block(stamps, buf[:n]), n)
-                else:
-                    encode, sink, dt = route.codec.encode, route.truth, self.dt_ns
-                    for i, v in enumerate(values):
-                        sink(encode((first + i) * dt, v))
-            if route.per_step:
-                topic = route.topic
-                for i, v in enumerate(values):
-                    step = pending.get(first + i)
-                    if step is None:
-                        step = pending[first + i] = {}
-                    step[topic] = v
+                    route.store[first + i] = from_row(buf[i].tolist())
+            if route.per_step or route.truth is not None:
+                rows = [i for i in range(n) if not lo <= first + i < hi]
+                edges += [(route, first + i, from_row(row)) for i, row in zip(rows, buf[rows].tolist(), strict=True)]
         for name, fs in zip(plan.names, declared, strict=True):
             for key, obj in fs.held.items():
                 route = self.routes[name].get(key)
@@ -270,17 +262,55 @@ class FusedLoop:
                 if route.store is not None:
                     for i in range(keep_from, n):
                         route.store[first + i] = obj
-                if route.truth is not None:
-                    for i in range(n):
-                        route.truth(route.codec.encode((first + i) * self.dt_ns, obj))
-                if route.per_step:
-                    topic = route.topic
-                    for i in range(n):
-                        step = pending.get(first + i)
-                        if step is None:
-                            step = pending[first + i] = {}
-                        step[topic] = obj
+                edges += [(route, first + i, obj) for i in range(n) if not lo <= first + i < hi]
+        # The truth digest takes each topic's messages in stamp order: the values before the block, the block, after.
+        self._one_by_one([e for e in edges if e[1] < lo])
+        if columns is not None:
+            self._drain()
+            if self._observer.next_step != lo:
+                raise RuntimeError(f'the fused loop left step {self._observer.next_step} incomplete before its block')
+            self._observer.feed_block(lo, hi - lo, columns)
+            self._one_by_one([e for e in edges if e[1] >= hi])
         self._drain()
+
+    def _one_by_one(self, edges: list[tuple[Route, int, Any]]) -> None:
+        """Values (route, stamp, value) to the truth digest and the summaries' steps, as the step program feeds them."""
+        dt, pending = self.dt_ns, self._pending
+        for route, stamp, value in edges:
+            if route.truth is not None:
+                route.truth(route.codec.encode(stamp * dt, value))
+            if route.per_step:
+                step = pending.get(stamp)
+                if step is None:
+                    step = pending[stamp] = {}
+                step[route.topic] = value
+
+    def _columns(self, plan: _Plan, buffers: list[np.ndarray], k0: int, n: int) -> dict[str, np.ndarray] | None:
+        """The rows of the steps stamped k0 + 1 … k0 + n − 1 per topic the observer takes as rows, or None when the
+        block cannot be fed so (fewer than two steps, a topic missing, another layout or a stamp offset past 1)."""
+        if n < 2:
+            return None
+        sources = self._block_sources.get(plan.key())
+        if sources is None:
+            sources = self._block_sources[plan.key()] = self._block_plan(plan)
+        if not sources:
+            return None
+        return {topic: buffers[b][1 - offset:n - offset] for topic, (b, offset) in sources.items()}
+
+    def _block_plan(self, plan: _Plan) -> dict[str, tuple[int, int]]:
+        """Per topic the observer takes as rows, (buffer index, stamp offset) of the output giving it; empty when
+        one is not given so (module docstring)."""
+        written = {plan.produced[key].route.topic: b for b, key in enumerate(plan.written)}  # type: ignore[union-attr]
+        sources = {}
+        for topic, layout in self._observer.block_topics.items():
+            b = written.get(topic)
+            if b is None:
+                return {}
+            p = plan.produced[plan.written[b]]
+            if p.offset not in (0, 1) or not _same_rows(layout, p.output):
+                return {}
+            sources[topic] = (b, p.offset)
+        return sources
 
 
 def _from_row(out: Output) -> Callable[[list[float]], Any]:
@@ -304,16 +334,15 @@ def _from_row(out: Output) -> Callable[[list[float]], Any]:
 _FROM_ROW: dict[Output, Callable[[list[float]], Any]] = {}
 
 
-def _same_rows(codec: Any, out: Output) -> bool:
-    """Whether ``codec`` lays a value of ``out`` out as the kernel's row (:attr:`acds_common.cdr.Codec.layout`):
-    then the truth messages of a block are encoded from the rows at once."""
-    known = _SAME_ROWS.get((id(codec), out))
+def _same_rows(layout: Any, out: Output) -> bool:
+    """Whether the row ``layout`` of a topic (:class:`acds_common.cdr.RowLayout`) lays a value of ``out`` out as the
+    kernel's row does (:func:`~acds_common.fused.leaves`): then its rows are the observer's."""
+    known = _SAME_ROWS.get((id(layout), out))
     if known is None:
-        layout = getattr(codec, 'layout', None)
         n = width(out.shape)
         row = [float(i + 1) for i in range(n)]
-        known = layout is not None and layout.width == n and list(layout.flatten(_from_row(out)(row))) == row
-        _SAME_ROWS[(id(codec), out)] = known
+        known = layout.width == n and list(layout.flatten(_from_row(out)(row))) == row
+        _SAME_ROWS[(id(layout), out)] = known
     return known
 
 

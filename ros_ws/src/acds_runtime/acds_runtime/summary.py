@@ -255,17 +255,6 @@ class RunObserver:
             return None
         return self._truth_buffers.setdefault(topic, []).append
 
-    def truth_block(self, topic: str, data: bytes, count: int) -> None:
-        """For the direct engine's fused loop: ``count`` serialized messages of truth ``topic`` in one ``data``
-        (:meth:`acds_common.cdr.Codec.encode_block`), after the ones :meth:`truth_sink` kept (the same digest)."""
-        buffer = self._truth_buffers.get(topic)
-        if buffer:
-            self._digests[topic].update(b''.join(buffer))
-            self.truth_messages += len(buffer)
-            buffer.clear()
-        self._digests[topic].update(data)
-        self.truth_messages += count
-
     def flush_truth(self) -> None:
         """Hash and count the messages :meth:`truth_sink` kept (the engine calls it now and then: bounded memory)."""
         for topic, buffer in self._truth_buffers.items():
@@ -283,6 +272,11 @@ class RunObserver:
     def event_sink(self, topic: str) -> Callable[[str, Any], None] | None:
         """For the direct engine: what takes each value of event ``topic`` when a summary reads it, else None."""
         return self._feed_event if topic in self.events else None
+
+    @property
+    def next_step(self) -> int:
+        """The first step not handed to the summaries yet (every step before it is complete and fed)."""
+        return self._next
 
     def drain(self) -> None:
         """Hand the complete steps of :attr:`pending` to the summaries, in step order."""
