@@ -13,8 +13,10 @@ SCENARIO = 'heao_b_acquisition_short'
 
 
 def _run_with(stage: str, wrap) -> str:
-    """Run 10 steps with ``node.stage`` replaced by ``wrap(original)``; the LaunchError's text."""
-    run = DirectRun(load_scenario(SCENARIO), steps=10)
+    """Run 10 steps with ``node.stage`` replaced by ``wrap(original)``; the LaunchError's text. Without the fused
+    loop: its quiet steps call no stage method (a stage's kernel calls a step that would fail not quiet, and the
+    step program then runs it, as here)."""
+    run = DirectRun(load_scenario(SCENARIO), steps=10, fused=False)
     node, name = stage.split('.')
     setattr(run.steppers[node], name, wrap(getattr(run.steppers[node], name)))
     with pytest.raises(LaunchError) as err:

@@ -6,9 +6,10 @@
    deliveries per step (each message published × the subscriptions that receive it);
 2. bare ring: as many plain rclpy processes as the graph has nodes, passing one message
    around (same QoS, same EventsExecutor) — cycles/s, the ceiling a lockstep could reach;
-3. direct engine: the same scenario's steppers in one process (``--engine direct``), after a two-step
-   run that loads its compiled kernels (:mod:`acds_common.kernels`; that one-time load, paid once per
-   process, is printed beside it);
+3. direct engine: the same scenario's steppers in one process (``--engine direct``), after a short
+   run that loads its compiled kernels and fused loop (:mod:`acds_common.kernels`, :mod:`acds_runtime.fused_step`;
+   that one-time load, paid once per process, is printed beside it); then the same run without the fused loop
+   (every step through the Python step program), and each model's fused kernel alone (µs per step);
 4. kernel: the rigid body + environment (``RigidBodyModel.advance`` + ``truth``) alone at
    the scenario's control period and substeps, with the attitude kernel compiled as the direct engine runs it;
 5. dispersion: a fixed 20-sample study of the same scenario (case 1), samples 0–19 of seed
@@ -25,7 +26,10 @@ shared with other work, the wall rate measures the load as much as the code.
 
 ``--json`` prints one object with the keys ``graph_steps_per_s``, ``bare_chain_steps_per_s``,
 ``ratio``, ``hops``, ``deliveries_per_step``, ``direct_steps_per_s``, ``direct_steps_per_cpu_s``,
-``direct_kernel_load_s``, ``core_steps_per_s``, ``core_steps_per_cpu_s``, ``direct_kernel_ratio`` and
+``direct_kernel_load_s``, ``direct_unfused_steps_per_s`` and ``direct_unfused_steps_per_cpu_s`` (the direct engine
+without its fused loop), ``direct_fused_share`` (the steps the fused loop ran), ``fused_loop_us_per_step`` (wall µs a
+step inside it), ``fused_us_per_model`` (node → µs per step of its fused kernel alone), ``core_steps_per_s``,
+``core_steps_per_cpu_s``, ``direct_kernel_ratio`` and
 ``direct_kernel_ratio_cpu`` (the whole six-model step against the rigid-body kernel alone: direct / core, per wall and
 per CPU second), ``dispersion_samples_per_s``, ``dispersion_samples_per_cpu_s``, ``fsw_sample_overhead_s``,
 ``fsw_sample_steps_per_s``, ``cores`` (and
@@ -58,6 +62,8 @@ DISPERSION_SEED, DISPERSION_SAMPLES = 1, 20
 #: many short samples (their median is the overhead), the long sample's steps.
 FSW_SCENARIO, FSW_NODE, FSW_COMMAND = (shipped_role('bench_flight_software')[k] for k in ('scenario', 'node', 'command'))
 FSW_SHORT_STEPS, FSW_REPEATS, FSW_STEPS = 2, 3, 2000
+#: The fused step's cost per model: each node's kernel timed at this step of the main job, this many calls.
+COST_STEP, COST_REPEATS = 200, 20000
 
 
 def bench_steps(text: str) -> int:
@@ -144,19 +150,29 @@ def bare_chain_rate(hops: int, cycles: int) -> float:
     return float(out.strip().splitlines()[-1])
 
 
-def direct_rate(steps: int) -> tuple[float, float, float]:
-    """Steps per wall second and per CPU second of the direct engine on the scenario (no recording), and the
-    wall seconds of the first, two-step run (numba's import and the compiled kernels' load)."""
+def direct_rate(steps: int) -> dict[str, Any]:
+    """The direct engine on the scenario (no recording), with its fused loop (:mod:`acds_runtime.fused_step`) and
+    without it (every step through the step program), one right after the other: steps per wall second and per CPU
+    second of each, the wall seconds of the first, short run (numba's import, the compiled kernels' and the fused
+    loop's load), the share of steps the loop ran and its own µs per step, and each model's fused kernel in µs per
+    step (:meth:`~acds_runtime.direct.DirectRun.fused_stage_costs`: at step :data:`COST_STEP`, its inputs held)."""
     from acds_common.scenario import load_scenario
     from acds_runtime.direct import DirectRun
 
     t0 = time.perf_counter()
-    DirectRun(load_scenario(SCENARIO), steps=2).run()
+    DirectRun(load_scenario(SCENARIO), steps=COST_STEP).run()
     load = time.perf_counter() - t0
-    run = DirectRun(load_scenario(SCENARIO), steps=steps)
-    cpu0 = time.process_time()
-    result = run.run()
-    return result.steps / result.wall_seconds, result.steps / (time.process_time() - cpu0), load
+    out: dict[str, Any] = {'load_s': load}
+    for fused in (True, False):
+        run = DirectRun(load_scenario(SCENARIO), steps=steps, fused=fused)
+        cpu0 = time.process_time()
+        result = run.run()
+        out[fused] = (result.steps / result.wall_seconds, result.steps / (time.process_time() - cpu0))
+        if run.fused_loop is not None:
+            out['fused_share'] = run.fused_loop.fused_steps / result.steps
+            out['loop_us'] = run.fused_loop.compiled_s / max(run.fused_loop.fused_steps, 1) * 1e6
+    out['models_us'] = DirectRun(load_scenario(SCENARIO), steps=steps).fused_stage_costs(COST_STEP, COST_REPEATS)
+    return out
 
 
 def dispersion_rate() -> tuple[float, float]:
@@ -231,7 +247,9 @@ def main(args: argparse.Namespace) -> int:
     """Run the measurements and print them (``--json``: last line one JSON object)."""
     graph = graph_rate(args.steps)
     bare = bare_chain_rate(graph['hops'], args.steps)
-    direct, direct_cpu, kernel_load = direct_rate(max(args.steps, 5000))
+    measured = direct_rate(max(args.steps, 5000))
+    (direct, direct_cpu), (unfused, unfused_cpu) = measured[True], measured[False]
+    kernel_load, models = measured['load_s'], measured['models_us']
     core, core_cpu = core_rate(max(args.steps, 5000))
     dispersion, dispersion_cpu = dispersion_rate()
     fsw_overhead, fsw_rate = fsw_sample_cost()
@@ -240,6 +258,10 @@ def main(args: argparse.Namespace) -> int:
               'deliveries_per_step': round(graph['deliveries_per_step'], 2),
               'direct_steps_per_s': round(direct, 1), 'direct_steps_per_cpu_s': round(direct_cpu, 1),
               'direct_kernel_load_s': round(kernel_load, 3),
+              'direct_unfused_steps_per_s': round(unfused, 1), 'direct_unfused_steps_per_cpu_s': round(unfused_cpu, 1),
+              'direct_fused_share': round(measured.get('fused_share', 0.0), 4),
+              'fused_loop_us_per_step': round(measured.get('loop_us', 0.0), 3),
+              'fused_us_per_model': {name: round(us, 3) for name, us in models.items()},
               'core_steps_per_s': round(core, 1), 'core_steps_per_cpu_s': round(core_cpu, 1),
               'direct_kernel_ratio': round(direct / core, 3), 'direct_kernel_ratio_cpu': round(direct_cpu / core_cpu, 3),
               'dispersion_samples_per_s': round(dispersion, 3),
@@ -256,6 +278,11 @@ def main(args: argparse.Namespace) -> int:
     print(f'ratio graph / bare ring:                          {graph["steps_per_s"] / bare:10.3f}')
     print(f'direct engine (one process, no DDS):              {direct:10.1f} steps/s  ({direct_cpu:.1f} per CPU s; '
           f'{kernel_load:.2f} s once per process to load its compiled kernels)')
+    print(f'direct engine without the fused loop:             {unfused:10.1f} steps/s  ({unfused_cpu:.1f} per CPU s)')
+    print(f'fused loop: {measured.get("fused_share", 0.0):.1%} of the steps, {measured.get("loop_us", 0.0):.2f} µs per '
+          'step inside it; each model\'s kernel alone, µs per step:')
+    for name, us in models.items():
+        print(f'    {name:44s} {us:8.3f}')
     print(f'rigid body + environment kernel:                  {core:10.1f} steps/s  ({core_cpu:.1f} per CPU s)')
     print(f'ratio direct engine / kernel:                     {direct / core:10.3f}  ({direct_cpu / core_cpu:.3f} per CPU s)')
     print(f'dispersion ({DISPERSION_SAMPLES} case-1 samples to capture, direct): {dispersion:10.3f} samples/s '

@@ -32,7 +32,7 @@ from acds_common.parameters import node_parameters, normalize
 from acds_common.scenario import Scenario
 from acds_common.stepper import Stepper, load_stepper
 
-from .fused_step import BLOCK_STEPS, FusedLoop
+from .fused_step import BLOCK_STEPS, FusedLoop, stage_costs
 from .launcher import LaunchError, RunResult
 from .step_program import Input, Route, Stage, StepProgram, compile_step
 from .summary import RunObserver
@@ -183,6 +183,25 @@ class DirectRun:
         return compile_step(stages, self._routes, self.graph.time_owner, dt_ns=self.dt_ns,
                             pending=self.observer.pending, per_step_count=self.observer.per_step_count,
                             drain=self.observer.drain, publish=self._publish if self._bytes_out else None)
+
+    def fused_stage_costs(self, at_step: int, repeats: int) -> dict[str, float]:
+        """µs per step of each node's fused kernel (:func:`~acds_runtime.fused_step.stage_costs`) at step
+        ``at_step`` of this run, reached through the step program (no bag, no live view); empty when the graph has
+        no fused loop or no block could start there. For ``acds bench``."""
+        for name, stepper in self.steppers.items():
+            stepper.telemetry_wanted = self._read('diagnostics', name)
+        loop = self._fused_loop()
+        if loop is None:
+            return {}
+        program = self._program()
+        program.initial(self.steppers[self.graph.time_owner].start())
+        for k in range(at_step):
+            program.step(k)
+        try:
+            return stage_costs(loop, at_step, program.step, repeats)
+        finally:
+            for stepper in self.steppers.values():
+                stepper.close()
 
     def _fused_loop(self) -> FusedLoop | None:
         """The fused loop when this run may use it (no bag, no live view, every stage with a fused form)."""

@@ -30,6 +30,7 @@ import hashlib
 import importlib.util
 import os
 import sys
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -104,9 +105,10 @@ class FusedLoop:
         self._stores = stores
         self._buffers: dict[Any, list[np.ndarray]] = {}
         self._possible = all(hasattr(steppers[name], 'fused') for name, _stage in self.stages)
-        #: Steps run fused so far, and blocks (for a reader of the bench).
+        #: Steps run fused so far, blocks, and the wall seconds spent in the compiled loop (for ``acds bench``).
         self.fused_steps = 0
         self.blocks = 0
+        self.compiled_s = 0.0
 
     @property
     def possible(self) -> bool:
@@ -163,7 +165,9 @@ class FusedLoop:
         for topic, (shape, depth, offset) in plan.registers.items():
             args += [nested(self._value_at(topic, k0 + offset - 1 - j), shape) for j in range(depth)]
         args += buffers
+        t0 = time.perf_counter()
         result = fn(*args)
+        self.compiled_s += time.perf_counter() - t0
         n = result[0]
         for fs, state in zip(declared, result[1:], strict=True):
             fs.restore(state)
@@ -425,8 +429,8 @@ def compose(plan: _Plan, dt_ns: int) -> str:
 LOOP_DIR = Path(__file__).resolve().parent / '__pycache__' / 'fused_loops'
 
 
-def _load(source: str) -> Any:
-    """``fused_block`` of ``source`` compiled: from a module file written once per source (numba's disk cache then
+def _load(source: str, function: str = 'fused_block') -> Any:
+    """``function`` of ``source`` compiled: from a module file written once per source (numba's disk cache then
     keeps its machine code across processes), or, where that folder cannot be written, from the source in memory
     (compiled in every process)."""
     from numba import njit
@@ -442,11 +446,47 @@ def _load(source: str) -> Any:
     except OSError:
         ns: dict[str, Any] = {}
         exec(compile(source, '<fused loop>', 'exec'), ns)  # noqa: S102 (our source)
-        return njit(ns['fused_block'])
+        return njit(ns[function])
     module = sys.modules.get(name)
     if module is None:  # registered before it runs: numba's cached code names its module
         spec = importlib.util.spec_from_file_location(name, path)
         assert spec is not None and spec.loader is not None
         module = sys.modules[name] = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
-    return njit(cache=True)(module.fused_block)
+    return njit(cache=True)(getattr(module, function))
+
+
+def stage_costs(loop: FusedLoop, k: int, step: Callable[[int], None], repeats: int) -> dict[str, float]:
+    """µs per call of each stage's compiled kernel, called ``repeats`` times in a compiled loop from its state at the
+    start of step k with the inputs of step k (``step(k)`` runs step k through the step program, which gives them;
+    each call takes the state the last quiet one left): the fused step's cost per model, for ``acds bench``.
+    Empty when no block could start at step k."""
+    declared = loop._declare(k)
+    if declared is None:
+        return {}
+    plan = loop._plan(declared)
+    step(k)
+    costs = {}
+    for i, (name, fs) in enumerate(zip(plan.names, declared, strict=True)):
+        inputs = []
+        for r in (r for key in fs.inputs for r in loop._reads[i] if r.key == key):
+            shape = plan.produced[(r.source, r.output)].output.shape
+            inputs.append(nested(loop._stores[r.topic][k - r.lag], shape))
+        kernel = fs.kernel
+        names = ''.join(f', I{j}' for j in range(len(inputs)))
+        source = (f'from {kernel.__module__} import {kernel.__qualname__} as K\n\n\n'
+                  f'def time_stage(P, S, k, t_s, n{names}):\n'
+                  '    quiet = 0\n'
+                  '    for _ in range(n):\n'
+                  f'        o = K(P, S, k, t_s{names})\n'
+                  '        if o[0]:\n'
+                  '            S = o[1]\n'
+                  '            quiet += 1\n'
+                  '    return quiet, S\n')
+        fn = _load(source, 'time_stage')
+        t_s = k * loop.dt_ns / 1e9
+        fn(fs.params, fs.state, k, t_s, 1, *inputs)
+        t0 = time.perf_counter()
+        fn(fs.params, fs.state, k, t_s, repeats, *inputs)
+        costs[name] = (time.perf_counter() - t0) / repeats * 1e6
+    return costs
