@@ -223,7 +223,7 @@ def _recorded_steps(monkeypatch, scenario, steps: int | None = None) -> tuple[He
         return advance(self, t, omega, sun, sun_present)
 
     monkeypatch.setattr(HeaoModeManager, 'advance', recording)
-    DirectRun(scenario, steps=steps).run()
+    DirectRun(scenario, steps=steps, fused=False).run()  # every step through HeaoPart.step, recorded
     monkeypatch.undo()
     return first[0], record
 
@@ -306,7 +306,8 @@ def test_fused_protocol_gives_the_python_steps(monkeypatch, tmp_path, compile_ke
             return result
 
         monkeypatch.setattr(HeaoPart, 'step', recording)
-        digests[run] = DirectRun(scenario, steps=steps).run().summary['truth_digest']
+        # Every step through HeaoPart.step (recorded), not the direct engine's fused loop.
+        digests[run] = DirectRun(scenario, steps=steps, fused=False).run().summary['truth_digest']
         monkeypatch.undo()
     assert digests['fused'] == digests['python']
     assert len(outputs['fused']) > steps

@@ -66,7 +66,7 @@ class _Recorder:
 
 def _record(sc, steps: int | None = None) -> Recording:
     """Run ``sc`` on the direct engine, keeping every value the summaries read and every truth message."""
-    run = DirectRun(sc, steps=steps)
+    run = DirectRun(sc, steps=steps, fused=False)  # every value fed one by one, as the recorder keeps them
     recorder = _Recorder()
     run.observer.parts.append(recorder)
     # The engine's routes append each truth message to the observer's buffer of its topic (truth_sink), which
