@@ -159,7 +159,7 @@ class FusedLoop:
             return 0
         plan = self._plan(declared)
         fn, buffers = self._function(plan)
-        args: list[Any] = [k0, BLOCK_STEPS]
+        args: list[Any] = [k0, BLOCK_STEPS, self.dt_ns]
         for fs in declared:
             args += [fs.params, fs.state]
         for topic, (shape, depth, offset) in plan.registers.items():
@@ -220,7 +220,7 @@ class FusedLoop:
         if known is None:
             if not kernels.enabled():
                 raise RuntimeError('the fused loop runs compiled only (acds_common.kernels.enable)')
-            source = compose(plan, self.dt_ns)
+            source = compose(plan)
             known = _COMPILED[key] = (_load(source), source)
         buffers = self._buffers.get(key)
         if buffers is None:
@@ -375,25 +375,25 @@ class _Plan:
                 self.outputs)
 
 
-def compose(plan: _Plan, dt_ns: int) -> str:
-    """The source of a module defining ``fused_block(k0, n_max, params0, state0, …, registers…, buffers…)``: steps
+def compose(plan: _Plan) -> str:
+    """The source of a module defining ``fused_block(k0, n_max, dt_ns, params0, state0, …, registers…, buffers…)``: steps
     k0, k0 + 1, … until a stage is not quiet or n_max steps ran; it returns (steps run, every stage's state). The
     kernels are imported by name (their modules' own, so numba's disk cache follows their sources,
     :mod:`acds_common.kernel_cache`)."""
     lines = ['"""The direct engine\'s fused loop for one graph (written by acds_runtime.fused_step.compose)."""', '']
     for i, kernel in enumerate(plan.kernels):
         lines.append(f'from {kernel.__module__} import {kernel.__qualname__} as K{i}')
-    lines += ['', f'DT = {int(dt_ns)}', '', '']
+    lines += ['', '']
     reg_names = {topic: [f'R{t}_{j}' for j in range(depth)] for t, (topic, (_s, depth, _o)) in
                  enumerate(plan.registers.items())}
     params = [f'P{i}' for i in range(len(plan.names))]
     states = [f'S{i}' for i in range(len(plan.names))]
-    signature = ['k0', 'n_max'] + [x for pair in zip(params, states, strict=True) for x in pair]
+    signature = ['k0', 'n_max', 'dt_ns'] + [x for pair in zip(params, states, strict=True) for x in pair]
     signature += [r for names in reg_names.values() for r in names]
     buffers = [f'B{i}' for i in range(len(plan.written))]
     signature += buffers
     lines += [f'def fused_block({", ".join(signature)}):', '    i = 0', '    while i < n_max:',
-              '        k = k0 + i', '        t_s = k * DT / 1e9']
+              '        k = k0 + i', '        t_s = k * dt_ns / 1e9']
     for i, name in enumerate(plan.names):
         inputs = []
         for how, what in plan.args[i]:
