@@ -255,7 +255,7 @@ class FusedLoop:
                 for i in range(keep_from, n):
                     route.store[first + i] = from_row(buf[i].tolist())
             if route.per_step or route.truth is not None:
-                rows = [i for i in range(n) if not lo <= first + i < hi]
+                rows = [*range(min(n, max(0, lo - first))), *range(max(0, hi - first), n)]  # stamps outside [lo, hi)
                 edges += [(route, first + i, from_row(row)) for i, row in zip(rows, buf[rows].tolist(), strict=True)]
         for name, fs in zip(plan.names, declared, strict=True):
             for key, obj in fs.held.items():
