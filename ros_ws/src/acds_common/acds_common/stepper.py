@@ -14,6 +14,10 @@ t_(k + stamp_offset), encodes and publishes it (node process) or hands it on in 
 
 A stepper reports through :meth:`log` (the host prints or logs it) and ends the run by
 setting :attr:`finished`; a failure the run cannot survive raises :class:`StepError`.
+
+A stepper may also give a compiled form of its stages for the direct engine's fused loop, a method
+``fused(stage, held) -> FusedStage | None`` (:mod:`acds_common.fused`); a graph whose every stepper has one runs
+its quiet steps in one compiled loop (:mod:`acds_runtime.fused_step`), any other graph runs every step here.
 """
 
 from __future__ import annotations

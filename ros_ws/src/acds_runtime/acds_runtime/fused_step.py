@@ -21,7 +21,14 @@ so the data, the digest and the summaries are the same bits with or without the 
 Which inputs a stage's kernel does not take (the mode report: a Python object) are *held*: the producer's
 declaration names the object it returns at every quiet step, the consumer is asked for its form knowing that
 object, and the block starts only when every step it reads before the block gave that very object.
-The loop runs only without a bag and a live view (:class:`~acds_runtime.direct.DirectRun` decides).
+The loop runs only without a bag and a live view (:class:`~acds_runtime.direct.DirectRun` decides, and after a
+step from which no block could start asks again after 1, 2, 4 … steps).
+
+The composed module is written once per structure under ``acds_runtime/__pycache__/fused_loops/`` (named by the
+hash of its source: it imports the kernels by name, and the step period is an argument), so numba keeps its machine
+code on disk beside it, stamped with the kernels' and their helpers' sources (:mod:`acds_common.kernel_cache`):
+one compile per machine (``acds_runtime.warm_kernels`` at set-up), one load per process.
+:func:`stage_costs` times each stage's kernel alone, for ``acds bench``.
 """
 
 from __future__ import annotations
