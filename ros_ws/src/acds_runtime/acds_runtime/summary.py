@@ -159,9 +159,9 @@ class DynamicsSummary:
         :attr:`torque_free` at the first row with a torque (:meth:`step`'s ``any(v)`` of a vector)."""
         if not self.torque_free:
             return 0
-        rows = [nonzero(columns[t]) for t in self.topics[3:] if t in columns]
-        n = max((len(rows) for rows in columns.values()), default=0)
-        at = first(np.logical_or.reduce(rows)) if rows else None
+        torques = [nonzero(columns[t]) for t in self.topics[3:] if t in columns]
+        n = max((len(c) for c in columns.values()), default=0)
+        at = first(np.logical_or.reduce(torques)) if torques else None
         if at is None:
             return n
         self.torque_free = False
@@ -328,8 +328,8 @@ class RunObserver:
 
         A per-step topic without fixed layout (the mode) is not in a block: the block's steps carry no value of it,
         which a summary reads as "no change". The engine runs the steps that change the mode in Python and feeds
-        them one by one (:meth:`feed_value`, :attr:`pending`). Steps are fed once each, in order: a block that does
-        not start at the first step not fed yet, or rows stamped before k0, raise ValueError."""
+        them one by one (:meth:`feed_value`, :attr:`pending`). Steps are fed once each, in order: a block after a
+        step not fed yet (k0 beyond it), or with rows of a step fed already, raises ValueError."""
         spans = self._spans(k0, n, columns, first or {})
         start, end = self._next, max(self._next, k0 + n)
         self._hash_block(columns, spans)
@@ -368,10 +368,11 @@ class RunObserver:
             self.truth_messages += m
 
     def _segments(self, start: int, end: int, spans: dict[str, tuple[int, int]]) -> list[tuple[int, int, bool]]:
-        """The block's steps [start, end) as runs [a, b): the runs every topic's rows cover with nothing pending, and
-        each other step alone, to be joined (an edge: some topic's row missing, or values fed before)."""
-        lo = max([start, *(f for f, _m in spans.values())])
-        hi = min([end, *(f + m for f, m in spans.values())])
+        """The block's steps [start, end) as runs [a, b): the runs the rows of every topic the summaries read cover
+        with nothing pending, and each other step alone, to be joined (an edge: a row missing, or values fed before)."""
+        read = [spans[t] for t in self.per_step if t in spans]
+        lo = max([start, *(f for f, _m in read)])
+        hi = min([end, *(f + m for f, m in read)])
         edges = {*range(start, min(lo, end)), *range(max(hi, start), end), *(k for k in self.pending if start <= k < end)}
         runs, a = [], start
         for e in [*sorted(edges), end]:
