@@ -151,16 +151,23 @@ def _mode_changes(values: list[dict]) -> set[int]:
     return {k for k, m in enumerate(modes) if k == 0 or m != modes[k - 1]}
 
 
+#: Small blocks are fed within this many steps of a step fed singly, blocks of :data:`FAR` steps farther away.
+NEAR, FAR = 300, 4096
+
+
 def _plan(steps: int, size: int, one_by_one: set[int]) -> list[tuple[int, int]]:
-    """(k0, n) of each block of at most ``size`` steps, n = 0 for a step of ``one_by_one`` fed singly."""
+    """(k0, n) of each block of at most ``size`` steps near the steps ``one_by_one`` (:data:`NEAR`; :data:`FAR`
+    steps farther), n = 0 for a step of ``one_by_one`` fed singly."""
+    near = {k for s in one_by_one for k in range(s - NEAR, s + NEAR)}
     plan, k = [], 0
     while k < steps:
         if k in one_by_one:
             plan.append((k, 0))
             k += 1
             continue
+        limit = size if k in near else FAR
         n = 1
-        while n < size and k + n < steps and k + n not in one_by_one:
+        while n < limit and k + n < steps and k + n not in one_by_one:
             n += 1
         plan.append((k, n))
         k += n
@@ -210,8 +217,9 @@ def test_the_recording_replays_the_run(acquisition, torque_free):
 @pytest.mark.parametrize('loop', (True, False), ids=('loop_steps', 'stamped_steps'))
 @pytest.mark.parametrize('size', (1, 7, 4096, 100_000))
 def test_blocks_give_the_same_summary_and_digest(acquisition, size, loop):
-    """Blocks between the steps that change the mode (Mode 1B, capture: the last step), the rows of a block of
-    loop steps each shifted by its topic's stamp offset (the time owner's truth one step ahead) or all stamped alike."""
+    """Blocks between the steps that change the mode (Mode 1B, capture: the last step; ``size`` near them), the rows
+    of a block of loop steps each shifted by its topic's stamp offset (the time owner's truth one step ahead) or all
+    stamped alike."""
     changes = _mode_changes(acquisition.values)
     assert len(changes) >= 3  # the start, Mode 1B, capture (the last step)
     assert _text(_replay_blocks(acquisition, size, changes, loop=loop)[0]) == _text(acquisition.summary)
