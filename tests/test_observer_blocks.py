@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 import random
-import time
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -175,14 +174,13 @@ def _plan(steps: int, size: int, one_by_one: set[int]) -> list[tuple[int, int]]:
 
 
 def _replay_blocks(rec: Recording, size: int, one_by_one: set[int], rows_only: bool = False, loop: bool = True
-                   ) -> tuple[dict, float]:
-    """A fresh observer fed blocks of at most ``size`` (loop) steps, the steps ``one_by_one`` singly (as the engine's
-    Python steps feed them, :func:`_feed_step`); (summary, wall s)."""
+                   ) -> dict:
+    """The summary of a fresh observer fed blocks of at most ``size`` (loop) steps, the steps ``one_by_one`` singly
+    (as the engine's Python steps feed them, :func:`_feed_step`)."""
     observer = RunObserver(rec.scenario, rec.graph)
     if rows_only:  # as if no summary module had step_block: each step's values unflattened
         observer._row_parts, observer._block_parts = observer.parts, []
     blocks = [(k0, n, *_block(rec, k0, n, loop)) for k0, n in _plan(rec.steps, size, one_by_one)]
-    t0 = time.perf_counter()
     for k0, n, columns, firsts in blocks:
         if not n:
             _feed_step(observer, k0, rec, loop)
@@ -191,24 +189,22 @@ def _replay_blocks(rec: Recording, size: int, one_by_one: set[int], rows_only: b
             for topic in (t for t, offset in rec.offsets.items() if offset):
                 _feed_topic(observer, topic, 0, rec)
         observer.feed_block(k0, n, columns, firsts)
-    wall = time.perf_counter() - t0
-    return observer.summary(rec.steps - 1, 0.0), wall
+    return observer.summary(rec.steps - 1, 0.0)
 
 
-def _replay_steps(rec: Recording, loop: bool = True) -> tuple[dict, float]:
+def _replay_steps(rec: Recording, loop: bool = True) -> dict:
+    """The summary of a fresh observer fed every step one by one (:func:`_feed_step`)."""
     observer = RunObserver(rec.scenario, rec.graph)
-    t0 = time.perf_counter()
     for k in range(rec.steps):
         _feed_step(observer, k, rec, loop)
-    wall = time.perf_counter() - t0
-    return observer.summary(rec.steps - 1, 0.0), wall
+    return observer.summary(rec.steps - 1, 0.0)
 
 
 def test_the_recording_replays_the_run(acquisition, torque_free):
     """Step by step, the recorded values give the run's own summary and digest (the replay is faithful)."""
     for rec in (acquisition, torque_free):
-        assert _text(_replay_steps(rec)[0]) == _text(rec.summary)
-        assert _text(_replay_steps(rec, loop=False)[0]) == _text(rec.summary)
+        assert _text(_replay_steps(rec)) == _text(rec.summary)
+        assert _text(_replay_steps(rec, loop=False)) == _text(rec.summary)
     assert {acquisition.offsets[t] for t in acquisition.truth} == {1}  # the time owner's: loop step k gives k + 1
     assert acquisition.summary['acquisition_time_min'] is not None  # the run reaches Mode 1B and capture
     assert torque_free.summary['torque_free'] and torque_free.summary['momentum_drift_rel'] > 0.0
@@ -222,7 +218,7 @@ def test_blocks_give_the_same_summary_and_digest(acquisition, size, loop):
     stamped alike."""
     changes = _mode_changes(acquisition.values)
     assert len(changes) >= 3  # the start, Mode 1B, capture (the last step)
-    assert _text(_replay_blocks(acquisition, size, changes, loop=loop)[0]) == _text(acquisition.summary)
+    assert _text(_replay_blocks(acquisition, size, changes, loop=loop)) == _text(acquisition.summary)
 
 
 @pytest.mark.parametrize('loop', (True, False), ids=('loop_steps', 'stamped_steps'))
@@ -231,18 +227,18 @@ def test_blocks_between_steps_fed_one_by_one(acquisition, loop):
     fed singly before its block joined with its rows)."""
     rng = random.Random(36)
     singles = _mode_changes(acquisition.values) | {rng.randrange(acquisition.steps) for _ in range(200)}
-    assert _text(_replay_blocks(acquisition, 613, singles, loop=loop)[0]) == _text(acquisition.summary)
+    assert _text(_replay_blocks(acquisition, 613, singles, loop=loop)) == _text(acquisition.summary)
 
 
 @pytest.mark.parametrize(('size', 'singles'), ((7, {0}), (4096, set()), (4096, {0, 1, 2500})))
 def test_blocks_of_a_torque_free_run(torque_free, size, singles):
     """Every row of every block counts in the drifts of H and E; every topic is the time owner's (one step ahead of
     its loop step), so a block's first step was fed with the step before it."""
-    assert _text(_replay_blocks(torque_free, size, singles)[0]) == _text(torque_free.summary)
+    assert _text(_replay_blocks(torque_free, size, singles)) == _text(torque_free.summary)
 
 
 def test_a_module_without_step_block_takes_each_step(acquisition):
-    summary, _wall = _replay_blocks(acquisition, 4096, _mode_changes(acquisition.values), rows_only=True)
+    summary = _replay_blocks(acquisition, 4096, _mode_changes(acquisition.values), rows_only=True)
     assert _text(summary) == _text(acquisition.summary)
 
 

@@ -273,6 +273,11 @@ class RunObserver:
         """For the direct engine: what takes each value of event ``topic`` when a summary reads it, else None."""
         return self._feed_event if topic in self.events else None
 
+    @property
+    def next_step(self) -> int:
+        """The first step not handed to the summaries yet (every step before it is complete and fed)."""
+        return self._next
+
     def drain(self) -> None:
         """Hand the complete steps of :attr:`pending` to the summaries, in step order."""
         self._drain(final=False)
