@@ -17,6 +17,8 @@ import numpy as np
 import pytest
 from acds_common import topics
 from acds_common.cdr import Codec
+from acds_common.graph import build_graph
+from acds_common.parameters import node_parameters
 from acds_common.scenario import load_scenario
 from acds_common.step_blocks import first, nonzero, norms, running_max, running_min
 from acds_common.vec3 import norm
@@ -255,6 +257,16 @@ def test_a_block_out_of_order_or_without_a_truth_topic_is_refused(acquisition):
         observer.feed_block(0, 4, columns)
     with pytest.raises(ValueError, match=f'rows of steps fed already: {topic}'):
         observer.feed_block(4, 4, {t: r[3:7] for t, r in acquisition.rows.items()}, {topic: 3})
+
+
+def test_a_module_that_reads_the_mode_every_step_refuses_blocks():
+    """The SSS summary reads the pass mode every step and has no step_block: a block (no mode) would lose it."""
+    sc = load_scenario('sss_a_attitude')
+    observer = RunObserver(sc, build_graph(node_parameters(sc, 10, 0.0)))
+    assert observer.without_blocks == {'ascs_mode_manager.sss_summary': [topics.resolve(topics.MODE)]}
+    columns = {t: np.zeros((2, layout.width)) for t, layout in observer.block_topics.items()}
+    with pytest.raises(ValueError, match=r'ascs_mode_manager.sss_summary reads every step \(/acds/mode\)'):
+        observer.feed_block(0, 2, columns)
 
 
 # ---- the block reductions against their per-step loops, on rows with NaN, ±inf, −0.0 ----------------------------

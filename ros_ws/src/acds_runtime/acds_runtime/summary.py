@@ -234,6 +234,12 @@ class RunObserver:
                              if c.layout is not None and (t in self._digests or t in self.per_step)}
         self._block_parts = [part for part in self.parts if hasattr(part, plugins.STEP_BLOCK_ATTRIBUTE)]
         self._row_parts = [part for part in self.parts if not hasattr(part, plugins.STEP_BLOCK_ATTRIBUTE)]
+        #: The summary modules a block of steps would not reach whole, with the topics it does not carry for them:
+        #: a module without ``step_block`` that reads a per-step topic of no fixed layout (the mode, every step).
+        #: :meth:`feed_block` refuses blocks while there is one (the engine feeds such a run one step at a time).
+        self.without_blocks = {type(part).__module__: missing for part in self._row_parts
+                               if (missing := sorted({topics.resolve(t) for t in part.topics} & set(self.per_step)
+                                                     - set(self.block_topics)))}
 
     # ---- feeding ------------------------------------------------------------------------------------
     def feed_raw(self, topic: str, data: bytes) -> None:
@@ -333,8 +339,9 @@ class RunObserver:
 
         A per-step topic without fixed layout (the mode) is not in a block: the block's steps carry no value of it,
         which a summary reads as "no change". The engine runs the steps that change the mode in Python and feeds
-        them one by one (:meth:`feed_value`, :attr:`pending`). Steps are fed once each, in order: a block after a
-        step not fed yet (k0 beyond it), or with rows of a step fed already, raises ValueError."""
+        them one by one (:meth:`feed_value`, :attr:`pending`); a summary module without ``step_block`` that reads
+        such a topic (:attr:`without_blocks`) makes blocks refused (ValueError). Steps are fed once each, in order: a
+        block after a step not fed yet (k0 beyond it), or with rows of a step fed already, raises ValueError."""
         spans = self._spans(k0, n, columns, first or {})
         start, end = self._next, max(self._next, k0 + n)
         self._hash_block(columns, spans)
@@ -361,6 +368,9 @@ class RunObserver:
         missing = [t for t in self._digests if t not in columns]
         if missing:
             raise ValueError(f'a block of steps {k0}…{k0 + n - 1} lacks the truth topic(s) {", ".join(missing)}')
+        if self.without_blocks:
+            raise ValueError('blocks of steps do not carry what ' + '; '.join(
+                f'{module} reads every step ({", ".join(ts)})' for module, ts in self.without_blocks.items()))
         return spans
 
     def _hash_block(self, columns: dict[str, np.ndarray], spans: dict[str, tuple[int, int]]) -> None:
