@@ -88,3 +88,14 @@ def test_a_type_without_fixed_layout_says_so(msg_type):
         codec.encode_block(np.array([0]), np.zeros((1, 1)))
     value = 'text' if msg_type.endswith('String') else (Status(0, 'n', 'm', 'h', (('k', 'v'),)),)
     assert codec.decode(codec.encode(0, value))[1] == value  # the message-by-message codec is unchanged
+
+
+@pytest.mark.parametrize('msg_type', FIXED)
+def test_one_codec_block_after_block(msg_type):
+    """A codec encodes block after block of any size, each the messages of its own rows (nothing of the one before)."""
+    rng = np.random.default_rng(3)
+    codec = Codec(msg_type, 'body', 'eci')
+    for n in (5, 2, 9, 0, 3, 9, 1):
+        rows = rng.normal(size=(n, WIDTH[msg_type]))
+        t_ns = rng.integers(-10**15, 10**15, size=n, dtype=np.int64)
+        assert codec.encode_block(t_ns, rows) == _one_by_one(codec, t_ns, rows)

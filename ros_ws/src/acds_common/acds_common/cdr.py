@@ -39,7 +39,7 @@ from __future__ import annotations
 import re
 import struct
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -170,6 +170,8 @@ class RowLayout:
     template: np.ndarray
     dtype: np.dtype
     fields: tuple[tuple[str, int, int], ...]
+    #: The template repeated, reused from block to block (only the stamps and the doubles change; one thread).
+    _repeated: list[np.ndarray] = field(default_factory=list, compare=False, repr=False)
 
     @classmethod
     def of(cls, packer: struct.Struct, encode: Callable[[int, Any], bytes], flatten: Callable[[Any], tuple[float, ...]],
@@ -200,13 +202,18 @@ class RowLayout:
         sec, nanosec = np.divmod(t_ns, 1_000_000_000)
         if n and (sec.min() < _SEC_RANGE[0] or sec.max() > _SEC_RANGE[1]):
             raise CdrError(f'a stamp of the block is beyond the int32 seconds of a Time: {t_ns.min()}…{t_ns.max()} ns')
-        data = np.tile(self.template, n)
-        messages = data.view(self.dtype)
+        messages = self._templates(n)
         messages['sec'] = sec
         messages['nanosec'] = nanosec
         for name, first, count in self.fields:
             messages[name] = rows[:, first:first + count]
-        return data.tobytes()
+        return messages.tobytes()
+
+    def _templates(self, n: int) -> np.ndarray:
+        """n templates, as messages (:attr:`dtype`): the first n of the ones kept, repeated anew when too few."""
+        if not self._repeated or len(self._repeated[0]) < n:
+            self._repeated[:] = [np.tile(self.template, n).view(self.dtype)]
+        return self._repeated[0][:n]
 
 
 class Codec:

@@ -159,9 +159,9 @@ class DynamicsSummary:
         :attr:`torque_free` at the first row with a torque (:meth:`step`'s ``any(v)`` of a vector)."""
         if not self.torque_free:
             return 0
-        rows = [nonzero(columns[t]) for t in self.topics[3:] if t in columns]
-        n = max((len(rows) for rows in columns.values()), default=0)
-        at = first(np.logical_or.reduce(rows)) if rows else None
+        torques = [nonzero(columns[t]) for t in self.topics[3:] if t in columns]
+        n = max((len(c) for c in columns.values()), default=0)
+        at = first(np.logical_or.reduce(torques)) if torques else None
         if at is None:
             return n
         self.torque_free = False
@@ -234,6 +234,12 @@ class RunObserver:
                              if c.layout is not None and (t in self._digests or t in self.per_step)}
         self._block_parts = [part for part in self.parts if hasattr(part, plugins.STEP_BLOCK_ATTRIBUTE)]
         self._row_parts = [part for part in self.parts if not hasattr(part, plugins.STEP_BLOCK_ATTRIBUTE)]
+        #: The summary modules a block of steps would not reach whole, with the topics it does not carry for them:
+        #: a module without ``step_block`` that reads a per-step topic of no fixed layout (the mode, every step).
+        #: :meth:`feed_block` refuses blocks while there is one (the engine feeds such a run one step at a time).
+        self.without_blocks = {type(part).__module__: missing for part in self._row_parts
+                               if (missing := sorted({topics.resolve(t) for t in part.topics} & set(self.per_step)
+                                                     - set(self.block_topics)))}
 
     # ---- feeding ------------------------------------------------------------------------------------
     def feed_raw(self, topic: str, data: bytes) -> None:
@@ -317,47 +323,121 @@ class RunObserver:
             self._next = min(pending)
             self._drain(final=True)
 
-    def feed_block(self, k0: int, n: int, columns: dict[str, np.ndarray]) -> None:
-        """Steps k0 … k0 + n − 1 at once (the direct engine's compiled blocks): ``columns`` holds, per topic of
-        :attr:`block_topics`, its float64 rows (n × width of its :class:`acds_common.cdr.RowLayout`; row i is the
-        value stamped step k0 + i). Exactly as feeding the same steps' values one by one: the truth messages are
-        encoded at once (:meth:`acds_common.cdr.Codec.encode_block`, the same bytes, so the same digest) and each
-        summary module takes the block (``Accumulator.step_block``) or, without one, each step's values unflattened.
+    def feed_block(self, k0: int, n: int, columns: dict[str, np.ndarray], first: dict[str, int] | None = None) -> None:
+        """Steps k0 … k0 + n − 1 at once (the direct engine's compiled blocks), exactly as their values fed one by one.
 
-        A per-step topic without fixed layout (the mode) is not in a block: its steps carry no value of it, which a
-        summary reads as "no change". The engine runs the steps that change the mode in Python and feeds them one
-        by one (:meth:`feed_value`, :attr:`pending`), so the steps before k0 are all fed and complete, and none of
-        the block's steps is pending (a ValueError otherwise: a step fed twice or out of order)."""
+        ``columns`` holds, per topic of :attr:`block_topics`, float64 rows (m × the width of its
+        :class:`acds_common.cdr.RowLayout`), row i the value stamped step ``first[topic] + i`` (``first`` defaults
+        to k0; a producer's ``stamp_offset`` shifts it, so a block of loop steps k0 … hands the time owner's rows
+        from k0 + 1). Every truth topic is there (m may be 0); the truth messages are encoded at once
+        (:meth:`acds_common.cdr.Codec.encode_block`: the same bytes, so the same digest). The steps every topic's
+        rows cover and nothing fed before touches go to each summary module at once (``Accumulator.step_block``;
+        without one, each step's values unflattened to ``step``); the block's other steps (its edges: the values
+        a step fed one by one left in :attr:`pending`) are joined and fed one by one; rows past k0 + n wait in
+        :attr:`pending` for their steps' other values. (A step completed before, like step k0 when every topic is
+        one step ahead, is not fed again: the block's steps start at the first step not fed yet.)
+
+        A per-step topic without fixed layout (the mode) is not in a block: the block's steps carry no value of it,
+        which a summary reads as "no change". The engine runs the steps that change the mode in Python and feeds
+        them one by one (:meth:`feed_value`, :attr:`pending`); a summary module without ``step_block`` that reads
+        such a topic (:attr:`without_blocks`) makes blocks refused (ValueError). Steps are fed once each, in order: a
+        block after a step not fed yet (k0 beyond it), or with rows of a step fed already, raises ValueError."""
+        spans = self._spans(k0, n, columns, first or {})
+        start, end = self._next, max(self._next, k0 + n)
+        self._hash_block(columns, spans)
+        with np.errstate(all='ignore'):  # a NaN or an infinity goes on silently, as in Python's float arithmetic
+            for a, b, joined in self._segments(start, end, spans):
+                if joined:
+                    self._step_joined(a, columns, spans)
+                else:
+                    self._step_rows(a, b, columns, spans)
+        self._park(end, columns, spans)
+        self._next = end
         self._drain(final=False)
-        if self._next != k0 or any(k0 <= k < k0 + n for k in self.pending):
-            raise ValueError(f'a block of steps {k0}…{k0 + n - 1} fed after step {self._next - 1} with steps '
-                             f'{sorted(self.pending)[:5]} pending: steps must be fed once each, in order')
+
+    def _spans(self, k0: int, n: int, columns: dict[str, np.ndarray], first: dict[str, int]) -> dict[str, tuple[int, int]]:
+        """(first step, row count) of each topic of a block, after checking the block comes in order (no step
+        before k0 left unfed, no row of a step fed already) and whole (every truth topic)."""
+        self._drain(final=False)
+        spans = {t: (first.get(t, k0), len(rows)) for t, rows in columns.items()}
+        early = [t for t, (f, m) in spans.items() if f < self._next and m]
+        if k0 > self._next or early:
+            raise ValueError(f'a block of steps {k0}…{k0 + n - 1} fed when step {self._next} is the next to feed'
+                             f'{" with rows of steps fed already: " + ", ".join(early) if early else ""}: '
+                             'steps must be fed once each, in order')
         missing = [t for t in self._digests if t not in columns]
         if missing:
             raise ValueError(f'a block of steps {k0}…{k0 + n - 1} lacks the truth topic(s) {", ".join(missing)}')
-        self._hash_block(k0, n, columns)
-        with np.errstate(all='ignore'):  # a NaN or an infinity goes on silently, as in Python's float arithmetic
-            for part in self._block_parts:
-                part.step_block(k0, columns)
-        if self._row_parts:
-            self._step_rows(k0, n, columns)
-        self._next = k0 + n
+        if self.without_blocks:
+            raise ValueError('blocks of steps do not carry what ' + '; '.join(
+                f'{module} reads every step ({", ".join(ts)})' for module, ts in self.without_blocks.items()))
+        return spans
 
-    def _hash_block(self, k0: int, n: int, columns: dict[str, np.ndarray]) -> None:
+    def _hash_block(self, columns: dict[str, np.ndarray], spans: dict[str, tuple[int, int]]) -> None:
         """The truth messages of a block into the digests, after the messages kept before it (:meth:`flush_truth`)."""
         self.flush_truth()
-        t_ns = np.arange(k0, k0 + n, dtype=np.int64) * self.dt_ns
         for topic, digest in self._digests.items():
-            digest.update(self._truth_codecs[topic].encode_block(t_ns, columns[topic]))
-        self.truth_messages += n * len(self._digests)
+            f, m = spans[topic]
+            digest.update(self._truth_codecs[topic].encode_block(np.arange(f, f + m, dtype=np.int64) * self.dt_ns,
+                                                                 columns[topic]))
+            self.truth_messages += m
 
-    def _step_rows(self, k0: int, n: int, columns: dict[str, np.ndarray]) -> None:
-        """Each step of a block as its values (the rows unflattened) to the summary modules without ``step_block``."""
-        rows = {t: (self.block_topics[t].unflatten, columns[t].tolist()) for t in self.per_step if t in columns}
-        for i in range(n):
-            values = {t: unflatten(r[i]) for t, (unflatten, r) in rows.items()}
-            for part in self._row_parts:
-                part.step(k0 + i, values)
+    def _segments(self, start: int, end: int, spans: dict[str, tuple[int, int]]) -> list[tuple[int, int, bool]]:
+        """The block's steps [start, end) as runs [a, b): the runs the rows of every topic the summaries read cover
+        with nothing pending, and each other step alone, to be joined (an edge: a row missing, or values fed before)."""
+        read = [spans[t] for t in self.per_step if t in spans]
+        lo = max([start, *(f for f, _m in read)])
+        hi = min([end, *(f + m for f, m in read)])
+        edges = {*range(start, min(lo, end)), *range(max(hi, start), end), *(k for k in self.pending if start <= k < end)}
+        runs, a = [], start
+        for e in [*sorted(edges), end]:
+            if a < e:
+                runs.append((a, e, False))
+            if e < end:
+                runs.append((e, e + 1, True))
+            a = e + 1
+        return runs
+
+    def _rows_of(self, columns: dict[str, np.ndarray], spans: dict[str, tuple[int, int]], a: int, b: int
+                 ) -> dict[str, np.ndarray]:
+        """The rows of steps [a, b) of the per-step topics the summaries read (every topic covers them)."""
+        return {t: columns[t][a - spans[t][0]:b - spans[t][0]] for t in self.per_step if t in columns}
+
+    def _step_rows(self, a: int, b: int, columns: dict[str, np.ndarray], spans: dict[str, tuple[int, int]]) -> None:
+        """Steps [a, b), all rows: to each summary module's ``step_block``, or row by row unflattened to its ``step``."""
+        rows = self._rows_of(columns, spans, a, b)
+        for part in self._block_parts:
+            part.step_block(a, rows)
+        if self._row_parts:
+            lists = {t: (self.block_topics[t].unflatten, r.tolist()) for t, r in rows.items()}
+            for i in range(b - a):
+                values = {t: unflatten(r[i]) for t, (unflatten, r) in lists.items()}
+                for part in self._row_parts:
+                    part.step(a + i, values)
+
+    def _values_at(self, k: int, columns: dict[str, np.ndarray], spans: dict[str, tuple[int, int]]
+                   ) -> dict[str, Any]:
+        """Step k's values of the block's rows that hold it (unflattened), for the per-step topics read."""
+        out = {}
+        for t in self.per_step:
+            f, m = spans.get(t, (0, 0))
+            if f <= k < f + m:
+                out[t] = self.block_topics[t].unflatten(columns[t][k - f].tolist())
+        return out
+
+    def _step_joined(self, k: int, columns: dict[str, np.ndarray], spans: dict[str, tuple[int, int]]) -> None:
+        """An edge step of a block: its values fed before (:attr:`pending`) and its rows, to every ``step``."""
+        values = {**self.pending.pop(k, {}), **self._values_at(k, columns, spans)}
+        for part in self.parts:
+            part.step(k, values)
+
+    def _park(self, end: int, columns: dict[str, np.ndarray], spans: dict[str, tuple[int, int]]) -> None:
+        """The rows stamped at or after ``end`` into :attr:`pending` (their steps' other values come later)."""
+        last = max((f + m for f, m in spans.values()), default=end)
+        for k in range(end, last):
+            values = self._values_at(k, columns, spans)
+            if values:
+                self.pending.setdefault(k, {}).update(values)
 
     # ---- result -------------------------------------------------------------------------------------
     def truth_digest(self) -> str:
