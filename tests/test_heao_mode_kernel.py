@@ -39,6 +39,7 @@ from ascs_mode_manager.heao_modes import (
     heao_logic,
 )
 from ascs_mode_manager.heao_part import HeaoPart
+from ascs_mode_manager.mode_manager_step import ModeManagerStep
 
 ZERO = (0.0, 0.0, 0.0)
 
@@ -209,7 +210,14 @@ def test_non_finite_inputs_are_not_quiet(compile_kernels):
 
 
 # ------------------------------------------------------------------------------------------ recorded runs
-def _recorded_steps(monkeypatch, scenario, steps: int | None = None) -> tuple[HeaoModeManager, list]:
+@pytest.fixture
+def python_steps(monkeypatch):
+    """The direct engine runs every step of the mode manager through its Python stage: the stepper offers no fused
+    form (``ModeManagerStep.fused``, where the engine has one, returns None), so the runs below see each step."""
+    monkeypatch.setattr(ModeManagerStep, 'fused', lambda self, stage, held: None, raising=False)
+
+
+def _recorded_steps(monkeypatch, scenario) -> tuple[HeaoModeManager, list]:
     """The HEAO core as a direct run built it and the inputs of each of its steps: (queued commands, t, ω, sun,
     sun present); the run's own advance is the one under test here, so the record is of its inputs only."""
     record: list = []
@@ -222,9 +230,9 @@ def _recorded_steps(monkeypatch, scenario, steps: int | None = None) -> tuple[He
         record.append((list(self._pending), t, tuple(omega), tuple(sun), sun_present))
         return advance(self, t, omega, sun, sun_present)
 
-    monkeypatch.setattr(HeaoModeManager, 'advance', recording)
-    DirectRun(scenario, steps=steps, fused=False).run()  # every step through HeaoPart.step, recorded
-    monkeypatch.undo()
+    with monkeypatch.context() as patch:
+        patch.setattr(HeaoModeManager, 'advance', recording)
+        DirectRun(scenario).run()
     return first[0], record
 
 
@@ -242,7 +250,7 @@ def _commands_variant(tmp_path):
 
 
 @pytest.mark.parametrize('case', ['acquisition', 'wheels_on', 'commands_auto_cruise'])
-def test_recorded_runs_step_by_step(monkeypatch, tmp_path, check_step, case):
+def test_recorded_runs_step_by_step(monkeypatch, python_steps, tmp_path, check_step, case):
     """The inputs of direct runs, step by step: heao_b_acquisition (Mode 1A → 1B → capture, where it stops),
     Table 4-7 case 6 (wheels on from separation: the Mode 1B entry stamp), and the acquisition with ground
     commands (a refused cruise before capture, a restart of acquisition) and the automatic cruise transfer."""
@@ -286,7 +294,7 @@ def _fused_step(compiled):
     return fused
 
 
-def test_fused_protocol_gives_the_python_steps(monkeypatch, tmp_path, compile_kernels):
+def test_fused_protocol_gives_the_python_steps(monkeypatch, python_steps, tmp_path, compile_kernels):
     """A direct run whose quiet mode-logic steps are the compiled kernel's (through :meth:`HeaoPart.fused_inputs` and
     :meth:`HeaoPart.fused_quiet`) gives every step's mode-logic output (the same ``mode`` object as the last step's
     on a quiet step) and the truth digest of the Python run, with ground commands and the auto cruise."""
@@ -305,10 +313,9 @@ def test_fused_protocol_gives_the_python_steps(monkeypatch, tmp_path, compile_ke
             out.append(result)
             return result
 
-        monkeypatch.setattr(HeaoPart, 'step', recording)
-        # Every step through HeaoPart.step (recorded), not the direct engine's fused loop.
-        digests[run] = DirectRun(scenario, steps=steps, fused=False).run().summary['truth_digest']
-        monkeypatch.undo()
+        with monkeypatch.context() as patch:
+            patch.setattr(HeaoPart, 'step', recording)
+            digests[run] = DirectRun(scenario, steps=steps).run().summary['truth_digest']
     assert digests['fused'] == digests['python']
     assert len(outputs['fused']) > steps
     assert outputs['fused'] == outputs['python']

@@ -265,6 +265,10 @@ class HeaoModeManager:
         self._last_t_s: float | None = None
         self._pending: list[tuple[str, float, str]] = []
         self._kernel_params = self.kernel_params()
+        #: :func:`heao_logic` bound to the one signature :meth:`advance` calls it with (:func:`kernels.bound`; compiled
+        #: in the direct engine): the tuples of :meth:`kernel_params` and :meth:`kernel_state`, a float time and float
+        #: triples (the stepper's step time and its gyro and sun sensor triples, :meth:`step`'s checked ones, ZERO).
+        self._logic = kernels.bound(heao_logic, self._kernel_params, self.kernel_state(), 0.0, ZERO, ZERO)
 
     # ----------------------------------------------------------------- stepping
     def step(
@@ -304,7 +308,7 @@ class HeaoModeManager:
             self._pending.clear()
         if not sun_present:
             sun = ZERO  # the kernel reads the zero vector as the sun absent
-        events, state = heao_logic(self._kernel_params, self.kernel_state(), t, omega, sun)
+        events, state = self._logic(self._kernel_params, self.kernel_state(), t, omega, sun)
         self.set_kernel_state(state)
         if events:
             out.extend(self._transitions(events, t, omega, sun))

@@ -36,8 +36,10 @@ otherwise runs :meth:`HeaoPart.step` from the states at the start of the step. A
 * the core is a variant's (the cold-gas logic adds its gas phases to the HEAO ``advance``).
 
 :meth:`HeaoPart.fused_inputs` gives the caller what it needs (None when no step can be quiet now) and
-:meth:`HeaoPart.fused_quiet` takes back the state after quiet steps and gives a quiet step's output. An absent gyro
-or sun sensor is the zero vector, as :meth:`HeaoPart.step` reads it.
+:meth:`HeaoPart.fused_quiet` takes back the state after quiet steps and gives a quiet step's output. Across quiet
+steps the caller carries the kernel's state from one step to the next; ``next_s`` changes only at a step that is
+not quiet (the due commands are taken) or when a live command arrives (−inf). An absent gyro or sun sensor is the
+zero vector, as :meth:`HeaoPart.step` reads it.
 """
 
 from __future__ import annotations
