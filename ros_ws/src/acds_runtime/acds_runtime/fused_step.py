@@ -109,6 +109,10 @@ class FusedLoop:
                 reads.append(_Read(inp.key, topic, inp.source, key, inp.lag))
             self._reads.append(tuple(reads))
         self._offsets = {(spec.instance, out.key): out.stamp_offset for spec, out in graph.outputs()}
+        #: Per node, the keys of its per-step outputs something reads (a store, the digest, a summary).
+        self._per_step_read = {name: [out.key for out in graph.nodes[name].outputs
+                                      if out.every_step and (r := routes[name].get(out.key)) is not None and r.read()]
+                               for name, _stage in self.stages}
         self._stores = stores
         self._buffers: dict[Any, list[np.ndarray]] = {}
         self._possible = all(hasattr(steppers[name], 'fused') for name, _stage in self.stages)
@@ -143,6 +147,10 @@ class FusedLoop:
                 return None
             declared.append(fs)
         by_node = dict(zip((name for name, _stage in self.stages), declared, strict=True))
+        for name, fs in by_node.items():  # every per-step output something reads: given by the kernel or held
+            given = {o.key for o in fs.outputs} | set(fs.held)
+            if any(key not in given for key in self._per_step_read[name]):
+                return None
         for fs, reads in zip(declared, self._reads, strict=True):
             for r in reads:
                 producer = by_node[r.source]
@@ -311,6 +319,8 @@ class FusedLoop:
     def _block_plan(self, plan: _Plan) -> dict[str, tuple[int, int]]:
         """Per topic the observer takes as rows, (buffer index, stamp offset) of the output giving it; empty when
         one is not given so (module docstring)."""
+        if self._observer.without_blocks:  # a summary module reads every step what a block does not carry
+            return {}
         written = {plan.produced[key].route.topic: b for b, key in enumerate(plan.written)}  # type: ignore[union-attr]
         sources = {}
         for topic, layout in self._observer.block_topics.items():
