@@ -48,18 +48,16 @@ import ast
 import copy
 import math
 import re
-import tempfile
 import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import yaml
 from acds_common import units
 from acds_common.attitude import dcm_to_quat, quat_to_dcm, rotation_between
-from acds_common.scenario import SAFE_NAME, SCHEMA, Field, Scenario, ScenarioError, load_scenario
+from acds_common.scenario import SAFE_NAME, SCHEMA, Field, Scenario, scenario_from_text  # noqa: F401 (the samples' loader)
 
 
 class SamplingError(ValueError):
@@ -328,17 +326,6 @@ def parse_sample_ref(text: str) -> tuple[int, int]:
     if not colon or s < 0 or k < 0:
         raise SamplingError(f'--sample {text!r}: expected SEED:INDEX, two whole numbers ≥ 0 (e.g. 1:17)')
     return s, k
-
-
-def scenario_from_text(text: str, label: str = 'sample') -> Scenario:
-    """Load a scenario from its YAML text (a sample crosses the wire as text); errors name ``label``."""
-    with tempfile.TemporaryDirectory(prefix='acds_sample_') as tmp:
-        path = Path(tmp) / 'sample.yaml'
-        path.write_text(text)
-        try:
-            return load_scenario(str(path))
-        except ScenarioError as exc:
-            raise ScenarioError(str(exc).replace(str(path), label)) from None
 
 
 def _set(raw: dict[str, Any], key: Key, value: Any) -> None:
