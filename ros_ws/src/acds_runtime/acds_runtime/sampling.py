@@ -44,10 +44,13 @@ between the body momentum and B, and the z-body-to-sun angle.
 
 from __future__ import annotations
 
+import array
 import ast
 import copy
+import json
 import math
 import re
+import tempfile
 import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -416,6 +419,35 @@ class KeptSample:
     def geometry(self) -> dict[str, float | None]:
         """:func:`initial_geometry` of the sample, computed when it was drawn."""
         return self.geometry_t0
+
+
+class SpooledSamples(Sequence[KeptSample]):
+    """A study's drawn samples as it keeps them (:class:`KeptSample`, appended in index order), each one JSON line
+    in an anonymous temporary file (gone when the process ends, however it ends), read back when asked: in memory
+    is only where each line is (16 bytes a sample), so a study's memory does not grow by ~4 kB a sample."""
+
+    def __init__(self) -> None:
+        self._file = tempfile.TemporaryFile(prefix='acds_samples_')  # noqa: SIM115 (lives as long as the study)
+        self._where = array.array('q')
+
+    def append(self, sample: KeptSample) -> None:
+        """Keep ``sample`` (the next index)."""
+        line = json.dumps([sample.seed, sample.index, sample.drawn, sample.text, sample.name, sample.geometry_t0,
+                           list(sample.length)]).encode() + b'\n'
+        self._file.seek(0, 2)
+        self._where.extend((self._file.tell(), len(line)))
+        self._file.write(line)
+
+    def __len__(self) -> int:
+        return len(self._where) // 2
+
+    def __getitem__(self, i: int) -> KeptSample:  # type: ignore[override]
+        if not -len(self) <= i < len(self):
+            raise IndexError(i)
+        i %= len(self)
+        self._file.seek(self._where[2 * i])
+        seed, index, drawn, text, name, geometry, (steps, period) = json.loads(self._file.read(self._where[2 * i + 1]))
+        return KeptSample(seed, index, drawn, text, name, geometry, (steps, period))
 
 
 def _name(base: str, seed: int, index: int) -> str:
