@@ -254,8 +254,9 @@ def percentile(values: np.ndarray, p: float) -> float | None:
     return v if math.isfinite(v) else None
 
 
-#: Resampled values the bootstrap holds at once (~8 MB): the resamples are drawn and reduced in blocks of rows.
-BOOTSTRAP_BLOCK = 2**20
+#: Resampled values the bootstrap holds at once (2 MB; with their indices and sorted copy ~6 MB): the resamples are
+#: drawn and reduced in blocks of rows.
+BOOTSTRAP_BLOCK = 2**18
 
 
 def _bootstrap(values: np.ndarray, seed: int, stream: tuple[int, ...], ps: Sequence[float]) -> dict[float, np.ndarray]:
