@@ -47,7 +47,7 @@ from __future__ import annotations
 import array
 import csv
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -130,7 +130,8 @@ def make_row(index: int, name: str, drawn: dict[str, Any], geometry: dict[str, A
 class Rows(Sequence[dict[str, Any]]):
     """The samples' rows (:func:`make_row`) held as columns: a column of floats (and None) as an array of float64,
     None as NaN (a row read from the journal has no NaN: JSON has none), any other column as a list; ``rows[i]``
-    gives row ``i`` as :func:`make_row` made it (the same keys in the order first seen, the same values and types).
+    gives row ``i`` as :func:`make_row` made it (the same keys, values and types; its keys in the order the columns
+    were first seen, so the rows' union of keys, ``samples.csv``'s header, is the same).
     About 0.5 kB a sample where a list of row dicts holds about 3 kB."""
 
     def __init__(self) -> None:
@@ -434,10 +435,12 @@ NOT_CAPTURED_COLUMNS = (('orbit_dipole_inclination_deg', 'orbit to dipole axis, 
                         ('sim_minutes', 'run, min', '.0f'))
 
 
-def not_captured(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The samples that ran and did not reach acquisition capture (censored in the acquisition time), by index."""
-    return sorted((r for r in rows if 'error' not in r and 'acquisition_time_min' in r and not r.get('captured')),
-                  key=lambda r: r['index'])
+def not_captured(rows: Sequence[dict[str, Any]]) -> Iterator[dict[str, Any]]:
+    """The samples that ran and did not reach acquisition capture (censored in the acquisition time), by index;
+    each row built as it is asked for (a short study's samples may all be censored)."""
+    index = column(rows, 'index')
+    hits = [i for i, r in enumerate(rows) if 'error' not in r and 'acquisition_time_min' in r and not r.get('captured')]
+    return (rows[i] for i in sorted(hits, key=index.__getitem__))
 
 
 def failure_rate(rows: Sequence[dict[str, Any]]) -> tuple[int, int, tuple[float, float] | None]:

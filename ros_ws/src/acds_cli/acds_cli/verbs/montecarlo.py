@@ -414,7 +414,7 @@ def _study_summary() -> Any:
     return next(m for m in modules(SUMMARIES) if hasattr(m, STUDY_ROW_ATTRIBUTE))
 
 
-def _not_captured(base: Scenario, out: Path, rows: list[dict[str, Any]], samples: list[Any]) -> list[str]:
+def _not_captured(base: Scenario, out: Path, rows: Sequence[dict[str, Any]], samples: Sequence[Any]) -> list[str]:
     """The samples that did not reach capture, with their drawn conditions (where the study's summary applies; markdown)."""
     from acds_runtime import dispersion_report as dr
 
