@@ -14,7 +14,9 @@
    the scenario's control period and substeps, with the attitude kernel compiled as the direct engine runs it;
 5. dispersion: a fixed 20-sample study of the same scenario (case 1), samples 0–19 of seed
    :data:`DISPERSION_SEED` with the default draws, each run to acquisition capture on the direct engine,
-   one after the other in this process (``montecarlo --jobs 1``): samples/s;
+   one after the other in this process (``montecarlo --jobs 1``): samples/s; and a sample's fixed cost (CPU ms per
+   sample of the same samples run one step each: its scenario loaded, its steppers, step and run summary built)
+   and its draw's (CPU ms per sample drawn as the study draws it, in the study's own process);
 6. flight-software sample: the scenario with one node left to an example node, started and stopped per sample as
    ``montecarlo --external ... --fsw-command`` (``bench_flight_software`` of ``scenarios/roles.json``)
    does (:func:`acds_runtime.flight_software.run_fsw_sample`): the overhead of a sample (wall seconds of a
@@ -31,7 +33,8 @@ without its fused loop), ``direct_fused_share`` (the steps the fused loop ran), 
 step inside it), ``fused_us_per_model`` (node → µs per step of its fused kernel alone), ``core_steps_per_s``,
 ``core_steps_per_cpu_s``, ``direct_kernel_ratio`` and
 ``direct_kernel_ratio_cpu`` (the whole six-model step against the rigid-body kernel alone: direct / core, per wall and
-per CPU second), ``dispersion_samples_per_s``, ``dispersion_samples_per_cpu_s``, ``fsw_sample_overhead_s``,
+per CPU second), ``dispersion_samples_per_s``, ``dispersion_samples_per_cpu_s``, ``dispersion_sample_overhead_ms``,
+``dispersion_draw_ms``, ``fsw_sample_overhead_s``,
 ``fsw_sample_steps_per_s``, ``cores`` (and
 ``cpu_ms_per_step``, ``load_average``).
 """
@@ -175,20 +178,28 @@ def direct_rate(steps: int) -> dict[str, Any]:
     return out
 
 
-def dispersion_rate() -> tuple[float, float]:
-    """Samples per wall second and per CPU second of the fixed case-1 study (module doc, item 5)."""
+def dispersion_rate() -> dict[str, float]:
+    """Samples per wall second and per CPU second of the fixed case-1 study, a sample's fixed cost and its draw's
+    (module doc, item 5)."""
     from acds_common.scenario import load_scenario
     from acds_runtime.montecarlo import run_samples
     from acds_runtime.sampling import Sampler
 
     sampler = Sampler(load_scenario(SCENARIO), DISPERSION_SEED)
-    texts = [sampler.draw(i).text for i in range(DISPERSION_SAMPLES)]
+    cpu0 = time.process_time()
+    texts = [sampler.draw(i).kept().text for i in range(DISPERSION_SAMPLES)]
+    draw = time.process_time() - cpu0
     wall0, cpu0 = time.perf_counter(), time.process_time()
     summaries, _ = run_samples(texts, progress=False)
+    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
     failed = [s['error'] for s in summaries if 'error' in s]
     if failed:
         raise RuntimeError(f'dispersion benchmark: a sample failed: {failed[0]}')
-    return DISPERSION_SAMPLES / (time.perf_counter() - wall0), DISPERSION_SAMPLES / (time.process_time() - cpu0)
+    cpu0 = time.process_time()
+    run_samples(texts, steps=1, progress=False)
+    fixed = time.process_time() - cpu0
+    return {'per_s': DISPERSION_SAMPLES / wall, 'per_cpu_s': DISPERSION_SAMPLES / cpu,
+            'overhead_ms': 1e3 * fixed / DISPERSION_SAMPLES, 'draw_ms': 1e3 * draw / DISPERSION_SAMPLES}
 
 
 def fsw_sample_cost() -> tuple[float, float]:
@@ -251,7 +262,7 @@ def main(args: argparse.Namespace) -> int:
     (direct, direct_cpu), (unfused, unfused_cpu) = measured[True], measured[False]
     kernel_load, models = measured['load_s'], measured['models_us']
     core, core_cpu = core_rate(max(args.steps, 5000))
-    dispersion, dispersion_cpu = dispersion_rate()
+    dispersion = dispersion_rate()
     fsw_overhead, fsw_rate = fsw_sample_cost()
     result = {'graph_steps_per_s': round(graph['steps_per_s'], 1), 'bare_chain_steps_per_s': round(bare, 1),
               'ratio': round(graph['steps_per_s'] / bare, 3), 'hops': graph['hops'],
@@ -264,8 +275,10 @@ def main(args: argparse.Namespace) -> int:
               'fused_us_per_model': {name: round(us, 3) for name, us in models.items()},
               'core_steps_per_s': round(core, 1), 'core_steps_per_cpu_s': round(core_cpu, 1),
               'direct_kernel_ratio': round(direct / core, 3), 'direct_kernel_ratio_cpu': round(direct_cpu / core_cpu, 3),
-              'dispersion_samples_per_s': round(dispersion, 3),
-              'dispersion_samples_per_cpu_s': round(dispersion_cpu, 3),
+              'dispersion_samples_per_s': round(dispersion['per_s'], 3),
+              'dispersion_samples_per_cpu_s': round(dispersion['per_cpu_s'], 3),
+              'dispersion_sample_overhead_ms': round(dispersion['overhead_ms'], 2),
+              'dispersion_draw_ms': round(dispersion['draw_ms'], 2),
               'fsw_sample_overhead_s': round(fsw_overhead, 3), 'fsw_sample_steps_per_s': round(fsw_rate, 1),
               'cores': os.cpu_count(),
               'cpu_ms_per_step': {k: round(v, 3) for k, v in graph['cpu_ms_per_step'].items()},
@@ -285,8 +298,9 @@ def main(args: argparse.Namespace) -> int:
         print(f'    {name:44s} {us:8.3f}')
     print(f'rigid body + environment kernel:                  {core:10.1f} steps/s  ({core_cpu:.1f} per CPU s)')
     print(f'ratio direct engine / kernel:                     {direct / core:10.3f}  ({direct_cpu / core_cpu:.3f} per CPU s)')
-    print(f'dispersion ({DISPERSION_SAMPLES} case-1 samples to capture, direct): {dispersion:10.3f} samples/s '
-          f'({dispersion_cpu:.3f} per CPU s)')
+    print(f'dispersion ({DISPERSION_SAMPLES} case-1 samples to capture, direct): {dispersion["per_s"]:10.3f} samples/s '
+          f'({dispersion["per_cpu_s"]:.3f} per CPU s; a sample\'s fixed cost {dispersion["overhead_ms"]:.1f} CPU ms, '
+          f'its draw {dispersion["draw_ms"]:.1f} CPU ms)')
     print(f'flight-software sample ({FSW_SCENARIO}, the example node started per sample): {fsw_overhead:.2f} s '
           f'overhead per sample (graph + node started, joined, stopped), then {fsw_rate:.1f} steps/s')
     for module in _bench_modules():  # other packages' figures (entry-point group acds.bench)

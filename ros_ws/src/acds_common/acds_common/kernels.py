@@ -129,6 +129,19 @@ def _shape(value: Any) -> Any:
     return object()  # equal to nothing else (tuples compare items by identity first): numba types the call
 
 
+#: The numba types of each kernel's bound arguments by their :func:`_shape` (one shape, one numba type): a process
+#: binds the same kernels to arguments of the same shapes for every sample of a study, and numba's ``typeof`` of
+#: each argument is most of a binding's cost.
+_SIGNATURES: dict[tuple[Any, Any], tuple[Any, ...]] = {}
+
+
+def _described(shape: Any) -> bool:
+    """Whether every part of a :func:`_shape` is described (an undescribed value's shape equals nothing)."""
+    if type(shape) is tuple:
+        return all(_described(s) for s in shape)
+    return type(shape) is not object
+
+
 def bound(fn: F, *example: Any) -> F:
     """Kernel ``fn`` for the one signature of the ``example`` arguments: ``fn`` itself in a plain process, else
     the entry point of its compiled specialization for the numba types of ``example`` (compiled, or loaded from
@@ -144,7 +157,12 @@ def bound(fn: F, *example: Any) -> F:
     from numba import typeof
 
     dispatcher: Any = compiled(fn)
-    signature = tuple(typeof(a) for a in example)
+    shape = _shape(example)
+    signature = _SIGNATURES.get((fn, shape)) if _described(shape) else None
+    if signature is None:
+        signature = tuple(typeof(a) for a in example)
+        if _described(shape):
+            _SIGNATURES[(fn, shape)] = signature
     overload = dispatcher.overloads.get(signature)
     if overload is None:
         dispatcher.compile(signature)
@@ -152,7 +170,6 @@ def bound(fn: F, *example: Any) -> F:
     entry = overload.entry_point
     if not checking():
         return entry  # type: ignore[no-any-return]
-    shape = _shape(example)
 
     def checked(*args: Any) -> Any:
         if _shape(args) != shape:  # else the same numba types (_shape); numba's own typing otherwise

@@ -44,9 +44,10 @@ factor), both censored: dropped from the ratio and counted.
 
 from __future__ import annotations
 
+import array
 import csv
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -126,23 +127,107 @@ def make_row(index: int, name: str, drawn: dict[str, Any], geometry: dict[str, A
     return row
 
 
+class Rows(Sequence[dict[str, Any]]):
+    """The samples' rows (:func:`make_row`) held as columns: a column of floats (and None) as an array of float64,
+    None as NaN (a row read from the journal has no NaN: JSON has none), any other column as a list; ``rows[i]``
+    gives row ``i`` as :func:`make_row` made it (the same keys, values and types; its keys in the order the columns
+    were first seen, so the rows' union of keys, ``samples.csv``'s header, is the same).
+    About 0.5 kB a sample where a list of row dicts holds about 3 kB."""
+
+    def __init__(self) -> None:
+        self._columns: dict[str, Any] = {}
+        #: Per float column, the rows that lack its key (a failed sample's row has no summary columns).
+        self._absent: dict[str, set[int]] = {}
+        self._n = 0
+
+    def append(self, row: dict[str, Any]) -> None:
+        """Add the next row."""
+        for key, value in row.items():
+            column = self._columns.get(key)
+            if column is None:
+                if _float(value):
+                    column = self._columns[key] = array.array('d', [math.nan]) * self._n
+                    self._absent[key] = set(range(self._n))
+                else:
+                    column = self._columns[key] = [_ABSENT] * self._n
+            elif isinstance(column, array.array) and not _float(value):
+                absent = self._absent.pop(key)
+                column = self._columns[key] = [_ABSENT if i in absent else None if math.isnan(v) else v
+                                               for i, v in enumerate(column)]
+            column.append((math.nan if value is None else value) if isinstance(column, array.array) else value)
+        for key, column in self._columns.items():
+            if len(column) == self._n:  # a key this row lacks
+                if isinstance(column, array.array):
+                    column.append(math.nan)
+                    self._absent[key].add(self._n)
+                else:
+                    column.append(_ABSENT)
+        self._n += 1
+
+    def __len__(self) -> int:
+        return self._n
+
+    def __getitem__(self, i: int) -> dict[str, Any]:  # type: ignore[override]
+        if not -self._n <= i < self._n:
+            raise IndexError(i)
+        i %= self._n
+        row = {}
+        for key, column in self._columns.items():
+            v = column[i]
+            if isinstance(column, array.array):
+                if i not in self._absent[key]:
+                    row[key] = None if math.isnan(v) else v
+            elif v is not _ABSENT:
+                row[key] = v
+        return row
+
+
+    def column(self, key: str) -> list[Any]:
+        """Every row's value of ``key``, None where it is None or missing (``row.get(key)`` of each row)."""
+        column = self._columns.get(key)
+        if column is None:
+            return [None] * self._n
+        if isinstance(column, array.array):
+            return [None if math.isnan(v) else v for v in column]
+        return [None if v is _ABSENT else v for v in column]
+
+
+#: A key a row does not have, in a list column.
+_ABSENT = object()
+
+
+def column(rows: Sequence[dict[str, Any]], key: str) -> list[Any]:
+    """``row.get(key)`` of every row; from the column itself when the rows are :class:`Rows` (no row built)."""
+    return rows.column(key) if isinstance(rows, Rows) else [row.get(key) for row in rows]
+
+
+def ran(rows: Sequence[dict[str, Any]]) -> list[int]:
+    """The positions of the rows whose sample ran (no ``error``: a failed run takes part in no statistic)."""
+    return [i for i, e in enumerate(column(rows, 'error')) if e is None]
+
+
+def _float(value: Any) -> bool:
+    """A value a float64 column holds as it is: a float, or None."""
+    return value is None or type(value) is float
+
+
 def values_of(rows: Sequence[dict[str, Any]], q: Quantity) -> tuple[np.ndarray, list[float]]:
     """The quantity's values over the samples that count (module doc), +∞ for censored, and the
     censoring times (run minutes) of the censored ones."""
+    value, captured, mode_1b, magnetics, run_min = (column(rows, key) for key in (
+        q.key, 'captured', 'mode_1b_reached', 'time_magnetics_only_min', 'sim_minutes'))
     vals, censor_at = [], []
-    for row in rows:
-        if 'error' in row:
+    for i in ran(rows):
+        if q.when == 'captured' and not captured[i]:
             continue
-        if q.when == 'captured' and not row.get('captured'):
+        if q.when == 'mode_1b' and not mode_1b[i]:
             continue
-        if q.when == 'mode_1b' and not row.get('mode_1b_reached'):
-            continue
-        v = row.get(q.key)
+        v = value[i]
         if v is None and q.censored:
             vals.append(math.inf)
             # known only to exceed the time the run had left for it: from Mode 1B for the time on the wheels
-            start = (row.get('time_magnetics_only_min') or 0.0) if q.when == 'mode_1b' else 0.0
-            censor_at.append(row['sim_minutes'] - start)
+            start = (magnetics[i] or 0.0) if q.when == 'mode_1b' else 0.0
+            censor_at.append(run_min[i] - start)
         elif v is not None:
             vals.append(float(v))
     return np.array(vals, dtype=float), censor_at
@@ -170,11 +255,25 @@ def percentile(values: np.ndarray, p: float) -> float | None:
     return v if math.isfinite(v) else None
 
 
-def _bootstrap_sorted(values: np.ndarray, seed: int, stream: tuple[int, ...]) -> np.ndarray:
-    """:data:`BOOTSTRAP_RESAMPLES` resamples of ``values`` (with replacement), each row sorted; seeded by the
-    study seed under ``(BOOTSTRAP_STREAM, *stream)``."""
+#: Resampled values the bootstrap holds at once (2 MB; with their indices and sorted copy ~6 MB): the resamples are
+#: drawn and reduced in blocks of rows.
+BOOTSTRAP_BLOCK = 2**18
+
+
+def _bootstrap(values: np.ndarray, seed: int, stream: tuple[int, ...], ps: Sequence[float]) -> dict[float, np.ndarray]:
+    """Percentile ``p`` (each of ``ps``, :func:`_interpolate`) of each of :data:`BOOTSTRAP_RESAMPLES` resamples of
+    ``values`` (with replacement); seeded by the study seed under ``(BOOTSTRAP_STREAM, *stream)``. Drawn in blocks
+    of rows (:data:`BOOTSTRAP_BLOCK` values each; the generator gives the same numbers in blocks as at once), so the
+    memory does not grow as resamples × samples (10,000 samples: 160 MB of indices and as much of values)."""
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(BOOTSTRAP_STREAM, *stream)))
-    return np.sort(values[rng.integers(len(values), size=(BOOTSTRAP_RESAMPLES, len(values)))], axis=1)
+    n = len(values)
+    rows = max(1, BOOTSTRAP_BLOCK // max(n, 1))
+    parts: dict[float, list[np.ndarray]] = {p: [] for p in ps}
+    for start in range(0, BOOTSTRAP_RESAMPLES, rows):
+        block = np.sort(values[rng.integers(n, size=(min(rows, BOOTSTRAP_RESAMPLES - start), n))], axis=1)
+        for p in ps:
+            parts[p].append(_interpolate(block, p))
+    return {p: np.concatenate(v) for p, v in parts.items()}
 
 
 def samples_for_width(n: int, interval: Sequence[float | None], value: float | None, target_pct: float) -> int | None:
@@ -204,10 +303,10 @@ def describe(rows: Sequence[dict[str, Any]], q: Quantity, seed: int, stream: int
     out.update(n=len(vals), censored=len(censor_at), censored_above=min(censor_at) if censor_at else None,
                unit=q.unit, too_few={f'p{p}': samples_needed(p) for p in PERCENTILES if p not in allowed})
     tail = (100.0 - CONFIDENCE_PCT) / 2
-    boot = _bootstrap_sorted(vals, seed, (stream,)) if len(vals) else None
+    boot = _bootstrap(vals, seed, (stream,), allowed) if len(vals) else {}
     intervals: dict[str, list[float | None]] = {}
     for p in PERCENTILES:
-        dist = _interpolate(boot, p) if boot is not None and p in allowed else np.array([])
+        dist = boot.get(p, np.array([]))
         intervals[f'p{p}'] = [percentile(dist, tail), percentile(dist, 100.0 - tail)]
     out['interval'] = intervals
     out['samples_for_width'] = {k: samples_for_width(len(vals), v, out[k], target_pct) for k, v in intervals.items()}
@@ -249,17 +348,19 @@ def spearman(x: np.ndarray, y: np.ndarray) -> float | None:
 
 def sensitivity(rows: Sequence[dict[str, Any]], drawn_columns: Sequence[str]) -> dict[str, dict[str, float | None]]:
     """{quantity: {variable: ρ}} over the samples that ran (module doc), strongest first."""
-    ok = [r for r in rows if 'error' not in r]
+    ok = ran(rows)
     geometry = [q.key for q in QUANTITIES if q.unit == 'deg']
     out: dict[str, dict[str, float | None]] = {}
     for target in SENSITIVITY_OF:
-        y = np.array([math.inf if r.get(target) is None else float(r[target]) for r in ok])
+        t = column(rows, target)
+        y = np.array([math.inf if t[i] is None else float(t[i]) for i in ok])
         rhos = {}
-        for col in [*drawn_columns, *geometry]:
-            if all(isinstance(r.get(col), (int, float)) and not isinstance(r.get(col), bool) for r in ok):
-                rho = spearman(np.array([float(r[col]) for r in ok]), y)
+        for key in [*drawn_columns, *geometry]:
+            x = column(rows, key)
+            if all(isinstance(x[i], (int, float)) and not isinstance(x[i], bool) for i in ok):
+                rho = spearman(np.array([float(x[i]) for i in ok]), y)
                 if rho is not None:
-                    rhos[col] = rho
+                    rhos[key] = rho
         out[target] = dict(sorted(rhos.items(), key=lambda kv: -abs(kv[1])))
     return out
 
@@ -281,7 +382,7 @@ def paired_ratio(case: np.ndarray, ref: np.ndarray, seed: int) -> dict[str, Any]
     out: dict[str, Any] = {'ratio_median': percentile(x, 50), 'ratio_ci90': [None, None], 'pairs': len(x),
                            'pairs_dropped': dropped}
     if len(x):
-        medians = _interpolate(_bootstrap_sorted(x, seed, ()), 50)
+        medians = _bootstrap(x, seed, (), (50,))[50]
         out['ratio_ci90'] = [percentile(medians, 5), percentile(medians, 95)]
     return out
 
@@ -334,17 +435,19 @@ NOT_CAPTURED_COLUMNS = (('orbit_dipole_inclination_deg', 'orbit to dipole axis, 
                         ('sim_minutes', 'run, min', '.0f'))
 
 
-def not_captured(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The samples that ran and did not reach acquisition capture (censored in the acquisition time), by index."""
-    return sorted((r for r in rows if 'error' not in r and 'acquisition_time_min' in r and not r.get('captured')),
-                  key=lambda r: r['index'])
+def not_captured(rows: Sequence[dict[str, Any]]) -> Iterator[dict[str, Any]]:
+    """The samples that ran and did not reach acquisition capture (censored in the acquisition time), by index;
+    each row built as it is asked for (a short study's samples may all be censored)."""
+    index = column(rows, 'index')
+    hits = [i for i, r in enumerate(rows) if 'error' not in r and 'acquisition_time_min' in r and not r.get('captured')]
+    return (rows[i] for i in sorted(hits, key=index.__getitem__))
 
 
 def failure_rate(rows: Sequence[dict[str, Any]]) -> tuple[int, int, tuple[float, float] | None]:
     """Not captured k of n samples that ran, and the Wilson interval of k/n (:func:`wilson_interval`)."""
-    ran = [r for r in rows if 'error' not in r and 'acquisition_time_min' in r]
-    k = len(not_captured(ran))
-    return k, len(ran), wilson_interval(k, len(ran))
+    counted = [r.get('captured') for r in rows if 'error' not in r and 'acquisition_time_min' in r]
+    k = sum(not c for c in counted)
+    return k, len(counted), wilson_interval(k, len(counted))
 
 
 def not_captured_lines(rows: Sequence[dict[str, Any]], drawn_columns: Sequence[str], explain: str) -> list[str]:
@@ -405,17 +508,18 @@ def percentile_table(stats: dict[str, dict[str, Any]]) -> str:
     return '\n'.join(lines)
 
 
-def write_rows(out: Path, rows: Sequence[dict[str, Any]], records: Sequence[dict[str, Any]]) -> None:
-    """``samples.csv`` (flat rows) and ``samples.json`` (per sample: drawn values, geometry, full summary)."""
-    columns: list[str] = []
+def write_rows(out: Path, rows: Sequence[dict[str, Any]], records: Iterable[dict[str, Any]]) -> None:
+    """``samples.csv`` (flat rows) and ``samples.json`` (per sample: drawn values, geometry, full summary), the
+    records written one at a time as they come (:func:`write_json_list`)."""
+    columns: dict[str, None] = {}
     for row in rows:
-        columns += [k for k in row if k not in columns]
+        columns.update(dict.fromkeys(row))
     with open(out / 'samples.csv', 'w', newline='') as fh:
-        writer = csv.DictWriter(fh, fieldnames=columns, restval='')
+        writer = csv.DictWriter(fh, fieldnames=list(columns), restval='')
         writer.writeheader()
         for row in rows:
             writer.writerow({k: '' if v is None else v for k, v in row.items()})
-    write_json(out / 'samples.json', list(records))
+    write_json_list(out / 'samples.json', records)
 
 
 def plot_distributions(out: Path, rows: Sequence[dict[str, Any]], stats: dict[str, dict[str, Any]]) -> list[Path]:
@@ -457,15 +561,16 @@ def plot_distributions(out: Path, rows: Sequence[dict[str, Any]], stats: dict[st
         fig.savefig(path, dpi=90)
         plt.close(fig)
         paths.append(path)
-    ok = [r for r in rows if 'error' not in r and r.get('orbit_dipole_inclination_deg') is not None]
-    if ok and any('acquisition_time_min' in r for r in ok):
+    inclination, acquisition, run_min = (column(rows, key) for key in (
+        'orbit_dipole_inclination_deg', 'acquisition_time_min', 'sim_minutes'))
+    ok = [i for i in ran(rows) if inclination[i] is not None]
+    if ok and any('acquisition_time_min' in rows[i] for i in ok):
         fig, ax = plt.subplots(figsize=(6, 4))
-        reached = [r for r in ok if r.get('acquisition_time_min') is not None]
-        ax.scatter([r['orbit_dipole_inclination_deg'] for r in reached], [r['acquisition_time_min'] for r in reached],
-                   s=12, label='captured')
-        cens = [r for r in ok if r.get('acquisition_time_min') is None]
+        reached = [i for i in ok if acquisition[i] is not None]
+        ax.scatter([inclination[i] for i in reached], [acquisition[i] for i in reached], s=12, label='captured')
+        cens = [i for i in ok if acquisition[i] is None]
         if cens:
-            ax.scatter([r['orbit_dipole_inclination_deg'] for r in cens], [r['sim_minutes'] for r in cens], s=18,
+            ax.scatter([inclination[i] for i in cens], [run_min[i] for i in cens], s=18,
                        marker='^', color='tab:red', label='not captured (at run end)')
         ax.set_xlabel('orbit inclination to the dipole axis at t0 [deg]')
         ax.set_ylabel('acquisition time [min]')
@@ -524,3 +629,15 @@ def write_report(out: Path, spec: dict[str, Any], rows: Sequence[dict[str, Any]]
 def write_json(path: Path, obj: Any) -> None:
     """Strict JSON, indented (a non-finite number as null, as every summary file)."""
     path.write_text(summary_json(obj)[0])
+
+
+def write_json_list(path: Path, items: Iterable[Any]) -> None:
+    """:func:`write_json` of a list, the same bytes, written an item at a time: the items may come from disk one
+    by one (a study's samples), never all held."""
+    with open(path, 'w') as fh:
+        fh.write('[')
+        sep = '\n  '
+        for item in items:
+            fh.write(sep + summary_json(item)[0][:-1].replace('\n', '\n  '))
+            sep = ',\n  '
+        fh.write(']\n' if sep == '\n  ' else '\n]\n')

@@ -12,7 +12,8 @@ A resumed study (``--resume DIR``) is checked against its journal: the same stud
 mismatch names the key, :class:`JournalError`), and each kept sample's scenario hash against the sample
 drawn now. The final outputs are built from the journal's summaries (JSON round trip: non-finite numbers
 as null, :func:`acds_runtime.summary.summary_json`) in a clean run too, so a resumed study's outputs are
-those of an uninterrupted one.
+those of an uninterrupted one. The summaries stay on disk (:class:`KeptSummaries`: where each sample's line is,
+read back when asked), so a study's memory does not grow with its samples.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator, MutableMapping
 from pathlib import Path
 from typing import Any
 
@@ -51,17 +52,60 @@ def _line(obj: Any) -> bytes:
     return summary_json(obj, indent=None)[0].encode()
 
 
+#: Where a kept sample's record is in the journal: (byte offset, length, whether its summary is a failure).
+Where = tuple[int, int, bool]
+
+
+class KeptSummaries(MutableMapping[tuple[str, int], dict[str, Any]]):
+    """The kept samples' summaries by (case, index), read from the journal when asked: held in memory is only where
+    each record is (:data:`Where`, ~100 bytes a sample), not the summary (~2 kB), so a study of N samples does not
+    hold N summaries. Removing a key forgets the record (the line stays in the file)."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.where: dict[tuple[str, int], Where] = {}
+
+    def __getitem__(self, key: tuple[str, int]) -> dict[str, Any]:
+        offset, length, _failed = self.where[key]
+        fd = os.open(self.path, os.O_RDONLY)
+        try:
+            line = os.pread(fd, length, offset)
+        finally:
+            os.close(fd)
+        return json.loads(line)['summary']
+
+    def __setitem__(self, key: tuple[str, int], where: Where) -> None:  # type: ignore[override]
+        self.where[key] = where
+
+    def __delitem__(self, key: tuple[str, int]) -> None:
+        del self.where[key]
+
+    def __iter__(self) -> Iterator[tuple[str, int]]:
+        return iter(self.where)
+
+    def __len__(self) -> int:
+        return len(self.where)
+
+    def __contains__(self, key: object) -> bool:
+        return key in self.where
+
+    def failed(self, key: tuple[str, int]) -> bool:
+        """Whether the kept summary of ``key`` is a failure (``{'scenario', 'error'}``), without reading it."""
+        return self.where[key][2]
+
+
 class Journal:
-    """The open journal of one study (module doc). ``done[(case, index)]`` holds the kept summaries."""
+    """The open journal of one study (module doc). ``done[(case, index)]`` gives the kept summaries
+    (:class:`KeptSummaries`, read from the file)."""
 
     def __init__(self, folder: Path, study: dict[str, Any], hashes: dict[tuple[str, int], str], *,
                  resume: bool) -> None:
         self.path = Path(folder) / JOURNAL
         self.study = json.loads(_line(study))
         self.hashes = hashes
-        self.done: dict[tuple[str, int], dict[str, Any]] = {}
+        self.done = KeptSummaries(self.path)
         if resume:
-            self._load()
+            self._size = self._load()
             self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND)
         else:
             Path(folder).mkdir(parents=True, exist_ok=True)
@@ -69,24 +113,24 @@ class Journal:
                 self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_EXCL, 0o644)
             except FileExistsError:
                 raise JournalError(f'{self.path} exists: resume that study with --resume {folder}') from None
+            self._size = 0
             self._append({'study': self.study})
             _fsync_dir(self.path.parent)
 
-    def _load(self) -> None:
+    def _load(self) -> int:
+        """Check the journal against this study and index its samples (read line by line); its size in bytes."""
         try:
-            data = self.path.read_bytes()
+            fh = open(self.path, 'r+b')  # noqa: SIM115 (closed below, after the lines are read)
         except OSError as exc:
             raise JournalError(f'--resume {self.path.parent}: no study journal there ({exc.strerror})') from None
-        whole = data[:data.rfind(b'\n') + 1]
-        if len(whole) < len(data):  # the last line was cut by a kill mid-write: not a sample
-            with open(self.path, 'r+b') as fh:
-                fh.truncate(len(whole))
-                os.fsync(fh.fileno())
-        lines = whole.decode().splitlines()
+        with fh:
+            return self._index(fh)
+
+    def _index(self, fh: Any) -> int:
+        first = fh.readline()
         try:
-            head = json.loads(lines[0])['study'] if lines else None
-            records = [json.loads(line) for line in lines[1:]]
-        except (json.JSONDecodeError, KeyError, TypeError) as exc:
+            head = json.loads(first)['study'] if first.endswith(b'\n') else None
+        except (json.JSONDecodeError, UnicodeDecodeError, KeyError, TypeError) as exc:
             raise JournalError(f'--resume {self.path.parent}: {JOURNAL} is not a study journal ({exc})') from None
         if not isinstance(head, dict):
             raise JournalError(f'--resume {self.path.parent}: {JOURNAL} has no study line')
@@ -99,33 +143,45 @@ class Journal:
         if head.get('samples_hash') != self.study.get('samples_hash'):
             raise JournalError(f'--resume {self.path.parent}: the samples drawn now differ from the study\'s '
                                '(the scenario file or the sampler changed since it began)')
-        for n, rec in enumerate(records, start=2):
+        offset, n = len(first), 1
+        while (line := fh.readline()).endswith(b'\n'):
+            n += 1
+            try:
+                rec = json.loads(line)
+            except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+                raise JournalError(f'--resume {self.path.parent}: {JOURNAL} is not a study journal ({exc})') from None
             if not (isinstance(rec, dict) and isinstance(rec.get('summary'), dict)
                     and {'case', 'index', 'scenario_hash'} <= rec.keys()):
                 raise JournalError(f'--resume {self.path.parent}: {JOURNAL} line {n} is not a sample record '
                                    '({"index", "case", "scenario_hash", "summary"})')
-        for rec in records:
             key = (rec['case'], rec['index'])
             if self.hashes.get(key) != rec['scenario_hash']:
                 raise JournalError(f'--resume {self.path.parent}: sample {rec["index"]}{" of " + key[0] if key[0] else ""}'
                                    ' was run from another scenario text than the one drawn now')
-            if key not in self.done or 'error' in self.done[key]:  # a sample run again after it failed: its last run
-                self.done[key] = rec['summary']
+            if key not in self.done or self.done.failed(key):  # a sample run again after it failed: its last run
+                self.done[key] = (offset, len(line), 'error' in rec['summary'])
+            offset += len(line)
+        if line:  # the last line was cut by a kill mid-write: not a sample
+            fh.truncate(offset)
+            os.fsync(fh.fileno())
+        return offset
 
-    def _append(self, obj: Any) -> None:
+    def _append(self, obj: Any) -> Where:
         data = _line(obj)
         written = os.write(self._fd, data)
         if written != len(data):
             raise OSError(f'{self.path}: short write ({written} of {len(data)} bytes)')
         os.fsync(self._fd)
+        where = (self._size, len(data), False)
+        self._size += len(data)
+        return where
 
     def record(self, key: tuple[str, int], summary: dict[str, Any]) -> None:
-        """Append a finished sample (fsynced before returning) and keep it as read back from JSON."""
+        """Append a finished sample (fsynced before returning) and keep where it is (read back from JSON)."""
         case, index = key
-        rec = {'index': index, 'case': case, 'scenario_hash': self.hashes[key], 'summary': summary}
-        kept = json.loads(_line(summary))
-        self._append(rec)
-        self.done[key] = kept
+        offset, length, _ = self._append({'index': index, 'case': case, 'scenario_hash': self.hashes[key],
+                                          'summary': summary})
+        self.done[key] = (offset, length, 'error' in summary)
 
     def kept(self) -> int:
         """The samples the journal on disk holds (after an interruption: what a resume will keep)."""

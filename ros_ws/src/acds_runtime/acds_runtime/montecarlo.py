@@ -193,9 +193,14 @@ class Execution:
 def run_samples(texts: Sequence[str], *, engine: str = 'direct', steps: int | None = None, jobs: int = 1,
                 scheduler: str | None = None, progress: bool = True,
                 on_result: Callable[[int, dict[str, Any]], None] | None = None,
-                task: Callable[[str], dict[str, Any]] | None = None, allow_mixed: bool = False
+                task: Callable[[str], dict[str, Any]] | None = None, allow_mixed: bool = False, keep: bool = True
                 ) -> tuple[list[dict[str, Any]], Execution]:
-    """Run every sample; its summaries in the order of ``texts``, and where they ran.
+    """Run every sample; its summaries in the order of ``texts`` (none with ``keep=False``: a study that journals
+    each as ``on_result`` gets it holds none of them), and where they ran.
+
+    ``texts`` may be read lazily (a sequence whose items are read from disk when asked): each is asked for when its
+    sample is sent, and at most :data:`IN_FLIGHT_PER_WORKER` samples per worker are sent ahead of the results, so
+    neither this process nor the scheduler holds every sample's text.
 
     ``task(text)`` runs one sample (default :func:`run_sample` on ``engine`` for ``steps``; a flight-software
     study's, :func:`acds_runtime.flight_software.run_fsw_sample`, picklable for the Dask workers).
@@ -222,13 +227,15 @@ def run_samples(texts: Sequence[str], *, engine: str = 'direct', steps: int | No
     try:
         if scheduler is None and jobs == 1:
             results = []
-            for i, text in enumerate(texts):
-                results.append(run_sample(text, engine, steps) if task is None else task(text))
+            for i in range(len(texts)):
+                summary = run_sample(texts[i], engine, steps) if task is None else task(texts[i])
+                if keep:
+                    results.append(summary)
                 bar.update(1)
                 if on_result is not None:
-                    on_result(i, results[-1])
+                    on_result(i, summary)
             return results, Execution('in-process', 1, 1)
-        return _run_dask(texts, engine, steps, jobs, scheduler, bar, on_result, task, allow_mixed)
+        return _run_dask(texts, engine, steps, jobs, scheduler, bar, on_result, task, allow_mixed, keep)
     finally:
         bar.close()
         if before is not None:  # the zombies of runs this study's end interrupted (live or young ones: next start)
@@ -359,9 +366,15 @@ def _mixed(mixed: tuple[str, str] | None, allow_mixed: bool, accepted: dict[str,
         accepted[diff].append(who)
 
 
+#: Samples sent to the cluster ahead of the results, per worker thread: enough that no worker waits for its next
+#: sample while this process journals a result, few enough that the texts in flight stay a few kB.
+IN_FLIGHT_PER_WORKER = 4
+
+
 def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, scheduler: str | None, bar: Any,
               on_result: Callable[[int, dict[str, Any]], None] | None,
-              task: Callable[[str], dict[str, Any]] | None, allow_mixed: bool) -> tuple[list[dict[str, Any]], Execution]:
+              task: Callable[[str], dict[str, Any]] | None, allow_mixed: bool,
+              keep: bool) -> tuple[list[dict[str, Any]], Execution]:
     from acds_common.numeric_config import numeric_configuration
     from dask.distributed import as_completed
 
@@ -374,27 +387,43 @@ def _run_dask(texts: Sequence[str], engine: str, steps: int | None, jobs: int, s
         execution = Execution(scheduler or 'local cluster', len(info), sum(w.get('nthreads', 1) for w in info.values()),
                               accepted)
         work = task if task is not None else functools.partial(run_sample, engine=engine, steps=steps)
-        indices: dict[str, list[int]] = {}
-        for i, text in enumerate(texts):
-            indices.setdefault(task_key(text, engine if task is None else repr(task), steps), []).append(i)
         pending = as_completed(loop=client.loop)
-        for key, ix in indices.items():
-            pending.add(client.submit(run_checked_sample, work, texts[ix[0]], expected, allow_mixed, key=key, pure=False))
-        results: list[dict[str, Any] | None] = [None] * len(texts)
+        indices: dict[str, list[int]] = {}  # the samples of each task in flight (equal texts: one task)
+        ahead = max(1, execution.threads) * IN_FLIGHT_PER_WORKER
+        sent = 0
+
+        def send() -> None:
+            nonlocal sent
+            while len(indices) < ahead and sent < len(texts):
+                text = texts[sent]
+                key = task_key(text, engine if task is None else repr(task), steps)
+                if key in indices:
+                    indices[key].append(sent)
+                else:
+                    indices[key] = [sent]
+                    pending.add(client.submit(run_checked_sample, work, text, expected, allow_mixed, key=key,
+                                              pure=False))
+                sent += 1
+        send()
+        results: list[dict[str, Any] | None] = [None] * len(texts) if keep else []
+        came = bytearray(len(texts))
         for future in pending:
             try:
                 summary, mixed = future.result()
             except Exception as exc:  # noqa: BLE001 (a sample that failed on every try is reported, not dropped)
                 summary, mixed = {'error': f'{type(exc).__name__}: {exc}'}, None
             _mixed(mixed, allow_mixed, accepted)  # a worker that joined after the check: refused before its result is kept
-            ix = indices[future.key]
+            ix = indices.pop(future.key)
             future.release()  # read: the scheduler may forget it (a lost worker then recomputes nothing read)
+            send()
             for i in ix:
-                results[i] = summary
+                came[i] = 1
+                if keep:
+                    results[i] = summary
                 if on_result is not None:
                     on_result(i, summary)
             bar.update(len(ix))
-        missing = [i for i, r in enumerate(results) if r is None]
+        missing = [i for i, c in enumerate(came) if not c]
         if missing:  # as_completed yields every future; this would be a Dask bug, said rather than hidden
             raise MonteCarloError(f'samples {missing} came back from no task')
         return [r for r in results if r is not None], execution

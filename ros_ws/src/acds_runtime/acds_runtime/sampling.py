@@ -44,22 +44,23 @@ between the body momentum and B, and the z-body-to-sun angle.
 
 from __future__ import annotations
 
+import array
 import ast
 import copy
+import json
 import math
 import re
 import tempfile
 import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import yaml
 from acds_common import units
 from acds_common.attitude import dcm_to_quat, quat_to_dcm, rotation_between
-from acds_common.scenario import SAFE_NAME, SCHEMA, Field, Scenario, ScenarioError, load_scenario
+from acds_common.scenario import SAFE_NAME, SCHEMA, Field, Scenario, scenario_from_text  # noqa: F401 (the samples' loader)
 
 
 class SamplingError(ValueError):
@@ -330,17 +331,6 @@ def parse_sample_ref(text: str) -> tuple[int, int]:
     return s, k
 
 
-def scenario_from_text(text: str, label: str = 'sample') -> Scenario:
-    """Load a scenario from its YAML text (a sample crosses the wire as text); errors name ``label``."""
-    with tempfile.TemporaryDirectory(prefix='acds_sample_') as tmp:
-        path = Path(tmp) / 'sample.yaml'
-        path.write_text(text)
-        try:
-            return load_scenario(str(path))
-        except ScenarioError as exc:
-            raise ScenarioError(str(exc).replace(str(path), label)) from None
-
-
 def _set(raw: dict[str, Any], key: Key, value: Any) -> None:
     """Set ``key`` in the merged scenario data, replacing the same field given in any unit."""
     section = raw if not key.section else raw.setdefault(key.section, {})
@@ -429,6 +419,35 @@ class KeptSample:
     def geometry(self) -> dict[str, float | None]:
         """:func:`initial_geometry` of the sample, computed when it was drawn."""
         return self.geometry_t0
+
+
+class SpooledSamples(Sequence[KeptSample]):
+    """A study's drawn samples as it keeps them (:class:`KeptSample`, appended in index order), each one JSON line
+    in an anonymous temporary file (gone when the process ends, however it ends), read back when asked: in memory
+    is only where each line is (16 bytes a sample), so a study's memory does not grow by ~4 kB a sample."""
+
+    def __init__(self) -> None:
+        self._file = tempfile.TemporaryFile(prefix='acds_samples_')  # noqa: SIM115 (lives as long as the study)
+        self._where = array.array('q')
+
+    def append(self, sample: KeptSample) -> None:
+        """Keep ``sample`` (the next index)."""
+        line = json.dumps([sample.seed, sample.index, sample.drawn, sample.text, sample.name, sample.geometry_t0,
+                           list(sample.length)]).encode() + b'\n'
+        self._file.seek(0, 2)
+        self._where.extend((self._file.tell(), len(line)))
+        self._file.write(line)
+
+    def __len__(self) -> int:
+        return len(self._where) // 2
+
+    def __getitem__(self, i: int) -> KeptSample:  # type: ignore[override]
+        if not -len(self) <= i < len(self):
+            raise IndexError(i)
+        i %= len(self)
+        self._file.seek(self._where[2 * i])
+        seed, index, drawn, text, name, geometry, (steps, period) = json.loads(self._file.read(self._where[2 * i + 1]))
+        return KeptSample(seed, index, drawn, text, name, geometry, (steps, period))
 
 
 def _name(base: str, seed: int, index: int) -> str:

@@ -14,6 +14,7 @@ stepper's exception names its node, stage and step; an output the node does not 
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -191,5 +192,12 @@ def compile_step(stages: list[Stage], routes: dict[str, dict[str, Route]], owner
     w.add(0, 'def initial(o):')  # the time owner's start(): its values of step 0
     _emit_lines(w, 1, owner, routes[owner], lambda _r: '0', publish)
     source = '\n'.join(w.lines) + '\n'
-    exec(compile(source, f'<direct engine step: {len(stages)} stages>', 'exec'), w.ns)  # noqa: S102 (our source)
+    exec(_compiled(source, f'<direct engine step: {len(stages)} stages>'), w.ns)  # noqa: S102 (our source)
     return StepProgram(w.ns['step'], w.ns['initial'], source)
+
+
+@functools.lru_cache(maxsize=8)
+def _compiled(source: str, name: str) -> Any:
+    """The code of a step's source, remembered: the samples of a study write the same source (their objects are
+    bound by name in each run's own namespace), and compiling it is ~2 ms a run."""
+    return compile(source, name, 'exec')

@@ -112,3 +112,52 @@ def test_the_samples_not_captured_are_listed_with_a_wilson_interval():
     lines = dr.not_captured_lines(rows, ['orbit.raan_deg'], 'explain {index}')
     assert lines[0].startswith('1 of 2 samples did not reach acquisition capture')
     assert lines[-1].startswith('| 1 | ') and '| mode_1b |' in lines[-1] and '`orbit.raan_deg` 7.5' in lines[-1]
+
+
+def _study_rows() -> list[dict]:
+    """Rows of every kind a study has: captured, censored, not reaching Mode 1B, failed first and later, an int
+    column beside float ones, a string column, a key only some rows have."""
+    rng = np.random.default_rng(7)
+    rows = [{'index': 0, 'name': 's0', 'seed': 12, 'x': 0.5, 'error': 'boom'}]
+    for i in range(1, 300):
+        mag = None if i % 17 == 0 else float(rng.uniform(40, 300))
+        acq = None if mag is None or i % 11 == 0 else mag + float(rng.uniform(5, 80))
+        rows.append(_row(i, mag, acq, sim=480.0, seed=int(rng.integers(0, 2**31 - 1)), x=float(rng.uniform()),
+                         final_mode='mode_1b' if acq is None else 'capture', orbit_dipole_inclination_deg=float(i % 33),
+                         **({'wheel_saturation_time_min': 12.5} if i % 5 == 0 else {})))
+    rows.insert(150, {'index': 300, 'name': 's300', 'seed': 3, 'x': 0.25, 'error': 'diverged'})
+    return rows
+
+
+def test_rows_held_as_columns_give_back_every_row_and_the_same_statistics(tmp_path):
+    rows = _study_rows()
+    table = dr.Rows()
+    for row in rows:
+        table.append(row)
+    assert len(table) == len(rows)
+    for i, row in enumerate(rows):  # the same keys, values and types (keys in the order the columns came)
+        assert table[i] == row and {k: type(v) for k, v in table[i].items()} == {k: type(v) for k, v in row.items()}
+    assert dr.percentiles(table, 1) == dr.percentiles(rows, 1)
+    assert dr.sensitivity(table, ['x', 'seed']) == dr.sensitivity(rows, ['x', 'seed'])
+    assert dr.failure_rate(table) == dr.failure_rate(rows)
+    assert dr.not_captured_lines(table, ['x'], 'e {index}') == dr.not_captured_lines(rows, ['x'], 'e {index}')
+    (tmp_path / 'a').mkdir()
+    (tmp_path / 'b').mkdir()
+    records = [{'index': r['index'], 'summary': {'v': r.get('x'), 'nan': math.nan}} for r in rows]
+    dr.write_rows(tmp_path / 'a', rows, records)
+    dr.write_rows(tmp_path / 'b', table, iter(records))  # records streamed
+    for name in ('samples.csv', 'samples.json'):
+        assert (tmp_path / 'a' / name).read_bytes() == (tmp_path / 'b' / name).read_bytes(), name
+    dr.write_json(tmp_path / 'list.json', records)
+    assert (tmp_path / 'list.json').read_bytes() == (tmp_path / 'a' / 'samples.json').read_bytes()
+    dr.write_json_list(tmp_path / 'empty.json', iter(()))
+    assert (tmp_path / 'empty.json').read_text() == '[]\n'
+
+
+def test_the_bootstrap_in_blocks_gives_the_numbers_of_one_block(monkeypatch):
+    rows = _study_rows()
+    case, ref = np.sqrt(np.arange(1.0, 40.0)), np.arange(2.0, 41.0)
+    whole, ratio = dr.percentiles(rows, 5), dr.paired_ratio(case, ref, 5)
+    monkeypatch.setattr(dr, 'BOOTSTRAP_BLOCK', 1000)  # 3 resamples a block of 299 values, the last block short
+    assert dr.percentiles(rows, 5) == whole
+    assert dr.paired_ratio(case, ref, 5) == ratio

@@ -24,6 +24,7 @@ import json
 import shlex
 import sys
 import time
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -127,7 +128,7 @@ def _steps(scenario: Scenario, until_min: float | None) -> int | None:
 
 def _run_length(scenario: Scenario, steps: int | None, samples: list[Any] | None = None) -> str:
     """How long each run is: its steps and control period (their ranges when the samples vary the period)."""
-    runs = [s.length for s in samples or []] or [(scenario.total_steps(), scenario.control_period_s)]
+    runs = {s.length for s in samples or []} or {(scenario.total_steps(), scenario.control_period_s)}
     lengths = sorted({(steps if steps is not None else n, dt) for n, dt in runs}, key=lambda nd: nd[0] * nd[1])
     if len({dt for _, dt in lengths}) > 1:
         counts, periods = sorted(n for n, _ in lengths), sorted(dt for _, dt in lengths)
@@ -141,17 +142,40 @@ def _run_length(scenario: Scenario, steps: int | None, samples: list[Any] | None
     return text
 
 
-def draw_samples(base: Scenario, seed: int, runs: int, vary: list[str], command: str) -> tuple[Any, list[Any]]:
+def draw_samples(base: Scenario, seed: int, runs: int, vary: list[str], command: str) -> tuple[Any, Any]:
     """The sampler and its ``runs`` samples as the study keeps them (``KeptSample``: each validated, then its
-    Scenario let go; the first pre-flighted: every stepper built)."""
+    Scenario let go; the first pre-flighted: every stepper built), on disk (``SpooledSamples``: the study's memory
+    does not grow with its samples)."""
+    from acds_runtime.sampling import SpooledSamples
+
     sampler = _sampler(base, seed, vary, command)
-    samples = []
+    samples = SpooledSamples()
     for i in range(runs):
         sample = _draw(sampler, i)
         if i == 0:
             _preflight(sample)
         samples.append(sample.kept())
     return sampler, samples
+
+
+class Keyed(Mapping[tuple[str, int], Any]):
+    """A study's samples by (case, index), read from each case's samples (``SpooledSamples``, sample k at
+    position k) when asked: a view, so nothing is held twice."""
+
+    def __init__(self, cases: dict[str, Sequence[Any]]) -> None:
+        self.cases = cases
+
+    def __getitem__(self, key: tuple[str, int]) -> Any:
+        case, index = key
+        if case not in self.cases or not 0 <= index < len(self.cases[case]):
+            raise KeyError(key)
+        return self.cases[case][index]
+
+    def __iter__(self) -> Iterator[tuple[str, int]]:
+        return ((case, index) for case, samples in self.cases.items() for index in range(len(samples)))
+
+    def __len__(self) -> int:
+        return sum(len(samples) for samples in self.cases.values())
 
 
 def study_command(verb: list[str], args: argparse.Namespace) -> str:
@@ -200,7 +224,7 @@ def open_journal(out: Path, study: dict[str, Any], samples: dict[tuple[str, int]
     """The study's journal (``acds_runtime.journal``), new or resumed; a mismatch is a UsageError (one line)."""
     from acds_runtime.journal import Journal, JournalError, samples_hash, text_hash
 
-    hashes = {key: text_hash(s.text) for key, s in samples.items()}
+    hashes = {key: text_hash(samples[key].text) for key in samples}
     study = {**study, 'samples_hash': samples_hash(hashes.values())}
     try:
         return Journal(out, study, hashes, resume=resume)
@@ -243,9 +267,9 @@ def run_journaled(journal: Any, samples: dict[tuple[str, int], Any], args: argpa
             if after is not None:
                 after(key, summary)
         for (steps, task), keys in batches.items():
-            execution = run_samples([samples[k].text for k in keys], engine=args.engine, steps=steps, jobs=args.jobs,
+            execution = run_samples(_Texts(samples, keys), engine=args.engine, steps=steps, jobs=args.jobs,
                                     scheduler=args.scheduler, progress=not args.quiet, task=task,
-                                    allow_mixed=args.allow_mixed_workers,
+                                    allow_mixed=args.allow_mixed_workers, keep=False,
                                     on_result=lambda i, summary, keys=keys: done(keys[i], summary))[1]
     except (KeyboardInterrupt, _Stop) as exc:
         why = 'Ctrl-C' if isinstance(exc, KeyboardInterrupt) else exc.args[0]
@@ -265,17 +289,34 @@ def run_journaled(journal: Any, samples: dict[tuple[str, int], Any], args: argpa
     return execution
 
 
-def records_of(samples: list[Any], summaries: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Per sample: index, name, drawn values, geometry at t0, run summary (``samples.json``)."""
-    return [{'index': s.index, 'name': s.name, 'drawn': s.drawn, 'geometry': s.geometry(), 'summary': summary}
-            for s, summary in zip(samples, summaries, strict=True)]
+class _Texts(Sequence[str]):
+    """The scenario texts of ``keys``' samples, read when asked (``run_samples`` asks for each as it sends it)."""
+
+    def __init__(self, samples: Mapping[tuple[str, int], Any], keys: list[tuple[str, int]]) -> None:
+        self.samples, self.keys = samples, keys
+
+    def __getitem__(self, i: int) -> str:  # type: ignore[override]
+        return self.samples[self.keys[i]].text
+
+    def __len__(self) -> int:
+        return len(self.keys)
 
 
-def rows_of(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The flat rows of ``records``."""
-    from acds_runtime.dispersion_report import make_row
+def records_of(samples: Iterable[Any], summaries: Iterable[dict[str, Any]]) -> Iterator[dict[str, Any]]:
+    """Per sample: index, name, drawn values, geometry at t0, run summary (``samples.json``), one at a time (the
+    samples and summaries may be read from disk as they are asked for)."""
+    return ({'index': s.index, 'name': s.name, 'drawn': s.drawn, 'geometry': s.geometry(), 'summary': summary}
+            for s, summary in zip(samples, summaries, strict=True))
 
-    return [make_row(r['index'], r['name'], r['drawn'], r['geometry'], r['summary']) for r in records]
+
+def rows_of(records: Iterable[dict[str, Any]]) -> Any:
+    """The flat rows of ``records`` (``dispersion_report.Rows``: held as columns)."""
+    from acds_runtime.dispersion_report import Rows, make_row
+
+    rows = Rows()
+    for r in records:
+        rows.append(make_row(r['index'], r['name'], r['drawn'], r['geometry'], r['summary']))
+    return rows
 
 
 def _default_out(prefix: str, name: str, seed: int, runs: int) -> Path:
@@ -315,10 +356,11 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     command = study_command(['montecarlo', args.scenario], args)
     from acds_runtime.montecarlo import kernel_build
 
+    keyed = Keyed({'': samples})
     journal = open_journal(out, {'verb': 'montecarlo', 'scenario': base.name, 'seed': args.seed, 'runs': args.runs,
                                  'vary': args.vary, 'engine': args.engine, 'until_min': args.until_min,
                                  'steps': steps, 'kernels': kernel_build(), 'command': command},
-                           {('', s.index): s for s in samples}, bool(args.resume))
+                           keyed, bool(args.resume))
     print(f'[montecarlo] {base.name}: {args.runs} samples of seed {args.seed} ({"; ".join(variables)}), '
           f'{run_length}, engine {args.engine}; output {out}', file=sys.stderr, flush=True)
     if not study.applies(base):
@@ -326,11 +368,12 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
               'summary', file=sys.stderr, flush=True)
     t0 = time.monotonic()
     kept = len(journal.done)
-    execution = run_journaled(journal, {('', s.index): s for s in samples}, args, lambda _key: steps, 'montecarlo')
+    execution = run_journaled(journal, keyed, args, lambda _key: steps, 'montecarlo')
     wall = time.monotonic() - t0
-    summaries = [journal.done[('', s.index)] for s in samples]
-    records = records_of(samples, summaries)
-    rows = rows_of(records)
+
+    def records() -> Iterator[dict[str, Any]]:  # read from disk, one sample at a time (twice: rows, samples.json)
+        return records_of(samples, (journal.done[('', s.index)] for s in samples))
+    rows = rows_of(records())
     stats = dr.percentiles(rows, args.seed, args.target_width or dr.TARGET_WIDTH_PCT)
     sens = dr.sensitivity(rows, list(dr.flatten(samples[0].drawn)))
     where = _execution_text(execution) if execution is not None else 'nothing left to run'
@@ -341,7 +384,7 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
             'steps': steps, 'run_length': run_length, 'execution': where,
             'wall_seconds': wall, 'command': command, 'rerun': rerun}
     mark_complete(out, spec, False)
-    dr.write_rows(out, rows, records)
+    dr.write_rows(out, rows, records())
     dr.write_json(out / 'percentiles.json', stats)
     plots = dr.plot_distributions(out, rows, stats)
     failures = _not_captured(base, out, rows, samples)
@@ -371,7 +414,7 @@ def _study_summary() -> Any:
     return next(m for m in modules(SUMMARIES) if hasattr(m, STUDY_ROW_ATTRIBUTE))
 
 
-def _not_captured(base: Scenario, out: Path, rows: list[dict[str, Any]], samples: list[Any]) -> list[str]:
+def _not_captured(base: Scenario, out: Path, rows: Sequence[dict[str, Any]], samples: Sequence[Any]) -> list[str]:
     """The samples that did not reach capture, with their drawn conditions (where the study's summary applies; markdown)."""
     from acds_runtime import dispersion_report as dr
 

@@ -29,6 +29,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -38,6 +39,7 @@ from acds_common.scenario import shipped_role
 
 from ..arguments import UsageError, check_output_file, positive_int, positive_minutes
 from .montecarlo import (
+    Keyed,
     add_execution_options,
     add_sample_options,
     draw_samples,
@@ -214,7 +216,7 @@ def cmd_paired(args: argparse.Namespace) -> int:
         steps_by_case.append(None if args.until_min is None else max(1, round(args.until_min * 60 /
                                                                                sc.control_period_s)))
     command = study_command(['sweep', *args.scenarios], args)
-    keyed = {(name, s.index): s for name, samples in zip(names, samples_by_case, strict=True) for s in samples}
+    keyed = Keyed(dict(zip(names, samples_by_case, strict=True)))
     journal = open_journal(out, {'verb': 'sweep', 'scenarios': names, 'seed': args.seed, 'runs': args.runs,
                                  'vary': args.vary, 'engine': args.engine, 'until_min': args.until_min,
                                  'command': command}, keyed, bool(args.resume))
@@ -223,9 +225,11 @@ def cmd_paired(args: argparse.Namespace) -> int:
           f'output {out}', file=sys.stderr, flush=True)
     t0 = time.monotonic()
     execution = run_journaled(journal, keyed, args, lambda key: steps_of[key[0]], 'sweep')
-    by_case = [[journal.done[(name, k)] for k in range(args.runs)] for name in names]
     wall = time.monotonic() - t0
-    rows_by_case = [rows_of(records_of(samples_by_case[i], by_case[i])) for i in range(len(names))]
+
+    def records(i: int) -> Iterator[dict[str, Any]]:  # case i's, read from disk one sample at a time
+        return records_of(samples_by_case[i], (journal.done[(names[i], k)] for k in range(args.runs)))
+    rows_by_case = [rows_of(records(i)) for i in range(len(names))]
     cases = []
     ref_rows = rows_by_case[0]
     for name, rows in zip(names, rows_by_case, strict=True):
@@ -257,8 +261,7 @@ def cmd_paired(args: argparse.Namespace) -> int:
         dr.write_json(Path(args.json), result)
     dr.write_json(out / 'sweep.json', result)
     all_rows = [{'case': name, **row} for name, rows in zip(names, rows_by_case, strict=True) for row in rows]
-    all_records = [{'case': name, **rec} for i, name in enumerate(names)
-                   for rec in records_of(samples_by_case[i], by_case[i])]
+    all_records = ({'case': name, **rec} for i, name in enumerate(names) for rec in records(i))
     dr.write_rows(out, all_rows, all_records)
     (out / 'report.md').write_text(f'# Paired perturbation study\n\n`{result["command"]}`\n\n```\n{text}\n```\n')
     return 0 if all(c['failed'] == 0 for c in cases) else 1
