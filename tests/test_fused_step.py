@@ -49,6 +49,32 @@ def test_fused_whole_acquisition_equals_the_step_program():
     assert loop.blocks > fused['steps'] // BLOCK_STEPS, 'the loop stopped at the transitions and took over again'
 
 
+#: Sample 2 of seed 2 of the paired sweep's draws (rates just above the Mode 1B thresholds): its steps 2, 3 and 4 are
+#: not all quiet, so a block of ONE fused step (step 2) sits between two steps of the step program.
+_ONE_STEP_BLOCK = """extends: heao_b_acquisition
+name: one_step_block
+seed: 981723672
+spacecraft:
+  initial_quaternion_xyzw: [-0.5616679134241909, -0.7312665121260047, -0.3056443538756509, 0.23740255309646355]
+  initial_rates_deg_s: [0.11529732198374719, 0.11511941980755268, 0.11531855401539937]
+orbit:
+  raan_deg: 316.4220549773804
+  arg_latitude0_deg: 133.32912680302064
+earth:
+  greenwich_angle0_deg: 243.88579719421594
+"""
+
+
+def test_a_block_of_one_step_feeds_every_value():
+    """A one-step block has no rows for the summaries' block form: its values go one by one, none left out (was: the
+    values stamped from the block's first step on were dropped and the next block refused the run)."""
+    from acds_common.scenario import scenario_from_text
+
+    plain, fused, run = _both(scenario_from_text(_ONE_STEP_BLOCK), 60)
+    assert fused == plain
+    assert run.fused_loop is not None and run.fused_loop.blocks >= 2
+
+
 def test_faults_alarms_and_commands_fall_back_to_the_step_program():
     """A bias shift on the active magnetometer unit, an open winding on the x driver (the mismatch alarm and the
     automatic switch to unit B), forwarded ground commands (a gain, the y axis's EEA select, the magnetometer's

@@ -289,7 +289,7 @@ class FusedLoop:
             if self._observer.next_step != lo:
                 raise RuntimeError(f'the fused loop left step {self._observer.next_step} incomplete before its block')
             self._observer.feed_block(lo, hi - lo, columns)
-            self._one_by_one([e for e in edges if e[1] >= hi])
+        self._one_by_one([e for e in edges if e[1] >= hi])  # without a block (lo = hi = k0): every value from k0 on
         self._drain()
 
     def _one_by_one(self, edges: list[tuple[Route, int, Any]]) -> None:
