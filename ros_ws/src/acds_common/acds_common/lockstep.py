@@ -73,6 +73,7 @@ from acds_common.parameters import (
     node_param_specs,
     normalize,
 )
+from acds_common.profiling import profiled
 from acds_common.stepper import StepError, load_stepper
 from acds_common.timing import StepTimes, overrun
 
@@ -786,8 +787,9 @@ def run_node(name: str, args: list[str] | None = None) -> int:
         from rclpy.experimental import EventsExecutor
         executor = EventsExecutor()
         executor.add_node(node)
-        while not (node.may_exit() or node.failure is not None or stop['signal'] is not None):
-            executor.spin_once(timeout_sec=0.1)
+        with profiled(node.instance):
+            while not (node.may_exit() or node.failure is not None or stop['signal'] is not None):
+                executor.spin_once(timeout_sec=0.1)
         faulthandler.dump_traceback_later(STUCK_TRACE_S, file=sys.stderr)
         if node.failure is not None:
             print(f'[{name}] {FAILURE_MARK}{node.failure}', file=sys.stderr, flush=True)
