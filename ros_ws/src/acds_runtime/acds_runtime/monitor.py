@@ -121,19 +121,28 @@ class RunMonitor:
         self._executor = EventsExecutor(context=self.context)
         self._executor.add_node(self.node)
         self._stop = threading.Event()
+        #: Cleared (with ``_stop`` set) when the monitor closes: what its spinning loop reads per message.
+        self._spinning = True
         self._thread = threading.Thread(target=profiling(MONITOR_NAME, self._spin), name='run_monitor', daemon=True)
         self._thread.start()
 
     # ---- spinning -----------------------------------------------------------------------------------
     def _spin(self) -> None:
+        """Take in messages (one per ``spin_once``) until closed; between them, while the graph has not started, announce
+        readiness once matched, then check the publishers every :data:`PUBLISHER_CHECK_PERIOD_S`. Per message only a
+        plain flag and the clock are read (the stop event and the context are checked with the publishers)."""
+        spin_once, monotonic = self._executor.spin_once, time.monotonic
         try:
-            while not self._stop.is_set() and self.context.ok():
-                self._executor.spin_once(timeout_sec=0.05)
-                now = time.monotonic()
+            while self._spinning:
+                spin_once(timeout_sec=0.05)
                 if not self.ready:
                     self._announce_when_matched()
-                elif now - self._last_check > PUBLISHER_CHECK_PERIOD_S:
+                    continue
+                now = monotonic()
+                if now - self._last_check > PUBLISHER_CHECK_PERIOD_S:
                     self._last_check = now
+                    if self._stop.is_set() or not self.context.ok():
+                        return
                     self._check_publishers(now)
         except Exception as exc:  # noqa: BLE001 (never a silent death of the observer: the launcher reports it)
             import traceback
@@ -342,6 +351,7 @@ class RunMonitor:
 
     def close(self) -> None:
         """Stop spinning and release the ROS context (closes the bag, if recording)."""
+        self._spinning = False
         self._stop.set()
         self._thread.join(timeout=5.0)
         if self.recorder is not None and hasattr(self.recorder, 'close'):
