@@ -361,6 +361,9 @@ class BagWriter:
         if self.compression == 'zstd':
             self._writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
         self.info = dict(info or {})
+        #: The sidecar's YAML but for the publishers, and what it was dumped from (:meth:`_write_run_info`).
+        self._head_key: tuple[Any, ...] = ()
+        self._head_yaml = ''
         self.publishers: dict[str, set[str]] = {}
         self.counts: dict[str, int] = {}
         self.flushed_counts: dict[str, int] = {}
@@ -386,13 +389,19 @@ class BagWriter:
         return yaml.safe_dump({t: sorted(v) for t, v in sorted(self.publishers.items())}, sort_keys=True)
 
     def _write_run_info(self) -> None:
-        """The sidecar, replaced atomically (a crash never leaves half of it); publishers as known so far."""
-        info = dict(self.info)
-        if self.publishers:
-            info['publishers'] = self._publishers_yaml()
-        replace_file(self.path / RUN_INFO_FILE, yaml.safe_dump({'storage': self.storage, 'compression': self.compression,
-                                                                'flush_period_s': self.flush_period_s, **info},
-                                                               sort_keys=False))
+        """The sidecar, replaced atomically (a crash never leaves half of it); publishers as known so far.
+
+        It is rewritten as each topic's publishers become known (some twenty times as a run starts): the YAML of
+        everything but the publishers (the scenario and the parameters, long strings) is dumped once and reused while
+        it does not change; the publishers' mapping follows it, as the last key of one dump would."""
+        head = {'storage': self.storage, 'compression': self.compression, 'flush_period_s': self.flush_period_s,
+                **{k: v for k, v in self.info.items() if k != 'publishers'}}
+        key = tuple(head.items())
+        if key != self._head_key:
+            self._head_key, self._head_yaml = key, yaml.safe_dump(head, sort_keys=False)
+        publishers = self._publishers_yaml() if self.publishers else self.info.get('publishers')
+        tail = '' if publishers is None else yaml.safe_dump({'publishers': publishers}, sort_keys=False)
+        replace_file(self.path / RUN_INFO_FILE, self._head_yaml + tail)
 
     # ---- writing ------------------------------------------------------------------------------------
     def write(self, topic: str, data: bytes, *, msgtype: str | None = None, qos: list[Qos] | None = None,
