@@ -27,7 +27,8 @@ The direct engine and the dispersion are also given per second of this process's
 shared with other work, the wall rate measures the load as much as the code.
 
 ``--json`` prints one object with the keys ``graph_steps_per_s``, ``bare_chain_steps_per_s``,
-``ratio``, ``hops``, ``deliveries_per_step``, ``direct_steps_per_s``, ``direct_steps_per_cpu_s``,
+``ratio``, ``hops``, ``deliveries_per_step`` (and ``deliveries_by_topic``: per step, each topic's messages × the
+subscriptions that receive them, the monitor's included), ``direct_steps_per_s``, ``direct_steps_per_cpu_s``,
 ``direct_kernel_load_s``, ``direct_unfused_steps_per_s`` and ``direct_unfused_steps_per_cpu_s`` (the direct engine
 without its fused loop), ``direct_fused_share`` (the steps the fused loop ran), ``fused_loop_us_per_step`` (wall µs a
 step inside it), ``fused_us_per_model`` (node → µs per step of its fused kernel alone), ``core_steps_per_s``,
@@ -45,6 +46,7 @@ import argparse
 import json
 import os
 import resource
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -119,16 +121,20 @@ def graph_rate(steps: int) -> dict[str, Any]:
             mon = graph.monitor
             assert mon is not None
             subs = {name: mon.node.count_subscribers(name) for name in [*mon.topics, topics.CLOCK]}
-            marks['deliveries'] = sum(mon.count(name) * n for name, n in subs.items()) / max(1, k)
+            marks['by_topic'] = {name: mon.count(name) * n / max(1, k) for name, n in subs.items()}
 
     graph.progress = progress
-    with graph:
-        graph.wait()
+    try:
+        with graph:
+            graph.wait()
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
     span = last - skip
     wall = marks['t1'] - marks['t0']
     cpu = {name: 1e3 * (marks['cpu1'][name] - marks['cpu0'][name]) / span for name in marks['cpu0']}
-    return {'steps_per_s': span / wall, 'cpu_ms_per_step': cpu, 'deliveries_per_step': marks['deliveries'],
-            'hops': len(graph.processes)}
+    by_topic = dict(sorted(marks['by_topic'].items(), key=lambda item: (-item[1], item[0])))
+    return {'steps_per_s': span / wall, 'cpu_ms_per_step': cpu, 'deliveries_per_step': sum(by_topic.values()),
+            'deliveries_by_topic': by_topic, 'hops': len(graph.processes)}
 
 
 def bare_chain_rate(hops: int, cycles: int) -> float:
@@ -267,6 +273,7 @@ def main(args: argparse.Namespace) -> int:
     result = {'graph_steps_per_s': round(graph['steps_per_s'], 1), 'bare_chain_steps_per_s': round(bare, 1),
               'ratio': round(graph['steps_per_s'] / bare, 3), 'hops': graph['hops'],
               'deliveries_per_step': round(graph['deliveries_per_step'], 2),
+              'deliveries_by_topic': {k: round(v, 2) for k, v in graph['deliveries_by_topic'].items()},
               'direct_steps_per_s': round(direct, 1), 'direct_steps_per_cpu_s': round(direct_cpu, 1),
               'direct_kernel_load_s': round(kernel_load, 3),
               'direct_unfused_steps_per_s': round(unfused, 1), 'direct_unfused_steps_per_cpu_s': round(unfused_cpu, 1),
@@ -287,6 +294,8 @@ def main(args: argparse.Namespace) -> int:
     for name, ms in graph['cpu_ms_per_step'].items():
         print(f'    CPU {name:34s} {ms:8.3f} ms/step')
     print(f'deliveries per step:                              {graph["deliveries_per_step"]:10.2f}')
+    for name, n in graph['deliveries_by_topic'].items():
+        print(f'    {name:45s} {n:6.2f}')
     print(f'bare rclpy ring ({graph["hops"]} processes):                 {bare:10.1f} cycles/s')
     print(f'ratio graph / bare ring:                          {graph["steps_per_s"] / bare:10.3f}')
     print(f'direct engine (one process, no DDS):              {direct:10.1f} steps/s  ({direct_cpu:.1f} per CPU s; '

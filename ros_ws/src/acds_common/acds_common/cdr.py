@@ -285,15 +285,34 @@ def _stamped(body: str) -> struct.Struct:
     return struct.Struct(f'<4siI{body}{-size % 4}x')
 
 
+def _fixed_reader(c: Codec, body: str, *, child: bool = False) -> tuple[struct.Struct, tuple[int, ...]]:
+    """One struct that reads a stamped message laid out as :meth:`Codec.encode` writes it for this topic (its
+    frame_id, and ``child``: its child_frame_id), and the string lengths that layout has: a decoder checks them and
+    reads the whole message in one ``unpack`` (the stamp, those lengths, then ``body``), falling back to reading field
+    by field when another frame name moved the fields (a message from outside the graph)."""
+    frame = len(c.frame_id.encode()) + 1
+    if not child:
+        pad = -(c._body_offset) % 8
+        return struct.Struct(f'<4xiII{frame}x{pad}x{body}'), (frame,)
+    second = len(c.child_frame_id.encode()) + 1
+    at = c._body_offset + -c._body_offset % 4 + 4 + second
+    return struct.Struct(f'<4xiII{frame}x{-c._body_offset % 4}xI{second}x{-at % 8}x{body}'), (frame, second)
+
+
 def _vector3_stamped(c: Codec) -> tuple[Any, Any, struct.Struct]:
     head = c._head + _pad(c._body_offset, 8)
     packer = _stamped(f'{len(head)}s3d')
+    reader, (frame,) = _fixed_reader(c, '3d')
 
     def encode(t_ns: int, value: Any) -> bytes:
         sec, nsec = divmod(t_ns, 1_000_000_000)
         return packer.pack(ENCAPSULATION, sec, nsec, head, value[0], value[1], value[2])
 
     def decode(data: bytes) -> tuple[int, tuple[float, float, float]]:
+        if len(data) >= reader.size:
+            sec, nsec, n, x, y, z = reader.unpack_from(data)
+            if n == frame:
+                return sec * 1_000_000_000 + nsec, (x, y, z)
         r = _Reader(data, 12)
         r.string()
         return stamp_ns(data), r.doubles(_V3)  # type: ignore[return-value]
@@ -303,6 +322,7 @@ def _vector3_stamped(c: Codec) -> tuple[Any, Any, struct.Struct]:
 def _magnetic_field(c: Codec) -> tuple[Any, Any, struct.Struct]:
     head = c._head + _pad(c._body_offset, 8)
     packer = _stamped(f'{len(head)}s3d9d')
+    reader, (frame,) = _fixed_reader(c, '3d9d')
 
     def encode(t_ns: int, value: Any) -> bytes:
         b, cov = value
@@ -310,6 +330,10 @@ def _magnetic_field(c: Codec) -> tuple[Any, Any, struct.Struct]:
         return packer.pack(ENCAPSULATION, sec, nsec, head, *b, *cov)
 
     def decode(data: bytes) -> tuple[int, Any]:
+        if len(data) >= reader.size:
+            sec, nsec, n, *v = reader.unpack_from(data)
+            if n == frame:
+                return sec * 1_000_000_000 + nsec, (tuple(v[:3]), tuple(v[3:]))
         r = _Reader(data, 12)
         r.string()
         return stamp_ns(data), (r.doubles(_V3), r.doubles(_D9))
@@ -344,6 +368,7 @@ def _imu(c: Codec) -> tuple[Any, Any, struct.Struct]:
     head = c._head + _pad(c._body_offset, 8) + _IDENTITY_ORIENTATION + _NOT_PROVIDED_9
     tail = _V3.pack(0.0, 0.0, 0.0) + _NOT_PROVIDED_9
     packer = _stamped(f'{len(head)}s3d9d{len(tail)}s')
+    reader, (frame,) = _fixed_reader(c, f'{len(_IDENTITY_ORIENTATION) + len(_NOT_PROVIDED_9)}x3d9d')
 
     def encode(t_ns: int, value: Any) -> bytes:
         w, cov = value
@@ -351,6 +376,10 @@ def _imu(c: Codec) -> tuple[Any, Any, struct.Struct]:
         return packer.pack(ENCAPSULATION, sec, nsec, head, *w, *cov, tail)
 
     def decode(data: bytes) -> tuple[int, Any]:
+        if len(data) >= reader.size:
+            sec, nsec, n, *v = reader.unpack_from(data)
+            if n == frame:
+                return sec * 1_000_000_000 + nsec, (tuple(v[:3]), tuple(v[3:]))
         r = _Reader(data, 12)
         r.string()
         r.doubles(_QUAT)
@@ -365,6 +394,7 @@ def _odometry(c: Codec) -> tuple[Any, Any, struct.Struct]:
     _P = struct.Struct('<3d4d')
     _T = struct.Struct('<3d3d')
     packer = _stamped(f'{len(head)}s7d{len(_D36_ZERO)}x6d{len(_D36_ZERO)}x')  # covariances: zeros
+    reader, (frame, child) = _fixed_reader(c, f'7d{len(_D36_ZERO)}x6d', child=True)
 
     def encode(t_ns: int, value: OdometryValue) -> bytes:
         sec, nsec = divmod(t_ns, 1_000_000_000)
@@ -372,6 +402,11 @@ def _odometry(c: Codec) -> tuple[Any, Any, struct.Struct]:
                            *value.angular)
 
     def decode(data: bytes) -> tuple[int, OdometryValue]:
+        if len(data) >= reader.size:
+            sec, nsec, n, m, *v = reader.unpack_from(data)
+            if n == frame and m == child:
+                return sec * 1_000_000_000 + nsec, OdometryValue(tuple(v[0:3]), tuple(v[3:7]), tuple(v[7:10]),
+                                                                 tuple(v[10:13]))  # type: ignore[arg-type]
         r = _Reader(data, 12)
         r.string()
         r.string()
@@ -401,9 +436,14 @@ def _cached_string(text: str) -> bytes:
 def _diagnostic_array(c: Codec) -> tuple[Any, Any, None]:
     head = c._head
 
+    sent: list[Any] = [None, b'']  # the last statuses encoded (an immutable tuple) and their bytes after the stamp
+
     def encode(t_ns: int, value: tuple[Status, ...]) -> bytes:
+        stamp = _STAMP.pack(*divmod(t_ns, 1_000_000_000))
+        if value is sent[0]:  # a stepper that hands the same statuses again (its mode has not changed)
+            return ENCAPSULATION + stamp + sent[1]
         # Offsets relative to the payload start; every string and count is 4-aligned (_PAD4).
-        out = bytearray(_STAMP.pack(*divmod(t_ns, 1_000_000_000)) + head)
+        out = bytearray(stamp + head)
         out += _PAD4[len(out) & 3]
         out += _U32.pack(len(value))
         for st in value:
@@ -418,9 +458,15 @@ def _diagnostic_array(c: Codec) -> tuple[Any, Any, None]:
                 out += _cached_string(key)
                 out += _PAD4[len(out) & 3]
                 out += _cached_string(text)
+        sent[:] = value, bytes(out[8:])
         return ENCAPSULATION + bytes(out)
 
+    last: list[Any] = [None, ()]  # the bytes after the stamp of the last message read, and its statuses
+
     def decode(data: bytes) -> tuple[int, tuple[Status, ...]]:
+        body = data[12:]
+        if body == last[0]:  # a mode or status that has not changed since the last step: the same (immutable) value
+            return stamp_ns(data), last[1]
         r = _Reader(data, 12)
         r.string()
         statuses = []
@@ -429,7 +475,8 @@ def _diagnostic_array(c: Codec) -> tuple[Any, Any, None]:
             name, message, hardware_id = r.string(), r.string(), r.string()
             values = tuple((r.string(), r.string()) for _ in range(r.u32()))
             statuses.append(Status(level, name, message, hardware_id, values))
-        return stamp_ns(data), tuple(statuses)
+        last[:] = body, tuple(statuses)
+        return stamp_ns(data), last[1]
     return encode, decode, None
 
 

@@ -73,6 +73,7 @@ from acds_common.parameters import (
     node_param_specs,
     normalize,
 )
+from acds_common.profiling import profiled
 from acds_common.stepper import StepError, load_stepper
 from acds_common.timing import StepTimes, overrun
 
@@ -170,6 +171,12 @@ class _Stage:
     handler: Callable[[int, float, dict[str, Any]], dict[str, Any]]
     paced_by_clock: bool
     next_step: int = 0
+    #: Per input, in declared order: its key, the buffer of its topic (None: its source is not in the graph) and its lag.
+    reads: tuple[tuple[str, dict[int, Any] | None, int], ...] = ()
+
+
+#: What a buffer lookup returns for a step not received yet.
+_MISSING = object()
 
 
 @dataclass
@@ -297,11 +304,14 @@ class LockstepNode(Node):
             for inp in present:
                 self._add_input(inp.topic, inp.source)
             paced = not any(i.lag == 0 for i in present)
-            self._stages.append(_Stage(st.name, st.inputs, getattr(self.stepper, st.name), paced))
+            reads = tuple((i.key, self._inputs[i.topic].buffer if i in present else None, i.lag) for i in st.inputs)
+            self._stages.append(_Stage(st.name, st.inputs, getattr(self.stepper, st.name), paced, reads=reads))
         self._clock_step = -1
         #: The run's last step, once the time owner has announced it (no stage waits for a later one).
         self._final_step: int | None = None
         self._monitor_acked = -1
+        #: Whether the run monitor paces this node (the time owner of a graph that has one).
+        self._paced_by_monitor = self.time_owner and MONITOR_NAME in self.graph_nodes
         self._firing = False
         self._started = False
         self._ready_sent = False
@@ -488,8 +498,7 @@ class LockstepNode(Node):
         if i > 0 and self._stages[i - 1].next_step <= k:
             return False
         if self.time_owner:
-            return k <= self._clock_step and (MONITOR_NAME not in self.graph_nodes
-                                              or monitor_allows(k, self._monitor_acked))
+            return k <= self._clock_step and (not self._paced_by_monitor or monitor_allows(k, self._monitor_acked))
         return not stage.paced_by_clock or k <= self._clock_step
 
     def _try_fire(self) -> None:
@@ -515,11 +524,15 @@ class LockstepNode(Node):
                 k = stage.next_step
                 if not self._ready_to_fire(i, stage, k):
                     continue
-                values: dict[str, Any] = {}
-                for inp in stage.inputs:
-                    ok, values[inp.key] = self._input_value(inp, k)
-                    if not ok:
+                values: dict[str, Any] = {}  # as _input_value reads them, from the buffers the stage holds
+                for key, buffer, lag in stage.reads:
+                    if buffer is None or k < lag:
+                        values[key] = None
+                        continue
+                    value = buffer.get(k - lag, _MISSING)
+                    if value is _MISSING:
                         break
+                    values[key] = value
                 else:
                     stage.next_step += 1
                     self._last_progress = ready = time.monotonic()
@@ -786,8 +799,9 @@ def run_node(name: str, args: list[str] | None = None) -> int:
         from rclpy.experimental import EventsExecutor
         executor = EventsExecutor()
         executor.add_node(node)
-        while not (node.may_exit() or node.failure is not None or stop['signal'] is not None):
-            executor.spin_once(timeout_sec=0.1)
+        with profiled(node.instance):
+            while not (node.may_exit() or node.failure is not None or stop['signal'] is not None):
+                executor.spin_once(timeout_sec=0.1)
         faulthandler.dump_traceback_later(STUCK_TRACE_S, file=sys.stderr)
         if node.failure is not None:
             print(f'[{name}] {FAILURE_MARK}{node.failure}', file=sys.stderr, flush=True)

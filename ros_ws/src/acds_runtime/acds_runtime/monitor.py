@@ -18,6 +18,7 @@ from outside the graph: :attr:`RunMonitor.intrusion` names it and the launcher f
 
 from __future__ import annotations
 
+import functools
 import sys
 import threading
 import time
@@ -31,6 +32,7 @@ from acds_common import topics
 from acds_common.cdr import Codec, stamp_ns
 from acds_common.graph import MONITOR_ACK_EVERY, MONITOR_NAME, Graph
 from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS, PublisherCheck, message_class, release_node
+from acds_common.profiling import profiling
 from rclpy.context import Context
 from rclpy.node import Node
 
@@ -60,7 +62,7 @@ class RunMonitor:
     """Observe one graph (one ROS domain) from inside the launcher process."""
 
     def __init__(self, domain_id: int, dt_ns: int, graph: Graph, *, on_clock: Callable[[int], None] | None = None,
-                 record: Callable[[Node], Callable[[str, bytes], None]] | None = None,
+                 record: Callable[[Node], Callable[[str, bytes, int | None], None]] | None = None,
                  observer: Any = None, keep: bool = False, sink: Callable[[str, bytes], None] | None = None,
                  external: ExternalWatch | None = None) -> None:
         self.context = Context()
@@ -94,7 +96,8 @@ class RunMonitor:
                 state = self.topics[name] = TopicState(name, out.msg_type, set(), out.every_step,
                                                        Codec(out.msg_type).stamped)
             state.publishers.add(external.publisher(spec.instance) if external is not None else spec.instance)
-        #: Called with (absolute topic, raw CDR) for every message, before the /clock ack (a bag writer).
+        #: Called with (absolute topic, raw CDR, its stamp in ns or None) for every message, before the /clock ack (a
+        #: bag writer).
         self.recorder = record(self.node) if record is not None else None
         #: Also called with every message, after the recorder (a live view: :mod:`acds_runtime.foxglove_bridge`).
         self.sink = sink
@@ -102,7 +105,7 @@ class RunMonitor:
         for name, state in self.topics.items():
             qos = COMMAND_QOS if name.endswith('/' + topics.GROUND_ACK) else LOCKSTEP_QOS
             self._subs[name] = self.node.create_subscription(message_class(state.msg_type), name,
-                                                             lambda data, t=name: self._on_raw(t, data), qos, raw=True)
+                                                             functools.partial(self._on_raw, name), qos, raw=True)
         self._clock_sub = self.node.create_subscription(message_class(topics.TYPES[topics.CLOCK]), topics.CLOCK,
                                                         self._on_clock_raw, LOCKSTEP_QOS, raw=True)
         self._ack = self.node.create_publisher(message_class(topics.TYPES[topics.MONITOR_ACK]), topics.MONITOR_ACK,
@@ -118,19 +121,28 @@ class RunMonitor:
         self._executor = EventsExecutor(context=self.context)
         self._executor.add_node(self.node)
         self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._spin, name='run_monitor', daemon=True)
+        #: Cleared (with ``_stop`` set) when the monitor closes: what its spinning loop reads per message.
+        self._spinning = True
+        self._thread = threading.Thread(target=profiling(MONITOR_NAME, self._spin), name='run_monitor', daemon=True)
         self._thread.start()
 
     # ---- spinning -----------------------------------------------------------------------------------
     def _spin(self) -> None:
+        """Take in messages (one per ``spin_once``) until closed; between them, while the graph has not started, announce
+        readiness once matched, then check the publishers every :data:`PUBLISHER_CHECK_PERIOD_S`. Per message only a
+        plain flag and the clock are read (the stop event and the context are checked with the publishers)."""
+        spin_once, monotonic = self._executor.spin_once, time.monotonic
         try:
-            while not self._stop.is_set() and self.context.ok():
-                self._executor.spin_once(timeout_sec=0.05)
-                now = time.monotonic()
+            while self._spinning:
+                spin_once(timeout_sec=0.05)
                 if not self.ready:
                     self._announce_when_matched()
-                elif now - self._last_check > PUBLISHER_CHECK_PERIOD_S:
+                    continue
+                now = monotonic()
+                if now - self._last_check > PUBLISHER_CHECK_PERIOD_S:
                     self._last_check = now
+                    if self._stop.is_set() or not self.context.ok():
+                        return
                     self._check_publishers(now)
         except Exception as exc:  # noqa: BLE001 (never a silent death of the observer: the launcher reports it)
             import traceback
@@ -169,7 +181,8 @@ class RunMonitor:
         st = self.topics[topic]
         if self.external is not None:
             self._watch(topic, data)
-        k = stamp_ns(data) // self.dt_ns if st.stamped else None
+        t_ns = stamp_ns(data) if st.stamped else None
+        k = t_ns // self.dt_ns if t_ns is not None else None
         with self._lock:
             if k is not None and st.every_step:
                 if len(st.publishers) == 1:
@@ -182,8 +195,8 @@ class RunMonitor:
             st.count += 1
             if self.keep:
                 st.kept.append(data)
-        if self.recorder is not None:
-            self.recorder(topic, data)
+        if self.recorder is not None:  # the stamp read once (little-endian CDR, as every node here sends)
+            self.recorder(topic, data, t_ns if data[1] == 1 else None)
         if self.sink is not None:
             self.sink(topic, data)
         if self.observer is not None:
@@ -202,7 +215,7 @@ class RunMonitor:
         t_ns = stamp_ns(data)
         k = t_ns // self.dt_ns
         if self.recorder is not None:
-            self.recorder(topics.CLOCK, data)
+            self.recorder(topics.CLOCK, data, t_ns if data[1] == 1 else None)
         if self.sink is not None:
             self.sink(topics.CLOCK, data)
         with self._lock:
@@ -338,6 +351,7 @@ class RunMonitor:
 
     def close(self) -> None:
         """Stop spinning and release the ROS context (closes the bag, if recording)."""
+        self._spinning = False
         self._stop.set()
         self._thread.join(timeout=5.0)
         if self.recorder is not None and hasattr(self.recorder, 'close'):

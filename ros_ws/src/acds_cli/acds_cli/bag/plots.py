@@ -55,7 +55,9 @@ def _gather(bag: Bag, vectors: dict[str, Callable[[Any], list[float]]],
     """{topic: (timestamps ns, values)} in one pass over the bag: numbers packed as doubles, other values a list.
 
     Numeric series keep at most about ``max_steps`` steps (every k-th control step, k from the longest series);
-    the ``texts`` (the mode stream: every transition) are kept whole.
+    the ``texts`` (the mode stream: every transition) are kept whole, and a text message whose bytes after its stamp
+    are those of the one before is not deserialized again: its getter's value is the one before (a ``texts`` getter
+    reads no stamp; the mode changes a few times in a run of tens of thousands of steps).
     """
     ts = typestore()
     getters = {topics.resolve(t): get for t, get in (*vectors.items(), *texts.items()) if bag.has(t)}
@@ -64,16 +66,20 @@ def _gather(bag: Bag, vectors: dict[str, Callable[[Any], list[float]]],
     dt = bag.control_period_ns or 0
     longest = max((bag.count(t) for t in getters if t not in whole), default=0)
     stride = max(1, math.ceil(longest / max_steps)) if dt > 0 else 1
+    last: dict[str, tuple[bytes, Any]] = {}
     for topic, t, data in bag.messages(getters):
         if stride > 1 and topic not in whole and (t // dt) % stride:
             continue
         stamps, values = out[topic]
         stamps.append(t)
-        got = getters[topic](ts.deserialize_cdr(data, bag.types[topic]))
-        if isinstance(values, array):
-            values.extend(got)
+        if topic in whole:
+            body = data[12:]  # after the encapsulation and the header's stamp
+            seen = last.get(topic)
+            if seen is None or seen[0] != body:
+                seen = last[topic] = body, getters[topic](ts.deserialize_cdr(data, bag.types[topic]))
+            values.append(seen[1])
         else:
-            values.append(got)
+            values.extend(getters[topic](ts.deserialize_cdr(data, bag.types[topic])))
     return out
 
 
