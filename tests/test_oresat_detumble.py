@@ -102,8 +102,8 @@ def test_summary_detumble_time_is_when_the_rate_stays_below_the_threshold() -> N
     energy counts the power of every step before it; the drive of the last step (never integrated) is
     not counted until a next step's truth arrives."""
     sc = load_scenario('oresat_detumble')
-    acc = oresat.Accumulator(type('S', (), {'control_period_s': 2.0})())
-    thr = math.radians(oresat.DETUMBLED_RATE_DEG_S)
+    acc = oresat.Accumulator(type('S', (), {'control_period_s': 2.0, 'get': lambda _s, *key: sc.get(*key)})())
+    thr = sc.get('dynamics', 'detumbled_rate')
     rates = [3 * thr, 0.5 * thr, 1.5 * thr, 0.9 * thr, 0.2 * thr]
     for k, rate in enumerate(rates):
         acc.step(k, {oresat.ODOMETRY: _odometry(rate), oresat.POWER: (0.1, 0.2, 0.0),

@@ -29,6 +29,7 @@ import shlex
 import shutil
 import signal
 import subprocess
+import time
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -151,17 +152,28 @@ def start_process(argv: Sequence[str], env: dict[str, str], log: Path) -> subpro
                                 start_new_session=True, preexec_fn=_die_with_parent())
 
 
-def stop_process(proc: subprocess.Popen[Any], grace_s: float) -> dict[str, Any]:
-    """Stop a user's node: SIGINT to its process group, SIGKILL after ``grace_s``; reaped. ``{'how', 'exit_code'}``,
-    ``how`` one of 'exited by itself', 'stopped by SIGINT', 'killed (ignored SIGINT for G s)'."""
+def interrupt(proc: subprocess.Popen[Any]) -> float | None:
+    """SIGINT to a running node's process group; when it was sent (monotonic s), None when the node had ended."""
     if proc.poll() is not None:
-        return {'how': 'exited by itself', 'exit_code': proc.returncode}
+        return None
     try:
         os.killpg(proc.pid, signal.SIGINT)
     except ProcessLookupError:
         pass
+    return time.monotonic()
+
+
+def stop_process(proc: subprocess.Popen[Any], grace_s: float, interrupted_at: float | None = None) -> dict[str, Any]:
+    """Stop a user's node: SIGINT to its process group (unless sent already, at ``interrupted_at``), SIGKILL
+    ``grace_s`` after it; reaped. ``{'how', 'exit_code'}``, ``how`` one of 'exited by itself', 'stopped by SIGINT',
+    'killed (ignored SIGINT for G s)'."""
+    if interrupted_at is None:
+        interrupted_at = interrupt(proc)
+        if interrupted_at is None:
+            return {'how': 'exited by itself', 'exit_code': proc.returncode}
     try:
-        return {'how': 'stopped by SIGINT', 'exit_code': proc.wait(timeout=grace_s)}
+        return {'how': 'stopped by SIGINT',
+                'exit_code': proc.wait(timeout=max(0.0, grace_s - (time.monotonic() - interrupted_at)))}
     except subprocess.TimeoutExpired:
         try:
             os.killpg(proc.pid, signal.SIGKILL)
@@ -201,6 +213,8 @@ class FswGraphRun(GraphRun):
     completed fails the sample at once, naming it (rather than the graph timing out on its missing outputs)."""
 
     fsw: subprocess.Popen[bytes] | None = None
+    #: When the user's node was sent SIGINT with the graph's own nodes (None: not yet).
+    fsw_interrupted_at: float | None = None
 
     def _check_health(self) -> None:
         super()._check_health()
@@ -215,6 +229,13 @@ class FswGraphRun(GraphRun):
         where = ('before it joined the graph' if self.monitor is None or not self.monitor.ready
                  else f'at step {step}, before the sample ended')
         raise LaunchError(f'the flight software exited ({how}) {where}')
+
+    def _stop_children(self, *args: Any, **kwargs: Any) -> dict[str, int]:
+        """The user's node is asked to leave together with the graph's own nodes (every output of the run is in when
+        they are), so its shutdown overlaps theirs instead of following it; :func:`stop_process` waits for it."""
+        if self.fsw is not None and self.fsw_interrupted_at is None:
+            self.fsw_interrupted_at = interrupt(self.fsw)
+        return super()._stop_children(*args, **kwargs)
 
 
 @dataclass(frozen=True)
@@ -263,7 +284,7 @@ def run_fsw_sample(spec: FswSpec, text: str, steps: int | None = None) -> dict[s
                     result = graph.wait()
                 finally:
                     if proc is not None:
-                        fsw['stop'] = stop_process(proc, spec.grace_s)
+                        fsw['stop'] = stop_process(proc, spec.grace_s, graph.fsw_interrupted_at)
             summary = dict(result.summary)
             fsw['timing'] = {inst: result.timing.get(inst) for inst in graph.external}
             fsw['warnings'] = result.warnings

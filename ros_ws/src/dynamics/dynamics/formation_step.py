@@ -83,6 +83,9 @@ class FormationDynamicsStep(Stepper):
         self.total_steps: int = params['total_steps']
         self.names: list[str] = list(params['formation_vehicles'])
         f, dyn = self.section('formation'), self.section('dynamics')
+        if dyn['stop_when_detumbled']:
+            raise DynamicsError('dynamics.stop_when_detumbled: a single spacecraft\'s run end (rigid_body); a '
+                                'formation runs its duration')
         orbit = field = None
         if f['frame'] == 'hill':
             o, e = self.section('orbit'), self.section('earth')

@@ -45,6 +45,16 @@ SECTIONS: dict[str, dict[str, Field]] = {
                           'reach Mode 1B '
                           '(56.59 min) and capture (86.32 min) at the same step, final wheel momentum within '
                           '9e-6 ft-lb-s. Raise it for faster bodies or longer control periods', 1, lo=1, hi=10000),
+        'stop_when_detumbled': Field('bool', 'rigid_body: end the run once the spacecraft is detumbled, |ω| (the '
+                                     'norm of the true body rate) below detumbled_rate at every step for '
+                                     'detumbled_hold; decided by the time owner from the truth, so it acts the same '
+                                     'whoever flies the spacecraft (the built-in law or your own node) and on every '
+                                     'engine. Off: the run lasts its duration', False),
+        'detumbled_rate': quantity('the body rate |ω| below which the spacecraft counts as detumbled (seed 003: '
+                                   'the torque-rod summary\'s threshold, 0.1 deg/s)', 0.1 * DEG, 'rad_s', RATE,
+                                   lo=1e-9, hi=1.0),
+        'detumbled_hold': quantity('stop_when_detumbled: how long |ω| must stay below detumbled_rate (whole steps, '
+                                   'rounded up) before the run ends', 600.0, 's', TIME, lo=0.0, hi=1e7),
     },
     'wheels': {
         'kind': Field('str', 'momentum store: wheels (square-law reaction wheels, spec §4) or cmg (ideal control '

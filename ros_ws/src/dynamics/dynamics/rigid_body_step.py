@@ -5,8 +5,10 @@ outputs of step k (the em_driver's step-average achieved dipole, the wheels' mom
 h(t_k) and rate ḣ over [t_k, t_k+1]; absent nodes mean zero) and the step's ``mode``,
 integrates t_k → t_k+1 and returns the truth of step k + 1. With the cold-gas subsystem in the graph its
 step-average thruster torque (``cold_gas/wrench``, step k) is applied as well. The run ends after step k
-when the total step count is reached or when the ``mode`` of step k asks it
-(:attr:`~acds_common.mode_report.ModeReport.run_complete`: stop at acquisition capture). A non-finite actuator input, or one
+when the total step count is reached, when the ``mode`` of step k asks it
+(:attr:`~acds_common.mode_report.ModeReport.run_complete`: stop at acquisition capture), or, with
+``dynamics.stop_when_detumbled``, when the truth has been detumbled for the hold (:mod:`dynamics.detumbled`). A
+non-finite actuator input, or one
 beyond what the hardware can produce (:func:`~dynamics.configuration.actuator_limits`),
 fails the run naming the topic and the step.
 
@@ -44,6 +46,7 @@ from acds_common.stepper import StepError, Stepper
 
 from dynamics import integration_accuracy as accuracy
 from dynamics.configuration import RIGID_BODY_SECTIONS, actuator_limits, build_rigid_body
+from dynamics.detumbled import detumbled_stop
 from dynamics.errors import DynamicsError, positive_dt
 from dynamics.rigid_body_model import Truth, TruthValues, advance_circular_dipole
 
@@ -148,6 +151,8 @@ class RigidBodyStep(Stepper):
         self._wheel_h = _ZERO
         #: Whether the step's ``mode`` value asks the run to end, read when a new value arrives.
         self._run_complete = ModeValueReader(run_complete)
+        #: The detumbled run end (None: off), fed |ω| of every truth published.
+        self._detumbled = detumbled_stop(self.section('dynamics'), self._dt)
         #: Torque-free so far (external and wheel torques all zero): the drifts are integration error.
         self.torque_free = not self.model.gravity_gradient and self.model.disturbance is None
         self._h0_eci: np.ndarray | None = None  # H in ECI and the rotational energy at t_0
@@ -183,7 +188,11 @@ class RigidBodyStep(Stepper):
 
     def start(self) -> dict[str, Any]:
         """The truth of step 0."""
-        return truth_outputs(self.model.truth(self._wheel_h).values)
+        values = self.model.truth(self._wheel_h).values
+        if self._detumbled is not None:
+            w = values[3]
+            self._detumbled.observe(0, math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]))
+        return truth_outputs(values)
 
     def health(self, truth: Truth, wall_step_s: float) -> tuple:
         """The integration health status of the step just integrated (module docstring)."""
@@ -233,7 +242,8 @@ class RigidBodyStep(Stepper):
 
     def integrate(self, k: int, _t: float, inp: dict[str, Any]) -> dict[str, Any]:
         """All actuator outputs of step k are in: integrate to t_k+1 and return its truth."""
-        if k >= self.total_steps or self._run_complete(inp['mode']):
+        if (k >= self.total_steps or self._run_complete(inp['mode'])
+                or (self._detumbled is not None and self._detumbled.done(k))):
             self.finished = True
             return {}
         h, hdot, dipole = xyz(inp['wheel_h']), xyz(inp['wheel_hdot']), xyz(inp['dipole'])
@@ -261,6 +271,8 @@ class RigidBodyStep(Stepper):
         out = truth_outputs(values)
         w = values[3]
         omega = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+        if self._detumbled is not None:
+            self._detumbled.observe(k + 1, omega)
         if omega > self._omega_checked:
             self._omega_checked = omega
             self._check_step(omega, k)

@@ -1,8 +1,10 @@
-"""Torque-rod figures (seed 003): body rates and |ω| (deg/s, with the summary's 0.1°/s threshold), dipole commands
-(A·m²) and rod currents (mA), for runs whose em_driver drives torque rods (``em_driver.driver_kind: torque_rod``)."""
+"""Torque-rod figures (seed 003): body rates and |ω| (deg/s, with the summary's detumbled threshold,
+``dynamics.detumbled_rate``), dipole commands (A·m²) and rod currents (mA), for runs whose em_driver drives torque rods
+(``em_driver.driver_kind: torque_rod``)."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -24,8 +26,11 @@ def vectors(_ctx: Any) -> dict[str, Callable[[Any], list[float]]]:
 
 def plot(kit: Any) -> None:
     """``torque_rod_detumble``: rates, |ω| against the detumbled threshold, dipole commands, rod currents."""
-    from em_driver.oresat_summary import DETUMBLED_RATE_DEG_S
+    from acds_common.scenario import SCHEMA
 
+    rate = SCHEMA['dynamics']['detumbled_rate']  # as the run's rigid_body received it (a bag from before the key: its default)
+    threshold_deg_s = math.degrees(kit.ctx.params.get('rigid_body', {}).get(
+        rate.param_name('dynamics', 'detumbled_rate'), rate.default))
     t_w, w = kit.rates
     if not len(t_w):
         return
@@ -37,7 +42,7 @@ def plot(kit: Any) -> None:
         axs[0].plot(t_w, rate[:, i], lw=0.8, label=f'ω{a}')
     axs[0].set_ylabel('body rate, deg/s')
     axs[1].semilogy(t_w, np.linalg.norm(rate, axis=1), lw=0.8, label='|ω|')
-    axs[1].axhline(DETUMBLED_RATE_DEG_S, color='k', ls='--', lw=0.8, label=f'{DETUMBLED_RATE_DEG_S:g}°/s')
+    axs[1].axhline(threshold_deg_s, color='k', ls='--', lw=0.8, label=f'{threshold_deg_s:g}°/s')
     axs[1].set_ylabel('|ω|, deg/s')
     for ax, (tt, y, ylabel, lab) in zip(axs[2:], ((t_c, cmd, 'dipole command, A·m²', 'M'),
                                                 (t_i, cur * 1e3, 'rod current, mA', 'I')), strict=True):

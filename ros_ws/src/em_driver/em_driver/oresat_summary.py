@@ -9,10 +9,12 @@ Contributed when the graph drives torque rods (``em_driver.driver_kind: torque_r
   ``em_driver/coil_current`` (active winding current at t_k+1), counted once the truth of step
   k + 1 is in (the rigid body integrated that step; the drive of the step the run ends at is not).
 
-Detumbled: |ω| < :data:`DETUMBLED_RATE_DEG_S` = 0.1°/s, the norm of the body rate (issue 14).
+Detumbled: |ω| < ``dynamics.detumbled_rate`` (default 0.1°/s), the norm of the body rate (issue 14); the
+same key ends the run at detumble with ``dynamics.stop_when_detumbled`` (``dynamics.detumbled``).
 ``detumble_time_min`` is the first t_k from which |ω| stays below it to the end of the run
-(``None`` when the run ends above it); ``first_below_threshold_min`` the first t_k below it at
-all. ``detumble_energy_j`` is the bus energy of the three rods over [0, detumble time];
+(``None`` when the run ends above it; a run ended by that rule ends ``detumbled_hold`` after it);
+``first_below_threshold_min`` the first t_k below it at all.
+``detumble_energy_j`` is the bus energy of the three rods over [0, detumble time];
 ``energy_j`` over the whole run (energy a decaying winding returns to the bus counts negative).
 ``peak_current_ma``: largest |active winding current| at a step end (the rods settle within
 milliseconds, so the end value is the step's plateau; the PWM ripple is < 1 % of full scale).
@@ -28,8 +30,6 @@ from typing import Any
 import numpy as np
 from acds_common import topics
 
-#: |ω| below which the spacecraft counts as detumbled, deg/s.
-DETUMBLED_RATE_DEG_S = 0.1
 ODOMETRY, POWER, DUTY, CURRENT = (topics.resolve(t) for t in (
     topics.TRUTH_ODOMETRY, topics.COIL_POWER, topics.COIL_DUTY, topics.COIL_CURRENT))
 
@@ -56,7 +56,7 @@ class Accumulator:
 
     def __init__(self, scenario: Any) -> None:
         self.dt_s = scenario.control_period_s
-        self.threshold_rad_s = math.radians(DETUMBLED_RATE_DEG_S)
+        self.threshold_rad_s = scenario.get('dynamics', 'detumbled_rate')
         self.initial_rate: float | None = None
         self.final_rate: float | None = None
         self.last_k: int | None = None
@@ -110,7 +110,7 @@ class Accumulator:
                 settled_k = None
         n = max(self.electrical_steps, 1)
         summary.update({
-            'detumble_threshold_deg_s': DETUMBLED_RATE_DEG_S,
+            'detumble_threshold_deg_s': math.degrees(self.threshold_rad_s),
             'initial_rate_deg_s': None if self.initial_rate is None else math.degrees(self.initial_rate),
             'final_rate_deg_s': None if self.final_rate is None else math.degrees(self.final_rate),
             'detumble_time_min': None if settled_k is None else settled_k * self.dt_s / 60,
