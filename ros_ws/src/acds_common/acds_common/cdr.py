@@ -39,7 +39,7 @@ from __future__ import annotations
 import re
 import struct
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -219,6 +219,21 @@ class RowLayout:
         return self._repeated[0][:n]
 
 
+def _layout(msg_type: str, frame_id: str, child_frame_id: str, packer: struct.Struct, encode: Callable[[int, Any], bytes]
+            ) -> RowLayout:
+    """The :class:`RowLayout` of a codec's messages, worked out once per process for each type and frames (the
+    layout's buffer is each codec's own: it starts empty)."""
+    key = (msg_type, frame_id, child_frame_id)
+    known = _LAYOUTS.get(key)
+    if known is None:
+        known = _LAYOUTS[key] = RowLayout.of(packer, encode, *_ROWS[msg_type])
+    return replace(known, _repeated=[])
+
+
+#: :func:`_layout` by (message type, frame_id, child_frame_id).
+_LAYOUTS: dict[tuple[str, str, str], RowLayout] = {}
+
+
 class Codec:
     """Encoder/decoder of one topic: its message type and, for stamped types, its fixed frame_id.
 
@@ -237,7 +252,7 @@ class Codec:
         self._body_offset = 8 + len(self._head)
         encode, self.decode, packer = _TYPES[msg_type](self)
         #: The rows of a fixed-layout type (module docstring), None for the others.
-        self.layout = None if packer is None else RowLayout.of(packer, encode, *_ROWS[msg_type])
+        self.layout = None if packer is None else _layout(msg_type, frame_id, child_frame_id, packer, encode)
         if packer is not None:  # one struct, already padded to 4 bytes (_stamped)
             self.encode = encode
             return

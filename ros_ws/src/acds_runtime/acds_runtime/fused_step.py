@@ -283,7 +283,7 @@ class FusedLoop:
                 for i in range(keep_from, n):
                     route.store[first + i] = from_row(buf[i].tolist())
             if route.per_step or route.truth is not None:
-                rows = [*range(min(n, max(0, lo - first))), *range(max(0, hi - first), n)]  # stamps outside [lo, hi)
+                rows = _outside(first, n, lo, hi)
                 edges += [(route, first + i, from_row(row)) for i, row in zip(rows, buf[rows].tolist(), strict=True)]
         for name, fs in zip(plan.names, declared, strict=True):
             for key, obj in fs.held.items():
@@ -294,7 +294,7 @@ class FusedLoop:
                 if route.store is not None:
                     for i in range(keep_from, n):
                         route.store[first + i] = obj
-                edges += [(route, first + i, obj) for i in range(n) if not lo <= first + i < hi]
+                edges += [(route, first + i, obj) for i in _outside(first, n, lo, hi)]
         # The truth digest takes each topic's messages in stamp order: the values before the block, the block, after.
         self._one_by_one([e for e in edges if e[1] < lo])
         if columns is not None:
@@ -345,6 +345,11 @@ class FusedLoop:
                 return {}
             sources[topic] = (b, p.offset)
         return sources
+
+
+def _outside(first: int, n: int, lo: int, hi: int) -> list[int]:
+    """The rows i < n of values stamped ``first`` + i outside the stamps [lo, hi) a block feeds (its edges)."""
+    return [*range(min(n, max(0, lo - first))), *range(max(0, hi - first), n)]
 
 
 def _from_row(out: Output) -> Callable[[list[float]], Any]:
