@@ -39,7 +39,7 @@ from __future__ import annotations
 import re
 import struct
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -170,7 +170,8 @@ class RowLayout:
     template: np.ndarray
     dtype: np.dtype
     fields: tuple[tuple[str, int, int], ...]
-    #: The template repeated, reused from block to block (only the stamps and the doubles change; one thread).
+    #: The template repeated, as messages (:attr:`dtype`) and as their bytes, reused from block to block (only the stamps
+    #: and the doubles change; one thread).
     _repeated: list[np.ndarray] = field(default_factory=list, compare=False, repr=False)
 
     @classmethod
@@ -190,10 +191,11 @@ class RowLayout:
         fields = tuple((f'd{i}', int(firsts[i]), count) for i, (_offset, count) in enumerate(runs))
         return cls(width, flatten, unflatten, template, dtype, fields)
 
-    def encode_block(self, t_ns: np.ndarray, rows: np.ndarray) -> bytes:
+    def encode_block(self, t_ns: np.ndarray, rows: np.ndarray) -> memoryview:
         """:meth:`Codec.encode_block`: the template repeated, the stamps split as ``divmod(t_ns, 10⁹)`` (floor,
         as :meth:`Codec.encode`; a ``sec`` beyond int32 raises as its ``struct.pack`` does) and the rows' doubles
-        copied bit for bit (NaN payloads and −0.0 kept)."""
+        copied bit for bit (NaN payloads and −0.0 kept), written into a buffer kept from block to block: the view
+        returned holds them until the next block of this layout (no copy: a digest takes it as it is)."""
         t_ns = np.asarray(t_ns, dtype=np.int64)
         rows = np.asarray(rows, dtype=np.float64)
         n = len(t_ns)
@@ -207,13 +209,29 @@ class RowLayout:
         messages['nanosec'] = nanosec
         for name, first, count in self.fields:
             messages[name] = rows[:, first:first + count]
-        return messages.tobytes()
+        return memoryview(self._repeated[1])[:n * self.dtype.itemsize]
 
     def _templates(self, n: int) -> np.ndarray:
         """n templates, as messages (:attr:`dtype`): the first n of the ones kept, repeated anew when too few."""
         if not self._repeated or len(self._repeated[0]) < n:
-            self._repeated[:] = [np.tile(self.template, n).view(self.dtype)]
+            raw = np.tile(self.template, n)
+            self._repeated[:] = [raw.view(self.dtype), raw]
         return self._repeated[0][:n]
+
+
+def _layout(msg_type: str, frame_id: str, child_frame_id: str, packer: struct.Struct, encode: Callable[[int, Any], bytes]
+            ) -> RowLayout:
+    """The :class:`RowLayout` of a codec's messages, worked out once per process for each type and frames (the
+    layout's buffer is each codec's own: it starts empty)."""
+    key = (msg_type, frame_id, child_frame_id)
+    known = _LAYOUTS.get(key)
+    if known is None:
+        known = _LAYOUTS[key] = RowLayout.of(packer, encode, *_ROWS[msg_type])
+    return replace(known, _repeated=[])
+
+
+#: :func:`_layout` by (message type, frame_id, child_frame_id).
+_LAYOUTS: dict[tuple[str, str, str], RowLayout] = {}
 
 
 class Codec:
@@ -234,7 +252,7 @@ class Codec:
         self._body_offset = 8 + len(self._head)
         encode, self.decode, packer = _TYPES[msg_type](self)
         #: The rows of a fixed-layout type (module docstring), None for the others.
-        self.layout = None if packer is None else RowLayout.of(packer, encode, *_ROWS[msg_type])
+        self.layout = None if packer is None else _layout(msg_type, frame_id, child_frame_id, packer, encode)
         if packer is not None:  # one struct, already padded to 4 bytes (_stamped)
             self.encode = encode
             return
@@ -245,10 +263,10 @@ class Codec:
             return data + bytes(pad) if pad else data
         self.encode = padded
 
-    def encode_block(self, t_ns: np.ndarray, rows: np.ndarray) -> bytes:
+    def encode_block(self, t_ns: np.ndarray, rows: np.ndarray) -> memoryview:
         """The messages of stamps ``t_ns`` (int64, n) and values ``rows`` (float64, n × width), concatenated:
-        ``b''.join(encode(t, unflatten(row)))`` byte for byte (:class:`RowLayout`); CdrError for a type that is
-        not of fixed layout."""
+        ``b''.join(encode(t, unflatten(row)))`` byte for byte (:class:`RowLayout`), as a view valid until the next
+        block of this codec (``bytes(...)`` to keep it); CdrError for a type that is not of fixed layout."""
         if self.layout is None:
             raise CdrError(f'{self.msg_type} is not of fixed layout: no rows, encode each message')
         return self.layout.encode_block(t_ns, rows)

@@ -400,7 +400,14 @@ class Graph:
 
     def publisher_of(self, topic: str) -> list[str]:
         """The instances declared to publish ``topic`` (absolute name)."""
-        return [spec.instance for spec, out in self.outputs() if spec.topic(out.topic) == topic]
+        return self.publishers().get(topic, [])
+
+    def publishers(self) -> dict[str, list[str]]:
+        """Per topic published (absolute name), the instances declared to publish it, in the order of :meth:`outputs`."""
+        publishers: dict[str, list[str]] = {}
+        for spec, out in self.outputs():
+            publishers.setdefault(spec.topic(out.topic), []).append(spec.instance)
+        return publishers
 
     def firing_order(self) -> list[tuple[str, Stage]]:
         """(instance, stage) of every non-time-owner stage, ordered so every lag-0 input is produced first.
@@ -444,8 +451,9 @@ def build_graph(params_by_node: dict[str, dict[str, Any]]) -> Graph:
     graph = Graph({}) if not params_by_node else Graph(
         {spec.instance: spec for spec in (node_spec(inst.rpartition('/')[2], params)
                                           for inst, params in params_by_node.items())})
+    by_topic = graph.publishers()
     for _spec, out in graph.outputs():
-        publishers = graph.publisher_of(_spec.topic(out.topic))
+        publishers = by_topic[_spec.topic(out.topic)]
         if out.every_step and len(publishers) > 1:
             raise ValueError(f'{_spec.topic(out.topic)} would be published by {" and ".join(publishers)}; '
                              'a per-step topic has one publisher')

@@ -40,6 +40,7 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
@@ -53,7 +54,7 @@ from .step_program import Route
 
 #: Steps of one block at most (the rows of each buffer).
 BLOCK_STEPS = 2048
-#: The block functions compiled in this process, by structure (:meth:`_Plan.key`): (function, source).
+#: The block functions compiled in this process, by structure (:attr:`_Plan.key`): (function, source).
 _COMPILED: dict[Any, tuple[Any, str]] = {}
 
 
@@ -115,6 +116,8 @@ class FusedLoop:
                                for name, _stage in self.stages}
         self._stores = stores
         self._buffers: dict[Any, list[np.ndarray]] = {}
+        #: The plans worked out so far, by the stages' declared kernels, inputs and outputs (:meth:`_plan`).
+        self._plans: dict[Any, _Plan] = {}
         self._possible = all(hasattr(steppers[name], 'fused') for name, _stage in self.stages)
         #: Steps run fused so far, blocks, and the wall seconds spent in the compiled loop (for ``acds bench``).
         self.fused_steps = 0
@@ -194,7 +197,17 @@ class FusedLoop:
 
     # ---- composition -------------------------------------------------------------------------------
     def _plan(self, declared: list[FusedStage]) -> _Plan:
-        """The structure of the loop for these declarations (what the compiled function depends on)."""
+        """The structure of the loop for these declarations (what the compiled function depends on), worked out
+        once per run for each set of kernels, input keys and outputs the stages declare (a block after a step that
+        was not quiet mostly has the structure of the block before)."""
+        key = tuple((fs.kernel, fs.inputs, fs.outputs) for fs in declared)
+        plan = self._plans.get(key)
+        if plan is None:
+            plan = self._plans[key] = self._structure(declared)
+        return plan
+
+    def _structure(self, declared: list[FusedStage]) -> _Plan:
+        """:meth:`_plan` worked out."""
         names = [name for name, _stage in self.stages]
         produced: dict[tuple[str, str], _Produced] = {}
         for i, (name, fs) in enumerate(zip(names, declared, strict=True)):
@@ -230,7 +243,7 @@ class FusedLoop:
 
     def _function(self, plan: _Plan) -> tuple[Any, list[np.ndarray]]:
         """The compiled block function of ``plan`` (composed once per structure and process) and its row buffers."""
-        key = plan.key()
+        key = plan.key
         known = _COMPILED.get(key)
         if known is None:
             if not kernels.enabled():
@@ -270,7 +283,7 @@ class FusedLoop:
                 for i in range(keep_from, n):
                     route.store[first + i] = from_row(buf[i].tolist())
             if route.per_step or route.truth is not None:
-                rows = [*range(min(n, max(0, lo - first))), *range(max(0, hi - first), n)]  # stamps outside [lo, hi)
+                rows = _outside(first, n, lo, hi)
                 edges += [(route, first + i, from_row(row)) for i, row in zip(rows, buf[rows].tolist(), strict=True)]
         for name, fs in zip(plan.names, declared, strict=True):
             for key, obj in fs.held.items():
@@ -281,7 +294,7 @@ class FusedLoop:
                 if route.store is not None:
                     for i in range(keep_from, n):
                         route.store[first + i] = obj
-                edges += [(route, first + i, obj) for i in range(n) if not lo <= first + i < hi]
+                edges += [(route, first + i, obj) for i in _outside(first, n, lo, hi)]
         # The truth digest takes each topic's messages in stamp order: the values before the block, the block, after.
         self._one_by_one([e for e in edges if e[1] < lo])
         if columns is not None:
@@ -309,9 +322,9 @@ class FusedLoop:
         block cannot be fed so (fewer than two steps, a topic missing, another layout or a stamp offset past 1)."""
         if n < 2:
             return None
-        sources = self._block_sources.get(plan.key())
+        sources = self._block_sources.get(plan.key)
         if sources is None:
-            sources = self._block_sources[plan.key()] = self._block_plan(plan)
+            sources = self._block_sources[plan.key] = self._block_plan(plan)
         if not sources:
             return None
         return {topic: buffers[b][1 - offset:n - offset] for topic, (b, offset) in sources.items()}
@@ -332,6 +345,11 @@ class FusedLoop:
                 return {}
             sources[topic] = (b, p.offset)
         return sources
+
+
+def _outside(first: int, n: int, lo: int, hi: int) -> list[int]:
+    """The rows i < n of values stamped ``first`` + i outside the stamps [lo, hi) a block feeds (its edges)."""
+    return [*range(min(n, max(0, lo - first))), *range(max(0, hi - first), n)]
 
 
 def _from_row(out: Output) -> Callable[[list[float]], Any]:
@@ -386,7 +404,9 @@ class _Plan:
     produced: dict[tuple[str, str], _Produced]
     outputs: tuple[tuple[str, ...], ...]
 
+    @cached_property
     def key(self) -> Any:
+        """What the compiled function depends on (worked out once per plan)."""
         return (tuple(self.names), self.kernels, tuple(tuple(a) for a in self.args),
                 tuple(sorted((t, repr(s), d, o) for t, (s, d, o) in self.registers.items())), self.written,
                 self.outputs)
