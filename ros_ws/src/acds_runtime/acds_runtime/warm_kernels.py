@@ -5,8 +5,8 @@ A process that runs the direct engine loads each model's compiled kernel from th
 issue 24), and so did the first run after a clone, each Monte Carlo worker and each test worker of a fresh
 checkout at once. Two steps of every shipped scenario build every model the way its runs do, so every kernel
 signature they bind is compiled here, once; a graph with a fused loop (:mod:`acds_runtime.fused_step`) composes and
-compiles it there too (its first block is tried at step 2), once per structure and signature (one for every
-shipped HEAO case). A scenario that leaves a node to the user (key ``external``) runs
+compiles it there too (its first block is tried at step 2), once per structure and signature (one serves every
+shipped scenario of one graph structure). A scenario that leaves a node to the user (key ``external``) runs
 only on the per-process graph and is skipped.
 
 Run as ``python -m acds_runtime.warm_kernels``; it exits non-zero, naming the scenario, if one fails to run.
