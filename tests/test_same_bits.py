@@ -206,3 +206,20 @@ def test_a_node_process_with_another_simd_dispatch_fails_the_graph_before_step_0
     assert 'died (exit code 2)' in first and "CONFIGURATION ERROR: numeric configuration on host" in first
     assert "differs from the launcher's: numpy SIMD dispatch" in first
     assert steps == []
+
+
+def test_what_a_run_generates_under_pycache_is_not_a_project_source():
+    """A fused loop a direct run composes (written under ``acds_runtime/__pycache__``) leaves the project-sources
+    digest as it was: a launcher and its nodes agree whichever of them generated it first (was: a study's graph nodes
+    refused to start once the study's own direct run had written a new one)."""
+    import acds_runtime
+    from acds_common import numeric_config
+
+    before = numeric_config._sources_digest()
+    generated = Path(acds_runtime.__file__).parent / '__pycache__' / 'fused_loops' / 'test_generated_probe.py'
+    generated.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        generated.write_text('# generated at run time\n')
+        assert numeric_config._sources_digest() == before
+    finally:
+        generated.unlink()

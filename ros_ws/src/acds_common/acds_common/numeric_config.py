@@ -99,7 +99,9 @@ def _version(distribution: str) -> str:
 
 def _sources_digest() -> str:
     """SHA-256 (12 hex digits) of the Python files of the project's packages: :data:`_CORE_PACKAGES` and every node
-    package (``acds.nodes`` entry points: the user's own included), by package and relative path."""
+    package (``acds.nodes`` entry points: the user's own included), by package and relative path; what a run generates
+    under ``__pycache__`` (the fused loops a direct run composes) is not a source and is left out, so a study's
+    nodes and its launcher agree whichever of them generated it first."""
     names = set(_CORE_PACKAGES) | {ep.value.split('.')[0].split(':')[0] for ep in entry_points(group='acds.nodes')}
     digest = hashlib.sha256()
     for name in sorted(names):
@@ -109,6 +111,8 @@ def _sources_digest() -> str:
             continue
         root = Path(next(iter(spec.submodule_search_locations)))
         for path in sorted(root.rglob('*.py')):
+            if '__pycache__' in path.parts:  # generated from the sources at run time (the fused loops): not a source
+                continue
             digest.update(f'{name}/{path.relative_to(root)}\0'.encode())
             digest.update(path.read_bytes())
     return digest.hexdigest()[:12]
