@@ -19,6 +19,7 @@ from acds_common.scenario import ScenarioError, list_scenarios
 
 from .arguments import OneLineParser, UsageError, positive_int
 from .bench import bench_steps
+from .interrupts import interruption
 from .workspace import workspace
 
 
@@ -143,15 +144,18 @@ def main(argv: list[str] | None = None) -> int:
     except UsageError as exc:
         print(f'acds {args.verb}: error: {exc}', file=sys.stderr)
         return 2
-    except KeyboardInterrupt as exc:
-        signum = getattr(exc, 'signum', signal.SIGINT)
-        print(f'\n[acds] stopped by {signal.Signals(signum).name}', file=sys.stderr)
-        return 128 + signum
     except BrokenPipeError:
         # The reader of stdout left (``acds params ... | head``): nothing more to say, no traceback; the shell's
         # exit status of a writer killed by SIGPIPE. Python would flush stdout again at exit: point it at devnull.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 128 + signal.SIGPIPE
+    except BaseException as caught:
+        exc = interruption(caught)
+        if exc is None:
+            raise
+        signum = getattr(exc, 'signum', signal.SIGINT)
+        print(f'\n[acds] stopped by {signal.Signals(signum).name}', file=sys.stderr)
+        return 128 + signum
 
 
 if __name__ == '__main__':

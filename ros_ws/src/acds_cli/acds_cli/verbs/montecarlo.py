@@ -31,6 +31,7 @@ from typing import Any
 from acds_common.scenario import Scenario, ScenarioError
 
 from ..arguments import UsageError, check_output_dir, positive_int, positive_minutes
+from ..interrupts import interruption
 from ..workspace import new_run_dir, workspace
 
 #: The quantity and percentile of the baseline rule (docs: Studies, "Choosing the baseline's open conditions").
@@ -271,15 +272,18 @@ def run_journaled(journal: Any, samples: dict[tuple[str, int], Any], args: argpa
                                     scheduler=args.scheduler, progress=not args.quiet, task=task,
                                     allow_mixed=args.allow_mixed_workers, keep=False,
                                     on_result=lambda i, summary, keys=keys: done(keys[i], summary))[1]
-    except (KeyboardInterrupt, _Stop) as exc:
+    except MonteCarloError as exc:
+        raise UsageError(str(exc)) from None
+    except BaseException as caught:
+        exc = interruption(caught, (KeyboardInterrupt, _Stop))
+        if exc is None:
+            raise
         why = 'Ctrl-C' if isinstance(exc, KeyboardInterrupt) else exc.args[0]
         signum = exc.args[1] if isinstance(exc, _Stop) else getattr(exc, 'signum', signal.SIGINT)
         print(f'\n[{verb}] interrupted ({why}): {journal.kept()} of {len(samples)} samples kept in '
               f'{journal.path}; continue with:\n  {journal.study["command"]} --resume {journal.path.parent}',
               file=sys.stderr, flush=True)
         raise SystemExit(128 + signum) from None
-    except MonteCarloError as exc:
-        raise UsageError(str(exc)) from None
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)

@@ -22,6 +22,7 @@ from ..arguments import (
     real_time_factor,
     step_count,
 )
+from ..interrupts import interruption
 from ..workspace import new_run_dir, workspace
 from .montecarlo import add_sample_options, sample_for_run
 
@@ -190,7 +191,10 @@ def _run(args: argparse.Namespace, scenario, run_dir: Path, direct: bool, extern
     except LaunchError as exc:
         print(f'[acds] run failed: {exc}', file=sys.stderr)
         return 1
-    except KeyboardInterrupt as exc:
+    except BaseException as caught:
+        exc = interruption(caught)
+        if exc is None:
+            raise
         signum = getattr(exc, 'signum', signal.SIGINT)
         stopped = 'the run stopped' if direct else 'all nodes stopped'
         print(f'\n[acds] stopped by {signal.Signals(signum).name}: {stopped}', file=sys.stderr)
