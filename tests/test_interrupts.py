@@ -12,7 +12,6 @@ import signal
 from pathlib import Path
 
 import pytest
-
 from acds_cli.interrupts import interruption
 from acds_cli.verbs import montecarlo
 
