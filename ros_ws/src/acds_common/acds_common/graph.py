@@ -398,6 +398,11 @@ class Graph:
         spec = self.nodes[self.time_owner]
         return sorted(spec.topic(out.topic) for out in spec.outputs if out.every_step)
 
+    def read_topics(self) -> set[str]:
+        """Absolute names of the topics some node of the graph reads (its inputs whose source is in the graph)."""
+        return {spec.topic(i.topic) for spec in self.nodes.values() for st in spec.stages for i in st.inputs
+                if i.source in self.nodes}
+
     def publisher_of(self, topic: str) -> list[str]:
         """The instances declared to publish ``topic`` (absolute name)."""
         return self.publishers().get(topic, [])

@@ -82,6 +82,11 @@ class ExternalWatch:
                                          {spec.topic(o.topic): o.frame_id for o in spec.outputs
                                           if o.every_step and Codec(o.msg_type).stamped})
 
+    def reads(self) -> set[str]:
+        """Absolute names of the topics the watch reads: the external nodes' outputs and inputs (not /clock)."""
+        return {t for ext in self.nodes.values() for t in (*ext.outputs, *(t for ins in ext.stage_inputs for t in ins))
+                if t != topics.CLOCK}
+
     def publisher(self, instance: str) -> str:
         """The ROS identity that publishes for ``instance`` (itself for a node the launcher starts)."""
         ext = self.nodes.get(instance)

@@ -1,7 +1,9 @@
 """The run monitor: an in-launcher rclpy node that observes the whole graph (spec §2).
 
-It subscribes, as serialized CDR (``raw=True``), to every output the graph declares
-(:mod:`acds_common.graph`) and to ``/clock``; it never deserializes what it only records.
+It subscribes, as serialized CDR (``raw=True``), to ``/clock`` and to every output the graph declares
+(:mod:`acds_common.graph`) when it records a bag, serves a live view or keeps messages; without them, to what a
+node, the summaries or the external nodes' watch read (:meth:`RunMonitor._takes_in`). It never deserializes what
+it only records.
 Each message goes to the recorder (a bag writer), to an optional live-view sink, and to the run's streaming summary
 (:class:`~acds_runtime.summary.RunObserver`, which decodes only the topics it reads); nothing
 is kept in memory unless ``keep`` asks for it (tests), so a run's memory does not grow with
@@ -102,7 +104,10 @@ class RunMonitor:
         #: Also called with every message, after the recorder (a live view: :mod:`acds_runtime.foxglove_bridge`).
         self.sink = sink
         self._subs: dict[str, Any] = {}
+        self._reads: set[str] | None = None
         for name, state in self.topics.items():
+            if not self._takes_in(name, keep or record is not None or sink is not None):
+                continue
             qos = COMMAND_QOS if name.endswith('/' + topics.GROUND_ACK) else LOCKSTEP_QOS
             self._subs[name] = self.node.create_subscription(message_class(state.msg_type), name,
                                                              functools.partial(self._on_raw, name), qos, raw=True)
@@ -125,6 +130,24 @@ class RunMonitor:
         self._spinning = True
         self._thread = threading.Thread(target=profiling(MONITOR_NAME, self._spin), name='run_monitor', daemon=True)
         self._thread.start()
+
+    def _takes_in(self, topic: str, everything: bool) -> bool:
+        """Whether the monitor subscribes to ``topic``: with a bag, a live view or kept messages every output; without,
+        what a node of the graph, the summaries (and the truth digest) or the external nodes' watch read. An output
+        nobody reads changes neither the run nor its summary (its publishers are still checked, from the graph's
+        introspection); not taking it in saves a delivery a step (``acds run --no-record``, the graph engine's
+        study samples)."""
+        if everything:
+            return True
+        if self._reads is None:
+            self._reads = self.graph.read_topics() | (self.observer.reads() if self.observer is not None else set()) \
+                | (self.external.reads() if self.external is not None else set())
+        return topic in self._reads
+
+    @property
+    def taken_in(self) -> list[str]:
+        """The graph's topics this monitor subscribes to (absolute names; /clock besides)."""
+        return list(self._subs)
 
     # ---- spinning -----------------------------------------------------------------------------------
     def _spin(self) -> None:
@@ -152,7 +175,7 @@ class RunMonitor:
     def _announce_when_matched(self) -> None:
         """READY once this monitor's own readers are matched with every declared publisher of every per-step
         topic and with the time owner's /clock (matched endpoints, not merely discovered ones)."""
-        per_step = [(self._subs[name], len(st.publishers)) for name, st in self.topics.items() if st.every_step]
+        per_step = [(self._subs[st.name], len(st.publishers)) for st in self._watched()]
         if self.external is not None:
             self.waiting_for = self.external.missing(
                 self.node, {name: sub.get_publisher_count() for name, sub in self._subs.items()})
@@ -232,19 +255,23 @@ class RunMonitor:
             self._on_clock(t_ns)
 
     # ---- queries ----------------------------------------------------------------------------------------
+    def _watched(self) -> list[TopicState]:
+        """The per-step topics this monitor takes in (:meth:`_takes_in`)."""
+        return [st for name, st in self.topics.items() if st.every_step and name in self._subs]
+
     def last_steps(self) -> dict[str, int]:
-        """Last step received on each per-step topic."""
+        """Last step received on each per-step topic taken in."""
         with self._lock:
-            return {name: st.last_step for name, st in self.topics.items() if st.every_step}
+            return {st.name: st.last_step for st in self._watched()}
 
     def complete_through(self, k: int) -> bool:
-        """Whether every per-step topic of the graph has arrived up to step ``k``."""
+        """Whether every per-step topic taken in has arrived up to step ``k``."""
         with self._lock:
-            return all(st.last_step >= k for st in self.topics.values() if st.every_step)
+            return all(st.last_step >= k for st in self._watched())
 
     def _per_step(self) -> list[tuple[TopicState, int]]:
-        """/clock and every per-step topic, each with its last step (call with the lock held)."""
-        return [(self._clock, self.clock_step), *((st, st.last_step) for st in self.topics.values() if st.every_step)]
+        """/clock and every per-step topic taken in, each with its last step (call with the lock held)."""
+        return [(self._clock, self.clock_step), *((st, st.last_step) for st in self._watched())]
 
     def behind(self, k: int) -> list[str]:
         """/clock and the per-step topics not yet received up to step ``k``, with the step each is at."""
@@ -322,16 +349,16 @@ class RunMonitor:
         last = self.last_steps()
         candidates = []
         for name, spec in self.graph.nodes.items():
-            outs = [spec.topic(o.topic) for o in spec.outputs if o.every_step]
+            watched = [o for o in spec.outputs if o.every_step and spec.topic(o.topic) in last]
+            outs = [spec.topic(o.topic) for o in watched]
             if not outs:
                 continue
-            offset = max(o.stamp_offset for o in spec.outputs if o.every_step)
+            offset = max(o.stamp_offset for o in watched)
             nxt = min(last.get(t, -1) for t in outs) + 1 - offset
             inputs = [(spec.topic(i.topic), i.lag) for s in spec.stages for i in s.inputs
                       if i.source in self.graph.nodes]
             if all(last.get(t, -1) >= nxt - lag for t, lag in inputs):
-                missing = [t for o in spec.outputs if o.every_step
-                           if last.get(t := spec.topic(o.topic), -1) < nxt + o.stamp_offset]
+                missing = [t for o in watched if last.get(t := spec.topic(o.topic), -1) < nxt + o.stamp_offset]
                 candidates.append((nxt, name, missing))
         if not candidates:
             return None

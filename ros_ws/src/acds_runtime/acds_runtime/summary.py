@@ -241,6 +241,10 @@ class RunObserver:
                                if (missing := sorted({topics.resolve(t) for t in part.topics} & set(self.per_step)
                                                      - set(self.block_topics)))}
 
+    def reads(self) -> set[str]:
+        """Absolute names of every topic the summaries and the truth digest read (what :meth:`feed_raw` uses)."""
+        return {*self.per_step, *self.truth, *self.events}
+
     # ---- feeding ------------------------------------------------------------------------------------
     def feed_raw(self, topic: str, data: bytes) -> None:
         """A serialized message of ``topic`` (absolute name), as the monitor receives it."""
