@@ -15,6 +15,7 @@ test ends). Installed with ``acds_runtime``, the fixtures need no ``conftest.py`
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -26,7 +27,20 @@ from acds_common import topics
 from acds_common.scenario import Scenario, load_scenario
 
 from .flight_software import external_env, stop_process
-from .launcher import GraphRun
+from .launcher import GraphRun, LaunchError
+
+
+def failure_of_hung(graph: GraphRun, node: str) -> str:
+    """Stop ``node``'s process (SIGSTOP, as a hung node) and return the line the run fails with; the process is
+    continued (SIGCONT) however the wait ends, so the harness can stop it."""
+    pid = graph.processes[node].popen.pid
+    os.kill(pid, signal.SIGSTOP)
+    try:
+        with pytest.raises(LaunchError) as err:
+            graph.wait()
+    finally:
+        os.kill(pid, signal.SIGCONT)
+    return str(err.value)
 
 
 def alive(pid: int) -> bool:
