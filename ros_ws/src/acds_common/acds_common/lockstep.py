@@ -174,6 +174,25 @@ class _Stage:
     #: Per input, in declared order: its key, the buffer of its topic (None: its source is not in the graph) and its lag.
     reads: tuple[tuple[str, dict[int, Any] | None, int], ...] = ()
 
+    def values(self, k: int) -> dict[str, Any] | None:
+        """Step k's input values by key (None for an input whose source is not in the graph or before its lag's first
+        step), or None while one has not arrived."""
+        values: dict[str, Any] = {}
+        for key, buffer, lag in self.reads:
+            if buffer is None or k < lag:
+                values[key] = None
+                continue
+            value = buffer.get(k - lag, _MISSING)
+            if value is _MISSING:
+                return None
+            values[key] = value
+        return values
+
+    def missing(self, k: int) -> list[Input]:
+        """The inputs of step k that have not arrived."""
+        return [inp for inp, (_key, buffer, lag) in zip(self.inputs, self.reads, strict=True)
+                if buffer is not None and k >= lag and k - lag not in buffer]
+
 
 #: What a buffer lookup returns for a step not received yet.
 _MISSING = object()
@@ -486,14 +505,6 @@ class LockstepNode(Node):
         entry.buffer[k] = value
         self._try_fire()
 
-    def _input_value(self, inp: Input, k: int) -> tuple[bool, Any]:
-        if inp.source not in self.graph_nodes or k - inp.lag < 0:
-            return True, None
-        buf = self._inputs[inp.topic].buffer
-        if k - inp.lag not in buf:
-            return False, None
-        return True, buf[k - inp.lag]
-
     def _ready_to_fire(self, i: int, stage: _Stage, k: int) -> bool:
         if i > 0 and self._stages[i - 1].next_step <= k:
             return False
@@ -524,26 +535,19 @@ class LockstepNode(Node):
                 k = stage.next_step
                 if not self._ready_to_fire(i, stage, k):
                     continue
-                values: dict[str, Any] = {}  # as _input_value reads them, from the buffers the stage holds
-                for key, buffer, lag in stage.reads:
-                    if buffer is None or k < lag:
-                        values[key] = None
-                        continue
-                    value = buffer.get(k - lag, _MISSING)
-                    if value is _MISSING:
-                        break
-                    values[key] = value
-                else:
-                    stage.next_step += 1
-                    self._last_progress = ready = time.monotonic()
-                    self._run_stage(stage, k, values)
-                    self._step_wall += time.monotonic() - ready
-                    if stage is self._stages[-1]:
-                        self._step_done(k)
-                    self._prune()
-                    progressed = True
-                    if self.done or self.failure:
-                        return
+                values = stage.values(k)
+                if values is None:
+                    continue
+                stage.next_step += 1
+                self._last_progress = ready = time.monotonic()
+                self._run_stage(stage, k, values)
+                self._step_wall += time.monotonic() - ready
+                if stage is self._stages[-1]:
+                    self._step_done(k)
+                self._prune()
+                progressed = True
+                if self.done or self.failure:
+                    return
 
     def _run_stage(self, stage: _Stage, k: int, values: dict[str, Any]) -> None:
         try:
@@ -639,7 +643,7 @@ class LockstepNode(Node):
             if self._final_step is not None and k > self._final_step:
                 continue  # the run ended before step k: nothing of it will come
             missing = [f'{self.resolve_topic_name(inp.topic)} (from {inp.source}, step {k - inp.lag})'
-                       for inp in stage.inputs if not self._input_value(inp, k)[0]]
+                       for inp in stage.missing(k)]
             if self.time_owner and k <= self._clock_step and not monitor_allows(k, self._monitor_acked) \
                     and MONITOR_NAME in self.graph_nodes:
                 missing.append(f'{self.resolve_topic_name(topics.MONITOR_ACK)} (from {MONITOR_NAME}, '

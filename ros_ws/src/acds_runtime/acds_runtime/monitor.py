@@ -2,7 +2,7 @@
 
 It subscribes, as serialized CDR (``raw=True``), to ``/clock`` and to every output the graph declares
 (:mod:`acds_common.graph`) when it records a bag, serves a live view or keeps messages; without them, to what a
-node, the summaries or the external nodes' watch read (:meth:`RunMonitor._takes_in`). It never deserializes what
+node, the summaries or the external nodes' watch read (:meth:`RunMonitor._read_topics`). It never deserializes what
 it only records.
 Each message goes to the recorder (a bag writer), to an optional live-view sink, and to the run's streaming summary
 (:class:`~acds_runtime.summary.RunObserver`, which decodes only the topics it reads); nothing
@@ -104,13 +104,15 @@ class RunMonitor:
         #: Also called with every message, after the recorder (a live view: :mod:`acds_runtime.foxglove_bridge`).
         self.sink = sink
         self._subs: dict[str, Any] = {}
-        self._reads: set[str] | None = None
+        read = None if keep or record is not None or sink is not None else self._read_topics()
         for name, state in self.topics.items():
-            if not self._takes_in(name, keep or record is not None or sink is not None):
+            if read is not None and name not in read:
                 continue
             qos = COMMAND_QOS if name.endswith('/' + topics.GROUND_ACK) else LOCKSTEP_QOS
             self._subs[name] = self.node.create_subscription(message_class(state.msg_type), name,
                                                              functools.partial(self._on_raw, name), qos, raw=True)
+        #: The per-step topics taken in: what the per-step queries (last steps, gaps, blame) speak of.
+        self._watched = [st for name, st in self.topics.items() if st.every_step and name in self._subs]
         self._clock_sub = self.node.create_subscription(message_class(topics.TYPES[topics.CLOCK]), topics.CLOCK,
                                                         self._on_clock_raw, LOCKSTEP_QOS, raw=True)
         self._ack = self.node.create_publisher(message_class(topics.TYPES[topics.MONITOR_ACK]), topics.MONITOR_ACK,
@@ -131,18 +133,13 @@ class RunMonitor:
         self._thread = threading.Thread(target=profiling(MONITOR_NAME, self._spin), name='run_monitor', daemon=True)
         self._thread.start()
 
-    def _takes_in(self, topic: str, everything: bool) -> bool:
-        """Whether the monitor subscribes to ``topic``: with a bag, a live view or kept messages every output; without,
-        what a node of the graph, the summaries (and the truth digest) or the external nodes' watch read. An output
-        nobody reads changes neither the run nor its summary (its publishers are still checked, from the graph's
-        introspection); not taking it in saves a delivery a step (``acds run --no-record``, the graph engine's
-        study samples)."""
-        if everything:
-            return True
-        if self._reads is None:
-            self._reads = self.graph.read_topics() | (self.observer.reads() if self.observer is not None else set()) \
-                | (self.external.reads() if self.external is not None else set())
-        return topic in self._reads
+    def _read_topics(self) -> set[str]:
+        """What a run without a bag, a live view or kept messages takes in: the topics a node of the graph, the
+        summaries (and the truth digest) or the external nodes' watch read. An output nobody reads changes neither
+        the run nor its summary (its publishers are still checked, from the graph's introspection); leaving it out
+        saves a delivery a step (``acds run --no-record``, the graph engine's study samples)."""
+        return (self.graph.read_topics() | (self.observer.reads() if self.observer is not None else set())
+                | (self.external.reads() if self.external is not None else set()))
 
     @property
     def taken_in(self) -> list[str]:
@@ -175,7 +172,7 @@ class RunMonitor:
     def _announce_when_matched(self) -> None:
         """READY once this monitor's own readers are matched with every declared publisher of every per-step
         topic and with the time owner's /clock (matched endpoints, not merely discovered ones)."""
-        per_step = [(self._subs[st.name], len(st.publishers)) for st in self._watched()]
+        per_step = [(self._subs[st.name], len(st.publishers)) for st in self._watched]
         if self.external is not None:
             self.waiting_for = self.external.missing(
                 self.node, {name: sub.get_publisher_count() for name, sub in self._subs.items()})
@@ -255,23 +252,19 @@ class RunMonitor:
             self._on_clock(t_ns)
 
     # ---- queries ----------------------------------------------------------------------------------------
-    def _watched(self) -> list[TopicState]:
-        """The per-step topics this monitor takes in (:meth:`_takes_in`)."""
-        return [st for name, st in self.topics.items() if st.every_step and name in self._subs]
-
     def last_steps(self) -> dict[str, int]:
         """Last step received on each per-step topic taken in."""
         with self._lock:
-            return {st.name: st.last_step for st in self._watched()}
+            return {st.name: st.last_step for st in self._watched}
 
     def complete_through(self, k: int) -> bool:
         """Whether every per-step topic taken in has arrived up to step ``k``."""
         with self._lock:
-            return all(st.last_step >= k for st in self._watched())
+            return all(st.last_step >= k for st in self._watched)
 
     def _per_step(self) -> list[tuple[TopicState, int]]:
         """/clock and every per-step topic taken in, each with its last step (call with the lock held)."""
-        return [(self._clock, self.clock_step), *((st, st.last_step) for st in self._watched())]
+        return [(self._clock, self.clock_step), *((st, st.last_step) for st in self._watched)]
 
     def behind(self, k: int) -> list[str]:
         """/clock and the per-step topics not yet received up to step ``k``, with the step each is at."""
