@@ -5,7 +5,7 @@
    every node process and of the launcher (its run monitor and recorder), and the
    deliveries per step (each message published × the subscriptions that receive it);
 2. bare ring: as many plain rclpy processes as the graph has nodes, passing one message
-   around (same QoS, same EventsExecutor) — cycles/s, the ceiling a lockstep could reach;
+   around (same QoS, same EventsExecutor spun the same way) — cycles/s, the ceiling a lockstep could reach;
 3. direct engine: the same scenario's steppers in one process (``--engine direct``), after a short
    run that loads its compiled kernels and fused loop (:mod:`acds_common.kernels`, :mod:`acds_runtime.fused_step`;
    that one-time load, paid once per process, is printed beside it); then the same run without the fused loop

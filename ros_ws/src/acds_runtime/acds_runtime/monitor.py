@@ -33,7 +33,15 @@ import rclpy
 from acds_common import topics
 from acds_common.cdr import Codec, stamp_ns
 from acds_common.graph import MONITOR_ACK_EVERY, MONITOR_NAME, Graph
-from acds_common.lockstep import COMMAND_QOS, LOCKSTEP_QOS, PublisherCheck, message_class, release_node
+from acds_common.lockstep import (
+    COMMAND_QOS,
+    LOCKSTEP_QOS,
+    SPIN_PERIOD_S,
+    PublisherCheck,
+    Spinner,
+    message_class,
+    release_node,
+)
 from acds_common.profiling import profiling
 from rclpy.context import Context
 from rclpy.node import Node
@@ -127,6 +135,7 @@ class RunMonitor:
         from rclpy.experimental import EventsExecutor
         self._executor = EventsExecutor(context=self.context)
         self._executor.add_node(self.node)
+        self._spinner = Spinner(self._executor)
         self._stop = threading.Event()
         #: Cleared (with ``_stop`` set) when the monitor closes: what its spinning loop reads per message.
         self._spinning = True
@@ -148,16 +157,18 @@ class RunMonitor:
 
     # ---- spinning -----------------------------------------------------------------------------------
     def _spin(self) -> None:
-        """Take in messages (one per ``spin_once``) until closed; between them, while the graph has not started, announce
-        readiness once matched, then check the publishers every :data:`PUBLISHER_CHECK_PERIOD_S`. Per message only a
-        plain flag and the clock are read (the stop event and the context are checked with the publishers)."""
-        spin_once, monotonic = self._executor.spin_once, time.monotonic
+        """Take in messages until closed: one per ``spin_once`` while the graph has not started, announcing readiness
+        once matched; then in the executor's own loop (:class:`~acds_common.lockstep.Spinner`), coming back every
+        :data:`~acds_common.lockstep.SPIN_PERIOD_S` to check the publishers every :data:`PUBLISHER_CHECK_PERIOD_S`
+        (the stop event and the context are checked with them; :meth:`close` wakes the loop)."""
+        spin_once, spin, monotonic = self._executor.spin_once, self._spinner.spin, time.monotonic
         try:
             while self._spinning:
-                spin_once(timeout_sec=0.05)
                 if not self.ready:
+                    spin_once(timeout_sec=SPIN_PERIOD_S)
                     self._announce_when_matched()
                     continue
+                spin(SPIN_PERIOD_S)
                 now = monotonic()
                 if now - self._last_check > PUBLISHER_CHECK_PERIOD_S:
                     self._last_check = now
@@ -373,6 +384,7 @@ class RunMonitor:
         """Stop spinning and release the ROS context (closes the bag, if recording)."""
         self._spinning = False
         self._stop.set()
+        self._spinner.wake()
         self._thread.join(timeout=5.0)
         if self.recorder is not None and hasattr(self.recorder, 'close'):
             self.recorder.close()  # the bag: index, custom data, metadata.yaml
