@@ -148,9 +148,10 @@ class Spinner:
     """Runs an ``EventsExecutor``'s callbacks in its C++ loop, from one message to the next, for a period at a time.
 
     A Python loop around ``spin_once`` returns to the interpreter after every message: with some forty deliveries a
-    step, the six-process graph spent 2.70-2.75 CPU ms a step that way, 2.40-2.55 this way (docs/measurements.md). :meth:`spin` stays in the
-    executor until :meth:`wake` or ``period_s`` has passed. :meth:`wake` is for callbacks and other threads; a signal
-    handler only sets its flag (it may run while this thread holds the future's lock), seen within a period.
+    step, the six-process graph spent 2.70-2.75 CPU ms a step that way, 2.40-2.55 this way (docs/measurements.md).
+    :meth:`spin` stays in the executor until :meth:`wake` or ``period_s`` has passed. :meth:`wake` is for callbacks and
+    other threads; a signal handler only sets its flag (it may run while this thread holds the future's lock), seen
+    within a period.
     """
 
     def __init__(self, executor: Any) -> None:
