@@ -50,6 +50,9 @@ from .external import ExternalWatch
 
 #: Seconds between checks of who publishes on the graph's topics.
 PUBLISHER_CHECK_PERIOD_S = 1.0
+#: Seconds between the checks, while the graph has not started, that this monitor's readers are matched (it then says
+#: READY: the time owner waits for it).
+READY_CHECK_PERIOD_S = 0.05
 
 
 @dataclass
@@ -158,14 +161,15 @@ class RunMonitor:
     # ---- spinning -----------------------------------------------------------------------------------
     def _spin(self) -> None:
         """Take in messages until closed: one per ``spin_once`` while the graph has not started, announcing readiness
-        once matched; then in the executor's own loop (:class:`~acds_common.lockstep.Spinner`), coming back every
-        :data:`~acds_common.lockstep.SPIN_PERIOD_S` to check the publishers every :data:`PUBLISHER_CHECK_PERIOD_S`
-        (the stop event and the context are checked with them; :meth:`close` wakes the loop)."""
+        once matched (checked at least every :data:`READY_CHECK_PERIOD_S`); then in the executor's own loop
+        (:class:`~acds_common.lockstep.Spinner`), coming back every :data:`~acds_common.lockstep.SPIN_PERIOD_S` to check
+        the publishers every :data:`PUBLISHER_CHECK_PERIOD_S` (the stop event and the context are checked with them;
+        :meth:`close` wakes the loop)."""
         spin_once, spin, monotonic = self._executor.spin_once, self._spinner.spin, time.monotonic
         try:
             while self._spinning:
                 if not self.ready:
-                    spin_once(timeout_sec=SPIN_PERIOD_S)
+                    spin_once(timeout_sec=READY_CHECK_PERIOD_S)
                     self._announce_when_matched()
                     continue
                 spin(SPIN_PERIOD_S)
