@@ -6,7 +6,9 @@ types, QoS, counts, the run's ``acds.*`` data) and returns a :class:`Bag` whose
 messages are streamed from the storage on each iteration, in timestamp order
 (equal times: recorded order), so no verb holds a whole bag in memory.
 
-- A closed bag (``metadata.yaml``) is read with ``rosbags``.
+- A closed bag (``metadata.yaml``) is read with ``rosbags``; its messages, when it is one indexed MCAP
+  file (what the recorder and ``ros2 bag record`` write), from the chunk index (:mod:`.indexed_mcap`:
+  the same messages in the same order, ~4× faster).
 - A bag being recorded (no ``metadata.yaml``, its writer's recording lock held,
   :mod:`.recording`) is refused with one line: reading it would
   race its writer.
@@ -34,6 +36,7 @@ import yaml
 from acds_common import topics
 from rosbags.rosbag2 import Reader
 
+from .indexed_mcap import IndexedMcap, indexed
 from .recording import LOCK_FILE, being_recorded
 from .salvage import UnclosedMcap, committed_view
 from .writer import RUN_INFO_FILE, BagError
@@ -231,8 +234,9 @@ def _locate(path: Path, use_metadata: bool) -> tuple[Path, Path | None]:
     return _locate(files[0], use_metadata=False)
 
 
-def _check_metadata(folder: Path) -> None:
-    """One line for a metadata.yaml that is not rosbag2 metadata (truncated, edited, foreign)."""
+def _check_metadata(folder: Path) -> dict[str, Any]:
+    """The rosbag2_bagfile_information of a bag's metadata.yaml; one line for a metadata.yaml that is not rosbag2
+    metadata (truncated, edited, foreign)."""
     meta = folder / 'metadata.yaml'
     try:
         data = yaml.safe_load(meta.read_text())
@@ -252,6 +256,7 @@ def _check_metadata(folder: Path) -> None:
                            'duration', 'starting_time', 'message_count') if k not in info]
     if missing:
         raise BagError(f'bag {folder}: its metadata.yaml lacks {", ".join(missing)} (truncated?)')
+    return info
 
 
 def _describe(target: Any) -> tuple[dict[str, str], dict[str, list[Any]], dict[str, int], dict[str, str]]:
@@ -315,7 +320,8 @@ def open_bag(path: Path | str, *, use_metadata: bool = True, note: Callable[[str
 
 
 def _open_closed(folder: Path) -> Bag:
-    _check_metadata(folder)
+    names = _check_metadata(folder)['relative_file_paths']
+    listed = [folder / n for n in names] if isinstance(names, list) and all(isinstance(n, str) for n in names) else []
     try:
         types, qos, counts, custom = _describe(folder)
     except Exception as exc:  # noqa: BLE001 (rosbags, apsw and OS errors: one line naming the bag)
@@ -324,7 +330,9 @@ def _open_closed(folder: Path) -> Bag:
     info.pop('storage', None)
     files = _storage_files(folder)
     storage = STORAGE_SUFFIXES[files[0].suffix] if files else ''
-    return Bag(folder, storage, files, types, qos, counts, info, None, _Rosbags(folder))
+    one = listed[0] if len(listed) == 1 and listed == files and listed[0].suffix == '.mcap' else None
+    source = IndexedMcap(one) if one is not None and indexed(one) else _Rosbags(folder)
+    return Bag(folder, storage, files, types, qos, counts, info, None, source)
 
 
 def iter_fields(msg: Any, prefix: str = '') -> Iterator[tuple[str, Any]]:
