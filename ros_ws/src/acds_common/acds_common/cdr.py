@@ -91,6 +91,16 @@ def frame_id_of(data: bytes) -> str:
         return ''
 
 
+def _frame_names(data: bytes, child: bool) -> tuple[str, str] | None:
+    """(header.frame_id, child_frame_id if ``child`` else '') of a message that starts with a std_msgs/Header;
+    None when the bytes do not hold them."""
+    try:
+        r = _Reader(data, 12)
+        return r.string(), r.string() if child else ''
+    except (struct.error, UnicodeDecodeError):
+        return None
+
+
 def _string(text: str) -> bytes:
     raw = text.encode() + b'\0'
     return _U32.pack(len(raw)) + raw
@@ -247,6 +257,8 @@ class Codec:
         self.frame_id = frame_id
         self.child_frame_id = child_frame_id
         self.stamped = msg_type != 'std_msgs/msg/String'
+        #: The (frame_id, child_frame_id) whose messages :meth:`decode` reads in one ``unpack`` (a fixed-layout type).
+        self.read_frames = (frame_id, child_frame_id)
         self._head = _header(frame_id)
         # Offset (in the payload) where the body after the header starts, before its alignment.
         self._body_offset = 8 + len(self._head)
@@ -255,6 +267,8 @@ class Codec:
         self.layout = None if packer is None else _layout(msg_type, frame_id, child_frame_id, packer, encode)
         if packer is not None:  # one struct, already padded to 4 bytes (_stamped)
             self.encode = encode
+            if not frame_id and not child_frame_id:
+                self.decode = self._learning(self.decode)
             return
 
         def padded(t_ns: int, value: Any = None) -> bytes:
@@ -262,6 +276,19 @@ class Codec:
             pad = -len(data) % 4
             return data + bytes(pad) if pad else data
         self.encode = padded
+
+    def _learning(self, decode: Callable[[bytes], Any]) -> Callable[[bytes], Any]:
+        """A subscriber's decode: a codec made without frame names (it does not know its publisher's) takes those of
+        the first message it decodes, so the messages after it that carry the same are read in one ``unpack`` (the
+        values are the same either way; a message with other frame names is read field by field)."""
+        def first(data: bytes) -> Any:
+            frames = _frame_names(data, self.msg_type == 'nav_msgs/msg/Odometry')
+            if frames is None or not any(frames):
+                self.decode = decode
+            else:
+                self.decode, self.read_frames = Codec(self.msg_type, *frames).decode, frames
+            return self.decode(data)
+        return first
 
     def encode_block(self, t_ns: np.ndarray, rows: np.ndarray) -> memoryview:
         """The messages of stamps ``t_ns`` (int64, n) and values ``rows`` (float64, n × width), concatenated:

@@ -82,6 +82,18 @@ def test_encode_equals_rosbags_and_decodes_exactly(msg_type, values, data, t_ns,
     assert back == value  # exact: CDR carries the doubles bit for bit
 
 
+@pytest.mark.parametrize('msg_type,values', CASES[:-1], ids=[c[0] for c in CASES[:-1]])
+@given(data=st.data(), t_ns=stamps, frame=frames, child=frames, other=frames)
+def test_a_subscribers_codec_takes_its_publishers_frames_from_the_first_message(msg_type, values, data, t_ns, frame,
+                                                                               child, other):
+    sent = [(Codec(msg_type, f, c), data.draw(values)) for f, c in ((frame, child), (frame, child), (other, frame))]
+    reader = Codec(msg_type)  # a subscriber's: it does not know its publisher's frame names
+    for codec, value in sent:
+        assert reader.decode(codec.encode(t_ns, value)) == (t_ns, value)
+    first = (frame, child if msg_type == 'nav_msgs/msg/Odometry' else '')
+    assert reader.read_frames == first  # kept after a message with other frames
+
+
 @given(t_ns=stamps, words=text)
 def test_clock_and_string(t_ns, words):
     clock = Codec('rosgraph_msgs/msg/Clock')
