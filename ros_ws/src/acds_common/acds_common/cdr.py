@@ -267,7 +267,7 @@ class Codec:
         self.layout = None if packer is None else _layout(msg_type, frame_id, child_frame_id, packer, encode)
         if packer is not None:  # one struct, already padded to 4 bytes (_stamped)
             self.encode = encode
-            if not frame_id and not child_frame_id:
+            if not frame_id and not child_frame_id and msg_type != 'rosgraph_msgs/msg/Clock':  # a header's frames
                 self.decode = self._learning(self.decode)
             return
 

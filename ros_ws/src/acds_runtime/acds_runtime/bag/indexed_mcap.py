@@ -2,15 +2,15 @@
 
 What rosbags reads for a closed MCAP bag, in the same order, at a fraction of the cost: the plots, the
 comparison and the replay read hundreds of thousands of messages (the main job's bag: 738,465), and rosbags
-parses every record of every chunk through a stream object before it filters them (~8 µs a message).
-Here each chunk is read once, decompressed and checked against its CRC, and its records are walked with
+parses every record of every chunk through a stream object before it filters them (~2.9 µs a record).
+Here each chunk is read once, decompressed and checked (its size, and its CRC when it has one), and its records are walked with
 one ``struct`` unpack each (MCAP format: a record is an opcode byte and a little-endian u64 length; a
 Message record starts with channel id u16, sequence u32, log time u64, publish time u64, then the data);
 only the selected channels' messages are kept.
 
 Order (what :meth:`acds_runtime.bag.reader.Bag.messages` promises, and rosbags' order): by log time; at
 equal times by the chunk's place in the file, then the record's place in its chunk (recorded order). Chunks
-are taken in the order of their index; the messages of the chunks read so far wait in one sorted list and
+are taken in file order; the messages of the chunks read so far wait in one sorted list and
 leave it once no chunk still to come starts earlier (chunks overlap in time only at their edges: the run
 monitor takes a step's messages as they arrive), so only a chunk or two is held at a time.
 
