@@ -33,7 +33,8 @@ PYTHON_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml', 'matplotlib': '
                'dask': 'python3-dask', 'tqdm': 'python3-tqdm', 'ppigrf': 'python3-ppigrf-pip',
                'foxglove': 'python3-foxglove-sdk-pip', 'websockets': 'python3-websockets', 'mcap': 'python3-mcap-pip',
                'numba': 'python3-numba', 'sphinx': 'python3-sphinx', 'docutils': 'python3-docutils',
-               'can': 'python3-can', 'canopen': 'python3-canopen-pip', 'oresat_configs': 'python3-oresat-configs-pip'}
+               'can': 'python3-can', 'canopen': 'python3-canopen-pip', 'oresat_configs': 'python3-oresat-configs-pip',
+               'zstandard': 'python3-zstandard', 'lz4': 'python3-lz4'}
 #: Packages whose code publishes or subscribes to any graph topic by its type name
 #: (``acds_common.lockstep.message_class``: the node host, the runtime's monitor and recorder, the CLI's recorder and player).
 EVERY_TOPIC = {'acds_common', 'acds_runtime', 'acds_cli'}
