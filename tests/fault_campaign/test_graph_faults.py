@@ -100,6 +100,28 @@ def test_a_node_that_waited_on_a_clock_step_the_monitor_withholds_blames_the_mon
     assert GraphRun._waited_on_monitor(graph, SimpleNamespace(tail=[line])) is on_monitor
 
 
+def test_a_stopped_node_is_named_when_its_last_message_reached_only_the_monitor():
+    """A SIGSTOP can land inside a publish: em_driver's step-172 outputs reached the run monitor, not acds_controller,
+    which waits for coil_current of step 172. From what the monitor received, acds_controller is the node whose inputs
+    arrived and whose outputs did not (seen once in a loaded fresh-clone suite); the stopped process is named."""
+    from types import SimpleNamespace
+
+    from acds_common.graph import build_graph
+    from acds_common.parameters import node_parameters
+    from acds_common.scenario import load_scenario
+    from acds_runtime.monitor import RunMonitor
+
+    graph = build_graph(node_parameters(load_scenario('heao_b_acquisition'), 400))
+    upstream = {'rigid_body', 'magnetometer_sim', 'ascs_mode_manager'}  # through step 173
+    last = {spec.topic(o.topic): 173 if name in upstream else 172
+            for name, spec in graph.nodes.items() for o in spec.outputs if o.every_step}
+    monitor = SimpleNamespace(settle=lambda: None, last_steps=lambda: last, graph=graph, external=None,
+                              dt_ns=500_000_000, _who=lambda name: name)
+    assert RunMonitor.blame(monitor)[0] == 'acds_controller'
+    name, text = RunMonitor.blame(monitor, lambda node: node == 'em_driver')
+    assert name == 'em_driver' and text.startswith('em_driver stopped at step 173: its process is stopped'), text
+
+
 #: A plain ROS 2 reader of /clock (``ros2 topic echo /clock`` with the lockstep QoS): one line per message.
 _CLOCK_READER = """
 import rclpy

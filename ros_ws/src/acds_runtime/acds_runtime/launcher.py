@@ -449,13 +449,19 @@ class GraphRun:
                     report += _last_lines(waiting)
             return head + report + "\n  the run monitor's thread now:\n" + '\n'.join(
                 f'    {line}' for line in self.monitor.spin_stack())
-        blame = self.monitor.blame() if self.monitor is not None and code == 3 and not over_deadline else None
+        blame = self.monitor.blame(self._stopped) if self.monitor is not None and code == 3 and not over_deadline \
+            else None
         if blame:
             culprit, text = blame
             head = f'{text} (the graph stopped waiting for it); ' + head
             if culprit != proc.name and culprit in self.processes:
                 report += self._stack_of(self.processes[culprit])
         return head + report
+
+    def _stopped(self, name: str) -> bool:
+        """Whether node ``name``'s process is alive and stopped (SIGSTOP, a debugger; never one the user runs)."""
+        proc = self.processes.get(name)
+        return proc is not None and proc.popen.poll() is None and is_stopped(proc.popen.pid)
 
     def _waited_on_monitor(self, proc: NodeProcess) -> bool:
         """Whether a node failed waiting on the run monitor: the time owner on its acknowledgement, or another node on

@@ -345,13 +345,15 @@ class RunMonitor:
             if not self.wait_for(advanced_since(self.last_steps()), timeout_s=min(quiet_s, left)):
                 return
 
-    def blame(self) -> tuple[str, str] | None:
+    def blame(self, stopped: Callable[[str], bool] = lambda _node: False) -> tuple[str, str] | None:
         """The node whose outputs stopped while its inputs were there (a hung node), from what arrived: its name
         and a sentence.
 
         For each node of the graph: the first step it has not published on all its per-step
         outputs; the culprit is a node whose lag-0 inputs for that step have all arrived. What was in
-        flight is counted first (:meth:`settle`).
+        flight is counted first (:meth:`settle`). A node whose process is stopped (``stopped``: SIGSTOP, a
+        debugger) is the culprit whatever arrived here: a stop can land inside a publish, after this monitor's copy
+        of a message and before another reader's, and that reader then waits for what the monitor has.
         """
         self.settle()
         last = self.last_steps()
@@ -365,16 +367,22 @@ class RunMonitor:
             nxt = min(last.get(t, -1) for t in outs) + 1 - offset
             inputs = [(spec.topic(i.topic), i.lag) for s in spec.stages for i in s.inputs
                       if i.source in self.graph.nodes]
+            missing = [t for o in watched if last.get(t := spec.topic(o.topic), -1) < nxt + o.stamp_offset]
+            if stopped(name):
+                return name, (f'{self._who(name)} stopped at step {nxt}: its process is stopped, its outputs did not '
+                              f'({", ".join(missing)} of step {nxt}, t = {nxt * self.dt_ns / 1e9:g} s)')
             if all(last.get(t, -1) >= nxt - lag for t, lag in inputs):
-                missing = [t for o in watched if last.get(t := spec.topic(o.topic), -1) < nxt + o.stamp_offset]
                 candidates.append((nxt, name, missing))
         if not candidates:
             return None
         k, name, missing = min(candidates)
-        who = name if self.external is None or name not in self.external.nodes else \
+        return name, (f'{self._who(name)} stopped at step {k}: its inputs for that step had arrived, its outputs did '
+                      f'not ({", ".join(missing)} of step {k}, t = {k * self.dt_ns / 1e9:g} s)')
+
+    def _who(self, name: str) -> str:
+        """A node as a failure names it (an external one with its ROS node)."""
+        return name if self.external is None or name not in self.external.nodes else \
             f'{name} (external, ROS node {self.external.publisher(name)})'
-        return name, (f'{who} stopped at step {k}: its inputs for that step had arrived, its outputs did not '
-                      f'({", ".join(missing)} of step {k}, t = {k * self.dt_ns / 1e9:g} s)')
 
     def spin_stack(self) -> list[str]:
         """The Python stack of the monitor's spinning thread now: where it is when it stopped taking in messages
