@@ -85,10 +85,8 @@ def stamp_ns(data: bytes) -> int:
 def frame_id_of(data: bytes) -> str:
     """The ``header.frame_id`` of a message that starts with a std_msgs/Header (every stamped type but the clock);
     '' when the bytes end before it (a message too short to hold one)."""
-    try:
-        return _Reader(data, 12).string()
-    except (struct.error, UnicodeDecodeError):
-        return ''
+    frames = _frame_names(data, child=False)
+    return '' if frames is None else frames[0]
 
 
 def _frame_names(data: bytes, child: bool) -> tuple[str, str] | None:

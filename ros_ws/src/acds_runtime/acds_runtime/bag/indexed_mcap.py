@@ -29,12 +29,12 @@ from operator import itemgetter
 from pathlib import Path
 from typing import Any
 
+from .writer import MESSAGE_FIELDS
+
 #: MCAP opcodes (specification, "Records").
 MESSAGE_OPCODE, CHUNK_OPCODE = 0x05, 0x06
 _RECORD = struct.Struct('<BQ')
 _MESSAGE = struct.Struct('<HIQ')
-#: Bytes of a Message record before its data: channel id, sequence, log time, publish time.
-_MESSAGE_HEAD = 22
 #: A Chunk record's fields before its compression string: start and end time, uncompressed size, CRC, the string's
 #: length.
 _CHUNK = struct.Struct('<QQQII')
@@ -69,7 +69,7 @@ def chunk_messages(records: bytes, channels: dict[int, str]) -> list[tuple[int, 
             channel, _sequence, log_time = unpack_message(records, body)
             topic = channels.get(channel)
             if topic is not None:
-                out.append((log_time, topic, records[body + _MESSAGE_HEAD:pos]))
+                out.append((log_time, topic, records[body + MESSAGE_FIELDS:pos]))
     if pos != end:
         raise ValueError('its last record runs past its end')
     return out

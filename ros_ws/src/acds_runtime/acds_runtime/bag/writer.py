@@ -225,9 +225,9 @@ def _jazzy(metadata_yaml: str) -> str:
 
 
 #: An MCAP message record's opcode and length, then its fields before the data: channel id, sequence, log time, publish
-#: time (the MCAP specification's Message record, as rosbags writes it).
+#: time (the MCAP specification's Message record, as rosbags writes it); MESSAGE_FIELDS: those fields' bytes.
 _MESSAGE_RECORD = struct.Struct('<BQHIQQ')
-_MESSAGE_FIELDS = 2 + 4 + 8 + 8
+MESSAGE_FIELDS = 2 + 4 + 8 + 8
 
 
 class _McapStorage(McapWriter):
@@ -259,7 +259,7 @@ class _McapStorage(McapWriter):
             chunk.message_end_time = timestamp
         bio = chunk.bio
         chunk.msgs[connection.id].append((timestamp, bio.tell()))
-        bio.write(_MESSAGE_RECORD.pack(0x05, _MESSAGE_FIELDS + len(data), connection.id, 0, timestamp, timestamp))
+        bio.write(_MESSAGE_RECORD.pack(0x05, MESSAGE_FIELDS + len(data), connection.id, 0, timestamp, timestamp))
         bio.write(data)
         if bio.tell() > 2**20:
             self.close_chunk()
