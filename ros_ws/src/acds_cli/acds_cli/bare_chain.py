@@ -3,7 +3,8 @@
 Process i relays every message from ``ring_i`` to ``ring_{i+1}``; process 0
 starts the token once every link is matched, times ``CYCLES`` round trips and
 prints cycles/s as its last line; the relays leave after the last cycle. Same QoS, executor and spinning (a
-:class:`~acds_common.lockstep.Spinner`) as the lockstep graph.
+:class:`~acds_common.lockstep.Spinner`) as the lockstep graph, and placed on a CPU the same way when the bench asks
+(:func:`~acds_common.lockstep.take_cpu`).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import sys
 import time
 
 import rclpy
-from acds_common.lockstep import LOCKSTEP_QOS, SPIN_PERIOD_S, Spinner
+from acds_common.lockstep import LOCKSTEP_QOS, SPIN_PERIOD_S, Spinner, take_cpu
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from std_msgs.msg import Header
@@ -21,6 +22,7 @@ from std_msgs.msg import Header
 def main() -> int:
     """Relay (or, as process 0, drive and time) the token."""
     index, hops, cycles = (int(x) for x in sys.argv[1:4])
+    take_cpu(f'bare_chain_{index}')
     rclpy.init()
     node = Node(f'bare_chain_{index}')
     pub = node.create_publisher(Header, f'ring_{(index + 1) % hops}', LOCKSTEP_QOS)

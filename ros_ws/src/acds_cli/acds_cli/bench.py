@@ -1,11 +1,12 @@
 """``acds bench``: measured speed of what users run, printed (never asserted in tests), one run.
 
-1. graph: the six-node main job (``scenarios/roles.json``; every node its own process, recording on),
-   steady-state lockstep steps/s after the first 10 % of the steps, CPU ms per step of
-   every node process and of the launcher (its run monitor and recorder), and the
-   deliveries per step (each message published × the subscriptions that receive it);
+1. graph: the six-node main job (``scenarios/roles.json``; every node its own process, recording on, the node
+   processes placed on two CPUs as the launcher places them; and again placed by the OS), steady-state lockstep
+   steps/s after the first 10 % of the steps, CPU ms per step of every node process and of the launcher (its run
+   monitor and recorder), and the deliveries per step (each message published × the subscriptions that receive it);
 2. bare ring: as many plain rclpy processes as the graph has nodes, passing one message
-   around (same QoS, same EventsExecutor spun the same way) — cycles/s, the ceiling a lockstep could reach;
+   around (same QoS, same EventsExecutor spun the same way) — cycles/s, the ceiling a lockstep could reach; placed by
+   the OS, and placed by the launcher's rule (a chain: one CPU);
 3. direct engine: the same scenario's steppers in one process (``--engine direct``), after a short
    run that loads its compiled kernels and fused loop (:mod:`acds_common.kernels`, :mod:`acds_runtime.fused_step`;
    that one-time load, paid once per process, is printed beside it); then the same run without the fused loop
@@ -27,8 +28,12 @@ The direct engine and the dispersion are also given per second of this process's
 shared with other work, the wall rate measures the load as much as the code.
 
 ``--json`` prints one object with the keys ``graph_steps_per_s``, ``bare_chain_steps_per_s``,
-``ratio``, ``hops``, ``deliveries_per_step`` (and ``deliveries_by_topic``: per step, each topic's messages × the
-subscriptions that receive them, the monitor's included), ``direct_steps_per_s``, ``direct_steps_per_cpu_s``,
+``ratio``, ``hops``, ``placement`` (the CPUs the launcher placed the node processes on, :mod:`acds_runtime.placement`;
+null when it does not place them: not exactly two CPUs) and, when it does, the graph placed by the OS
+(``graph_os_placed_steps_per_s``, ``ratio_os_placed``: against the same ring) and the ring placed by the same rule
+(``bare_chain_placed_steps_per_s``, ``ratio_placed``: the placed graph against it), ``deliveries_per_step``
+(and ``deliveries_by_topic``: per step, each topic's messages × the subscriptions that receive them, the monitor's
+included), ``direct_steps_per_s``, ``direct_steps_per_cpu_s``,
 ``direct_kernel_load_s``, ``direct_unfused_steps_per_s`` and ``direct_unfused_steps_per_cpu_s`` (the direct engine
 without its fused loop), ``direct_fused_share`` (the steps the fused loop ran), ``fused_loop_us_per_step`` (wall µs a
 step inside it), ``fused_us_per_model`` (node → µs per step of its fused kernel alone), ``core_steps_per_s``,
@@ -92,8 +97,9 @@ def _self_cpu_s() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def graph_rate(steps: int) -> dict[str, Any]:
-    """Steady-state steps/s, CPU ms/step per process and deliveries/step of the recorded six-node graph."""
+def graph_rate(steps: int, place: bool = True) -> dict[str, Any]:
+    """Steady-state steps/s, CPU ms/step per process and deliveries/step of the recorded six-node graph (``place``:
+    its node processes placed as the launcher places them, :mod:`acds_runtime.placement`; else by the OS)."""
     from acds_common import topics
     from acds_common.graph import MONITOR_LAG
     from acds_common.scenario import load_scenario
@@ -106,7 +112,7 @@ def graph_rate(steps: int) -> dict[str, Any]:
     last = steps - 2 - MONITOR_LAG
     marks: dict[str, Any] = {}
     work = Path(tempfile.mkdtemp(prefix='acds_bench_'))
-    graph = GraphRun(sc, work / 'run', steps=steps, echo=lambda _l: None, record=work / 'bag')
+    graph = GraphRun(sc, work / 'run', steps=steps, echo=lambda _l: None, record=work / 'bag', place=place)
 
     def sample() -> dict[str, float]:
         cpu = {name: _cpu_s(p.popen.pid) for name, p in graph.processes.items()}
@@ -134,18 +140,27 @@ def graph_rate(steps: int) -> dict[str, Any]:
     cpu = {name: 1e3 * (marks['cpu1'][name] - marks['cpu0'][name]) / span for name in marks['cpu0']}
     by_topic = dict(sorted(marks['by_topic'].items(), key=lambda item: (-item[1], item[0])))
     return {'steps_per_s': span / wall, 'cpu_ms_per_step': cpu, 'deliveries_per_step': sum(by_topic.values()),
-            'deliveries_by_topic': by_topic, 'hops': len(graph.processes)}
+            'deliveries_by_topic': by_topic, 'hops': len(graph.processes), 'placement': graph.placement}
 
 
-def bare_chain_rate(hops: int, cycles: int) -> float:
-    """Cycles/s of a ring of ``hops`` rclpy processes relaying one message (the graph's QoS and executor)."""
+def bare_chain_rate(hops: int, cycles: int, place: bool = False) -> float:
+    """Cycles/s of a ring of ``hops`` rclpy processes relaying one message (the graph's QoS and executor; ``place``:
+    its processes placed by the launcher's rule, :func:`acds_runtime.placement.chain_shape`, else by the OS)."""
+    from acds_common.lockstep import CPU_ENV
     from acds_runtime.launcher import FASTDDS_PROFILE, DomainLease
+    from acds_runtime.placement import chain_shape, placement_cpus
+    from acds_runtime.placement import place as place_on
 
+    cpus = placement_cpus() if place else None
+    plan = place_on(chain_shape(str(i) for i in range(hops)), cpus) if cpus else {}
     lease = DomainLease()
     env = dict(os.environ, ROS_DOMAIN_ID=str(lease.domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
                FASTRTPS_DEFAULT_PROFILES_FILE=str(FASTDDS_PROFILE))
+    env.pop(CPU_ENV, None)
     procs = [subprocess.Popen([sys.executable, '-m', 'acds_cli.bare_chain', str(i), str(hops), str(cycles)],
-                              env=env, stdout=subprocess.PIPE, text=True) for i in range(hops)]
+                              env=dict(env, **{CPU_ENV: str(plan[str(i)])}) if str(i) in plan else env,
+                              stdout=subprocess.PIPE,
+                              text=True) for i in range(hops)]
     try:
         out, _ = procs[0].communicate(timeout=600)
         for p in procs[1:]:
@@ -262,8 +277,15 @@ def _bench_modules() -> list:
 
 def main(args: argparse.Namespace) -> int:
     """Run the measurements and print them (``--json``: last line one JSON object)."""
+    from acds_runtime.placement import describe, placement_cpus
+
     graph = graph_rate(args.steps)
     bare = bare_chain_rate(graph['hops'], args.steps)
+    # Placed on two CPUs as the launcher places a graph: the graph both ways, the ring both ways (the same rule puts
+    # a ring, a chain with nothing beside it, on one CPU), side by side.
+    placed = placement_cpus() is not None
+    graph_os = graph_rate(args.steps, place=False)['steps_per_s'] if placed else None
+    bare_placed = bare_chain_rate(graph['hops'], args.steps, place=True) if placed else None
     measured = direct_rate(max(args.steps, 5000))
     (direct, direct_cpu), (unfused, unfused_cpu) = measured[True], measured[False]
     kernel_load, models = measured['load_s'], measured['models_us']
@@ -272,6 +294,11 @@ def main(args: argparse.Namespace) -> int:
     fsw_overhead, fsw_rate = fsw_sample_cost()
     result = {'graph_steps_per_s': round(graph['steps_per_s'], 1), 'bare_chain_steps_per_s': round(bare, 1),
               'ratio': round(graph['steps_per_s'] / bare, 3), 'hops': graph['hops'],
+              'placement': describe(graph['placement']) if graph['placement'] else None,
+              'graph_os_placed_steps_per_s': None if graph_os is None else round(graph_os, 1),
+              'ratio_os_placed': None if graph_os is None else round(graph_os / bare, 3),
+              'bare_chain_placed_steps_per_s': None if bare_placed is None else round(bare_placed, 1),
+              'ratio_placed': None if bare_placed is None else round(graph['steps_per_s'] / bare_placed, 3),
               'deliveries_per_step': round(graph['deliveries_per_step'], 2),
               'deliveries_by_topic': {k: round(v, 2) for k, v in graph['deliveries_by_topic'].items()},
               'direct_steps_per_s': round(direct, 1), 'direct_steps_per_cpu_s': round(direct_cpu, 1),
@@ -290,7 +317,8 @@ def main(args: argparse.Namespace) -> int:
               'cores': os.cpu_count(),
               'cpu_ms_per_step': {k: round(v, 3) for k, v in graph['cpu_ms_per_step'].items()},
               'load_average': [round(x, 2) for x in os.getloadavg()]}
-    print(f'six-node graph ({SCENARIO}, recording on):    {graph["steps_per_s"]:10.1f} steps/s')
+    print(f'six-node graph ({SCENARIO}, recording on):    {graph["steps_per_s"]:10.1f} steps/s'
+          + (f'  (placed: {describe(graph["placement"])})' if graph['placement'] else '  (placed by the OS)'))
     for name, ms in graph['cpu_ms_per_step'].items():
         print(f'    CPU {name:34s} {ms:8.3f} ms/step')
     print(f'deliveries per step:                              {graph["deliveries_per_step"]:10.2f}')
@@ -298,6 +326,11 @@ def main(args: argparse.Namespace) -> int:
         print(f'    {name:45s} {n:6.2f}')
     print(f'bare rclpy ring ({graph["hops"]} processes):                 {bare:10.1f} cycles/s')
     print(f'ratio graph / bare ring:                          {graph["steps_per_s"] / bare:10.3f}')
+    if graph_os is not None and bare_placed is not None:
+        print(f'six-node graph placed by the OS:                  {graph_os:10.1f} steps/s  (ratio to the ring '
+              f'{graph_os / bare:.3f})')
+        print(f'bare ring placed by the same rule (one CPU):      {bare_placed:10.1f} cycles/s  (ratio of the placed '
+              f'graph to it {graph["steps_per_s"] / bare_placed:.3f})')
     print(f'direct engine (one process, no DDS):              {direct:10.1f} steps/s  ({direct_cpu:.1f} per CPU s; '
           f'{kernel_load:.2f} s once per process to load its compiled kernels)')
     print(f'direct engine without the fused loop:             {unfused:10.1f} steps/s  ({unfused_cpu:.1f} per CPU s)')

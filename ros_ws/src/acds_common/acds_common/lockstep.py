@@ -106,6 +106,9 @@ EXIT_OK, EXIT_CONFIG, EXIT_LOCKSTEP, EXIT_ORPHANED = 0, 2, 3, 4
 #: Environment variable the launcher sets to its own pid: a node started by a launcher asks the kernel to
 #: SIGKILL it when that launcher dies (``PR_SET_PDEATHSIG``), and leaves at once if it already has.
 LAUNCHER_PID_ENV = 'ACDS_LAUNCHER_PID'
+#: Environment variable the launcher sets to the CPU it places a node process on (:mod:`acds_runtime.placement`): the
+#: process binds itself there before ROS starts, so every thread it creates (Fast DDS's too) runs there.
+CPU_ENV = 'ACDS_CPU'
 #: Signals that stop a node cleanly (flush, exit 0): Ctrl-C, kill, a closed terminal.
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 #: Seconds a launcher gives a node to stop after SIGINT before it SIGKILLs it.
@@ -803,6 +806,25 @@ def numeric_mismatch() -> str | None:
     return f'numeric configuration on host {mine["host"]} differs from the launcher\'s: {"; ".join(diff)}'
 
 
+def take_cpu(name: str) -> None:
+    """Bind this process to the CPU the launcher placed it on (:data:`CPU_ENV`; unset: where the OS puts it): the
+    threads its imports started (numpy's BLAS workers among them) and, by inheritance, every thread it starts later.
+    A CPU the process may not use is said in one line and left to the OS: placement changes speed, never data."""
+    cpu = os.environ.get(CPU_ENV, '')
+    if not cpu:
+        return
+    try:
+        cpus = {int(cpu)}
+        os.sched_setaffinity(0, cpus)
+        for tid in sorted(int(t) for t in os.listdir('/proc/self/task')):
+            try:
+                os.sched_setaffinity(tid, cpus)
+            except ProcessLookupError:  # a thread that ended meanwhile
+                continue
+    except (OSError, ValueError) as exc:
+        print(f'[{name}] not placed on CPU {cpu!r} ({exc}): the operating system places it', file=sys.stderr, flush=True)
+
+
 def run_node(name: str, args: list[str] | None = None) -> int:
     """Entry-point body of every node (``name``, as its package declares it): init, spin, report, shut down
     cleanly, end the process. The stepper is the one the node's declaration names for its parameters.
@@ -822,6 +844,7 @@ def run_node(name: str, args: list[str] | None = None) -> int:
         print(f'[{name}] CONFIGURATION ERROR: {mismatch}', file=sys.stderr, flush=True)
         return EXIT_CONFIG
     os.environ.setdefault('ROS_LOG_DIR', os.path.join(os.environ.get('TMPDIR', '/tmp'), 'acds_ros_log'))
+    take_cpu(name)
     try:
         rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     except RuntimeError as exc:  # rclpy's RCLError: bad --ros-args or params file

@@ -30,6 +30,7 @@ import yaml
 from acds_common import numeric_config, topics
 from acds_common.graph import Graph, build_graph, monitor_allows
 from acds_common.lockstep import (
+    CPU_ENV,
     EXIT_LOCKSTEP,
     FAILURE_LINES,
     LAUNCHER_PID_ENV,
@@ -47,6 +48,7 @@ from acds_common.timing import DEADLINE_FAILURE, parse_line
 from . import shm
 from .external import ExternalWatch
 from .monitor import RunMonitor
+from .placement import describe, node_placement
 from .summary import RunObserver
 
 VENV_BIN = Path(sys.executable).parent
@@ -166,8 +168,12 @@ class GraphRun:
                  record: Path | None = None, record_storage: str = 'mcap', record_compression: str | None = None,
                  keep: bool = False, live: Callable[[dict[str, dict[str, Any]]], Any] | None = None,
                  external: Iterable[str] = (), domain: int | None = None, peers: Iterable[str] = (),
-                 notice: Callable[[str], None] | None = None):
+                 notice: Callable[[str], None] | None = None, place: bool = True):
         self.scenario = scenario
+        #: Place the node processes on the machine's two CPUs (:mod:`acds_runtime.placement`; only with exactly two).
+        self.place = place
+        #: {instance: CPU} of the node processes placed (empty: the operating system places them).
+        self.placement: dict[str, int] = {}
         self.run_dir = Path(run_dir)
         self.steps = steps if steps is not None else scenario.total_steps()
         self.rtf = rtf
@@ -234,6 +240,7 @@ class GraphRun:
             **{LAUNCHER_PID_ENV: str(os.getpid()), numeric_config.ENV: numeric_config.to_env()},
         )
         env.pop('ROS_LOCALHOST_ONLY', None)
+        env.pop(CPU_ENV, None)  # set per node process by its placement
         if self.peers:  # discovery stays off the subnet but reaches these hosts (an external node's, issue 20 §6)
             env['ROS_STATIC_PEERS'] = ';'.join(self.peers)
         else:
@@ -318,15 +325,19 @@ class GraphRun:
                       f'{identity.rpartition("/")[2]} in namespace {spec.namespace} on ROS_DOMAIN_ID='
                       f'{self.lease.domain_id} (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST on this host); its contract: '
                       f'./scripts/acds contract {self.scenario.name} --node {name}')
+        self.placement = node_placement(self.graph, self.external) if self.place else {}
+        if self.placement:
+            self.notice(f'[acds] node processes placed on the two CPUs ({describe(self.placement)})')
         for name, spec in self.graph.nodes.items():
             if name in self.external:
                 continue
             exe = executables[name]
+            node_env = dict(env, **{CPU_ENV: str(self.placement[name])}) if name in self.placement else env
             namespace = [] if spec.namespace == topics.NAMESPACE else ['-r', f'__ns:={spec.namespace}']
             popen = subprocess.Popen(
                 [str(exe), '--ros-args', *namespace, '--params-file', str(params_file)],
                 stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                text=True, env=env, start_new_session=True, pass_fds=(self.lease.fd,))
+                text=True, env=node_env, start_new_session=True, pass_fds=(self.lease.fd,))
             proc = NodeProcess(name, popen)
             proc.reader = threading.Thread(target=self._forward, args=(proc, popen.stdout), daemon=True)
             proc.reader.start()
