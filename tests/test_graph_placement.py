@@ -8,7 +8,9 @@ import subprocess
 import sys
 
 from acds_common.lockstep import CPU_ENV
+from acds_common.scenario import load_scenario
 from acds_runtime import placement
+from acds_runtime.launcher import GraphRun
 from acds_runtime.testing import stream_digests
 
 SCENARIO = 'heao_b_acquisition_short'
@@ -72,3 +74,10 @@ def test_placed_nodes_run_where_placed_and_send_the_same_data(launch_graph, monk
     assert not any('placed on the two CPUs' in line for line in unplaced.output)
 
 
+
+
+def test_a_run_paced_to_the_wall_clock_is_not_placed(tmp_path, monkeypatch):
+    monkeypatch.setattr(placement, 'placement_cpus', _allowed)
+    scenario = load_scenario(SCENARIO)
+    assert GraphRun(scenario, tmp_path / 'a').place and not GraphRun(scenario, tmp_path / 'b', rtf=1.0).place
+    assert not GraphRun(scenario, tmp_path / 'c', place=False).place

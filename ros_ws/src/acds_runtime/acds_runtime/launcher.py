@@ -170,8 +170,10 @@ class GraphRun:
                  external: Iterable[str] = (), domain: int | None = None, peers: Iterable[str] = (),
                  notice: Callable[[str], None] | None = None, place: bool = True):
         self.scenario = scenario
-        #: Place the node processes on the machine's two CPUs (:mod:`acds_runtime.placement`; only with exactly two).
-        self.place = place
+        #: Place the node processes on the machine's two CPUs (:mod:`acds_runtime.placement`; only with exactly two, and
+        #: never in a run paced to the wall clock: there a node's deadline matters, and a bound process cannot move
+        #: away from other load).
+        self.place = place and rtf == 0
         #: {instance: CPU} of the node processes placed (empty: the operating system places them).
         self.placement: dict[str, int] = {}
         self.run_dir = Path(run_dir)

@@ -148,12 +148,15 @@ def cmd_run(args: argparse.Namespace) -> int:
         except KeyboardInterrupt:
             print('\n[acds] stopped before the run started', file=sys.stderr)
             return 130
-        return _run(args, scenario, run_dir, direct, external, overrides, bag, live, echo, steps)
+        return _run(args, scenario, run_dir, direct, external, overrides, bag, live, echo, steps,
+                    paced=bool(args.rtf) or any(x.paces for x in sessions))
 
 
 def _run(args: argparse.Namespace, scenario, run_dir: Path, direct: bool, external, overrides, bag, live, echo,
-         steps) -> int:
-    """The run itself, on the engine asked, then its summary, tables and plots."""
+         steps, paced: bool) -> int:
+    """The run itself, on the engine asked, then its summary, tables and plots (``paced``: to the wall clock, by
+    ``--rtf`` or a session such as a bus: its node processes are left where the OS puts them,
+    :mod:`acds_runtime.placement`)."""
     from acds_runtime.direct import DirectRun
     from acds_runtime.launcher import GraphRun, LaunchError
     from acds_runtime.report import format_summary
@@ -167,7 +170,7 @@ def _run(args: argparse.Namespace, scenario, run_dir: Path, direct: bool, extern
     else:
         engine = GraphRun(scenario, run_dir, steps=steps, rtf=args.rtf, echo=echo, progress=progress,
                           overrides=overrides, external=args.external, domain=args.domain, peers=args.peer,
-                          notice=lambda line: print(line, file=sys.stderr, flush=True), **options)
+                          notice=lambda line: print(line, file=sys.stderr, flush=True), place=not paced, **options)
     print(f'[acds] scenario {scenario.name}: {engine.steps} steps of {scenario.control_period_s} s '
           f'({engine.steps * scenario.control_period_s / 60:.1f} min sim), '
           + ('direct engine (one process, no DDS)' if direct else 'nodes ' + ', '.join(
