@@ -57,7 +57,7 @@ def test_placed_nodes_run_where_placed_and_send_the_same_data(launch_graph, monk
         if k >= STEPS // 2 and not seen:
             seen.update({name: _affinity(p.popen.pid) for name, p in graph.processes.items()})
 
-    with launch_graph(SCENARIO, steps=STEPS, progress=look) as graph:
+    with launch_graph(SCENARIO, steps=STEPS, progress=look, place=True) as graph:
         graph.wait()
         placed = stream_digests(graph.monitor)
     assert graph.placement == placement.place(placement.shape_of(graph.graph), _allowed())
@@ -67,7 +67,7 @@ def test_placed_nodes_run_where_placed_and_send_the_same_data(launch_graph, monk
         assert len(threads) > 3, f'{name}: Fast DDS threads expected'
         elsewhere = {t: cpus for t, cpus in threads.items() if cpus != {graph.placement[name]}}
         assert not elsewhere, f'{name} placed on CPU {graph.placement[name]}; threads elsewhere: {elsewhere}'
-    with launch_graph(SCENARIO, steps=STEPS, place=False) as unplaced:
+    with launch_graph(SCENARIO, steps=STEPS) as unplaced:
         unplaced.wait()
         assert stream_digests(unplaced.monitor) == placed
     assert unplaced.placement == {}
@@ -76,8 +76,8 @@ def test_placed_nodes_run_where_placed_and_send_the_same_data(launch_graph, monk
 
 
 
-def test_a_run_paced_to_the_wall_clock_is_not_placed(tmp_path, monkeypatch):
-    monkeypatch.setattr(placement, 'placement_cpus', _allowed)
+def test_placement_is_asked_for_and_never_in_a_run_paced_to_the_wall_clock(tmp_path):
     scenario = load_scenario(SCENARIO)
-    assert GraphRun(scenario, tmp_path / 'a').place and not GraphRun(scenario, tmp_path / 'b', rtf=1.0).place
-    assert not GraphRun(scenario, tmp_path / 'c', place=False).place
+    assert GraphRun(scenario, tmp_path / 'a', place=True).place
+    assert not GraphRun(scenario, tmp_path / 'b', rtf=1.0, place=True).place
+    assert not GraphRun(scenario, tmp_path / 'c').place  # a study's samples, the tests' graphs

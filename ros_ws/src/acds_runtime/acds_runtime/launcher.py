@@ -168,11 +168,12 @@ class GraphRun:
                  record: Path | None = None, record_storage: str = 'mcap', record_compression: str | None = None,
                  keep: bool = False, live: Callable[[dict[str, dict[str, Any]]], Any] | None = None,
                  external: Iterable[str] = (), domain: int | None = None, peers: Iterable[str] = (),
-                 notice: Callable[[str], None] | None = None, place: bool = True):
+                 notice: Callable[[str], None] | None = None, place: bool = False):
         self.scenario = scenario
         #: Place the node processes on the machine's two CPUs (:mod:`acds_runtime.placement`; only with exactly two, and
         #: never in a run paced to the wall clock: there a node's deadline matters, and a bound process cannot move
-        #: away from other load).
+        #: away from other load). Off unless asked (``acds run``, ``acds bench``): graphs run side by side (a study's
+        #: samples, the tests' workers) would all put their chains on the same CPU.
         self.place = place and rtf == 0
         #: {instance: CPU} of the node processes placed (empty: the operating system places them).
         self.placement: dict[str, int] = {}

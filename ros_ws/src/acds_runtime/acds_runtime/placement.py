@@ -19,11 +19,12 @@ The rule, from the graph's declaration only (so it is the same on every run of a
   (on a tie, the second): they run beside the chain, and the run monitor, which the scheduler places, fills in.
 
 Data are the same wherever a process runs (the lockstep orders every message by step); placement changes only how
-fast. The launcher applies it when its own CPU set holds exactly two CPUs (the machine this was measured on), to its
-own node processes only (an external node is the user's and runs where the user puts it), and only in a run as fast
-as it goes: a run paced to the wall clock (``--rtf``, or a bus whose flight computer expects its answers in real
-time) gains nothing from it, and there a process bound to one CPU could not move away from other load and miss a
-deadline (a C3's SDO write waits 0.3 s for the card's answer).
+fast. The launcher applies it when asked (``acds run``, ``acds bench``; not a study's samples or the tests' graphs,
+which run side by side and would all put their chains on the same CPU), when its own CPU set holds exactly two CPUs
+(the machine this was measured on), to its own node processes only (an external node is the user's and runs where the
+user puts it), and only in a run as fast as it goes: a run paced to the wall clock (``--rtf``, or a bus whose flight
+computer expects its answers in real time) gains nothing from it, and there a process bound to one CPU could not move
+away from other load and miss a deadline (a C3's SDO write waits 0.3 s for the card's answer).
 """
 
 from __future__ import annotations

@@ -154,9 +154,9 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace, scenario, run_dir: Path, direct: bool, external, overrides, bag, live, echo,
          steps, paced: bool) -> int:
-    """The run itself, on the engine asked, then its summary, tables and plots (``paced``: to the wall clock, by
-    ``--rtf`` or a session such as a bus: its node processes are left where the OS puts them,
-    :mod:`acds_runtime.placement`)."""
+    """The run itself, on the engine asked, then its summary, tables and plots. The graph's node processes are
+    placed on the machine's two CPUs (:mod:`acds_runtime.placement`) unless the run is ``paced`` to the wall clock, by
+    ``--rtf`` or a session such as a bus."""
     from acds_runtime.direct import DirectRun
     from acds_runtime.launcher import GraphRun, LaunchError
     from acds_runtime.report import format_summary
