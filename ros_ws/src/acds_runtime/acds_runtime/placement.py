@@ -42,7 +42,8 @@ PLACEMENT_ENV = 'ACDS_PLACEMENT'
 
 @dataclass(frozen=True)
 class StepShape:
-    """What placement needs of a step: its nodes with the time owner first, each node's lag-0 sources, weights."""
+    """What placement needs of a step: its time owner, each node's lag-0 sources (the nodes it waits for within a
+    step) and each node's weight (module docstring)."""
 
     owner: str
     sources: dict[str, frozenset[str]]
