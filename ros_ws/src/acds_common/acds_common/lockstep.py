@@ -107,7 +107,7 @@ EXIT_OK, EXIT_CONFIG, EXIT_LOCKSTEP, EXIT_ORPHANED = 0, 2, 3, 4
 #: SIGKILL it when that launcher dies (``PR_SET_PDEATHSIG``), and leaves at once if it already has.
 LAUNCHER_PID_ENV = 'ACDS_LAUNCHER_PID'
 #: Environment variable the launcher sets to the CPU it places a node process on (:mod:`acds_runtime.placement`): the
-#: process binds itself there before ROS starts, so every thread it creates (Fast DDS's too) runs there.
+#: process binds itself and its threads there as its first stage fires (:func:`take_cpu`).
 CPU_ENV = 'ACDS_CPU'
 #: Signals that stop a node cleanly (flush, exit 0): Ctrl-C, kill, a closed terminal.
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
@@ -373,6 +373,9 @@ class LockstepNode(Node):
         #: Whether the run monitor paces this node (the time owner of a graph that has one).
         self._paced_by_monitor = self.time_owner and MONITOR_NAME in self.graph_nodes
         self._firing = False
+        #: Bound to the CPU the launcher placed it on (:func:`take_cpu`): done as the first stage fires, once the graph
+        #: is up, so discovery and the start run wherever the OS puts them.
+        self._placed = False
         self._started = False
         self._ready_sent = False
         self._ready_from: set[str] = set()
@@ -591,6 +594,9 @@ class LockstepNode(Node):
                     return
 
     def _run_stage(self, stage: _Stage, k: int, values: dict[str, Any]) -> None:
+        if not self._placed:
+            self._placed = True
+            take_cpu(self.get_name())
         try:
             outputs = stage.handler(k, self.step_time_s(k), values)
         except StepError as exc:
@@ -807,8 +813,8 @@ def numeric_mismatch() -> str | None:
 
 
 def take_cpu(name: str) -> None:
-    """Bind this process to the CPU the launcher placed it on (:data:`CPU_ENV`; unset: where the OS puts it): the
-    threads its imports started (numpy's BLAS workers among them) and, by inheritance, every thread it starts later.
+    """Bind this process to the CPU the launcher placed it on (:data:`CPU_ENV`; unset: where the OS puts it): every
+    thread it has (Fast DDS's, numpy's BLAS workers) and, by inheritance, every thread it starts later.
     A CPU the process may not use is said in one line and left to the OS: placement changes speed, never data."""
     cpu = os.environ.get(CPU_ENV, '')
     if not cpu:
@@ -844,7 +850,6 @@ def run_node(name: str, args: list[str] | None = None) -> int:
         print(f'[{name}] CONFIGURATION ERROR: {mismatch}', file=sys.stderr, flush=True)
         return EXIT_CONFIG
     os.environ.setdefault('ROS_LOG_DIR', os.path.join(os.environ.get('TMPDIR', '/tmp'), 'acds_ros_log'))
-    take_cpu(name)
     try:
         rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     except RuntimeError as exc:  # rclpy's RCLError: bad --ros-args or params file
