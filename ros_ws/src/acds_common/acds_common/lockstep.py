@@ -821,7 +821,6 @@ def take_cpu(name: str) -> None:
         return
     try:
         cpus = {int(cpu)}
-        os.sched_setaffinity(0, cpus)
         for tid in sorted(int(t) for t in os.listdir('/proc/self/task')):
             try:
                 os.sched_setaffinity(tid, cpus)
