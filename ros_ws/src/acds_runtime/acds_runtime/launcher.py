@@ -132,6 +132,8 @@ class DomainLease:
                 continue
             self.domain_id, self._fh = candidate, fh
             os.set_inheritable(fh.fileno(), True)
+            #: The zombie shared-memory ports of the domain removed as it was leased (:func:`shm.clean_domain`).
+            self.shm_cleared = shm.clean_domain(candidate)
             return
         if len(choices) == 1:
             raise LaunchError(f'ROS domain {choices[0]} is in use by another run or acds play (lock {DOMAIN_LOCK_DIR})')

@@ -65,3 +65,38 @@ def test_a_lease_file_not_listed_in_proc_locks_is_probed(tmp_path, monkeypatch):
         assert not shm.lock_held(lease)
         assert shm.lock_held(lease, probe=True)
     assert not shm.lock_held(lease, probe=True)
+
+
+def test_a_port_that_was_there_before_goes_with_its_new_lock_files(tmp_path):
+    """A port left without its lock files is reused as found by the next participant on its number (see
+    ``clean_domain``): a zombie goes whole, the port and its mutex with the lock files the run created."""
+    base = 'fastrtps_port7007'
+    for name in (base, f'sem.{base}_mutex'):
+        (tmp_path / name).write_bytes(b'')
+    before = shm.snapshot(tmp_path)
+    for name in (f'{base}_el', f'{base}_sl'):
+        (tmp_path / name).write_bytes(b'')
+        os.utime(tmp_path / name, (time.time() - 60, time.time() - 60))
+    assert sorted(shm.clean_run(before, tmp_path)) == sorted([base, f'{base}_el', f'{base}_sl', f'sem.{base}_mutex'])
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_leased_domain_loses_every_port_of_it_no_process_holds(tmp_path):
+    domain = 3  # its ports: 8150 … 8399
+    bare = 'fastrtps_port8161'  # no lock file left: a zombie all the same
+    for name in (bare, f'sem.{bare}_mutex'):
+        (tmp_path / name).write_bytes(b'')
+        os.utime(tmp_path / name, (time.time() - 60, time.time() - 60))
+    dead = _port(tmp_path, 8163)
+    live = _port(tmp_path, 8165)
+    young = _port(tmp_path, 8167, age_s=0.0)
+    other_domain = _port(tmp_path, 8411)
+    segment = 'fastrtps_0123456789abcdef'
+    (tmp_path / segment).write_bytes(b'')
+    with open(tmp_path / f'{live}_el', 'ab') as held:
+        fcntl.flock(held, fcntl.LOCK_EX)
+        removed = shm.clean_domain(domain, tmp_path)
+    assert sorted(removed) == sorted([bare, f'sem.{bare}_mutex', dead, f'{dead}_el', f'{dead}_sl',
+                                      f'sem.{dead}_mutex'])
+    left = set(os.listdir(tmp_path))
+    assert {live, f'{live}_el', young, other_domain, segment} <= left
