@@ -25,7 +25,8 @@ def test_short_cold_gas_acquisition_reaches_capture_on_both_engines_with_identic
     with launch_graph(sc) as graph:
         result = graph.wait()
         kept = graph.monitor.snapshot()
-    assert set(result.exit_codes) == NODES and set(result.exit_codes.values()) == {0}, result.warnings
+    # The warnings joined: pytest cuts a list element short, and a node's stack is in one.
+    assert set(result.exit_codes) == NODES and set(result.exit_codes.values()) == {0}, '\n'.join(result.warnings)
     s = result.summary
     assert [(t['from'], t['to']) for t in s['mode_transitions']] == [
         ('gas_rate_damping', 'gas_sun_acquisition'), ('gas_sun_acquisition', 'mode_1b'), ('mode_1b', 'capture')]

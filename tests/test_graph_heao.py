@@ -47,7 +47,8 @@ def test_short_acquisition_reaches_capture_and_is_deterministic(launch_graph):
     for _ in range(2):
         with launch_graph(sc) as graph:
             result = graph.wait()
-            assert set(result.exit_codes) == NODES and set(result.exit_codes.values()) == {0}, result.warnings
+            assert set(result.exit_codes) == NODES and set(result.exit_codes.values()) == {0}, \
+                '\n'.join(result.warnings)  # whole (pytest cuts a list element short)
             assert result.steps < sc.total_steps(), 'the run must end at capture, before the time limit'
             summary = result.summary
             digests.append({**stream_digests(result.monitor), topics.resolve(topics.DIAGNOSTICS): diagnostics_by_node(
