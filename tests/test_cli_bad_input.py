@@ -114,3 +114,14 @@ def test_a_domain_another_run_holds_is_one_line_before_the_run_folder(tmp_path):
     assert f'--domain {lease.domain_id}: another run (or acds play) holds this ROS domain now' in proc.stderr, proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
     assert not (tmp_path / 'run').exists()
+
+
+def test_the_test_verb_hands_pytest_the_options_it_does_not_know_and_other_verbs_refuse_them():
+    from acds_cli.__main__ import build_parser, parse
+
+    parser = build_parser()
+    args = parse(parser, ['test', '--durations=20', '-j', '2', 'tests/test_shm.py', '-x'])
+    assert args.jobs == 2 and args.pytest_args == ['--durations=20', 'tests/test_shm.py', '-x']
+    out = run_acds('scenarios', '--durations=20')
+    assert out.returncode == 2 and 'unrecognized arguments: --durations=20' in out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1

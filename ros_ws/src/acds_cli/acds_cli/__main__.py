@@ -113,6 +113,17 @@ def _terminate(signum: int, _frame: object) -> None:
     raise Stopped(signum)
 
 
+def parse(parser: argparse.ArgumentParser, argv: list[str] | None) -> argparse.Namespace:
+    """The verb and its arguments; ``acds test`` hands pytest every option it does not know itself
+    (``acds test --durations=20 -k graph``: argparse's remainder alone stops at an option that comes first)."""
+    args, unknown = parser.parse_known_args(argv)
+    if unknown and args.verb != 'test':
+        parser.parse_args(argv)  # the verb's own one-line usage error, exit 2
+    if unknown:
+        args.pytest_args = [*unknown, *args.pytest_args]
+    return args
+
+
 def main(argv: list[str] | None = None) -> int:
     """Parse the verb and run it; usage and scenario errors are one line, exit 2.
 
@@ -133,7 +144,7 @@ def main(argv: list[str] | None = None) -> int:
     except PluginConflict as exc:
         print(f'acds: plug-in conflict: {exc}', file=sys.stderr)
         return 2
-    args = parser.parse_args(argv)
+    args = parse(parser, argv)
     try:
         code = args.func(args)
         sys.stdout.flush()  # inside: a reader gone before the last write is the BrokenPipeError below
