@@ -118,13 +118,19 @@ def clean_run(before: set[str], shm_dir: Path = SHM_DIR) -> list[str]:
         victims = [base, f'{base}_el', f'{base}_sl']
         if base.startswith('fastrtps_port'):
             victims.append(f'sem.{base}_mutex')
-        for victim in victims:
-            if (shm_dir / victim).exists():
-                try:
-                    (shm_dir / victim).unlink()
-                    removed.append(victim)
-                except OSError:
-                    pass
+        removed += _remove(shm_dir, [v for v in victims if (shm_dir / v).exists()])
+    return removed
+
+
+def _remove(shm_dir: Path, names: list[str]) -> list[str]:
+    """Unlink ``names`` in ``shm_dir``; return those removed (one gone meanwhile, or not ours to remove, is skipped)."""
+    removed = []
+    for name in names:
+        try:
+            (shm_dir / name).unlink()
+            removed.append(name)
+        except OSError:
+            pass
     return removed
 
 
@@ -151,10 +157,5 @@ def clean_domain(domain_id: int, shm_dir: Path = SHM_DIR) -> list[str]:
         locks = [shm_dir / f'fastrtps_port{port}_{kind}' for kind in ('el', 'sl')]
         if any(_young(shm_dir / n) for n in names) or any(p.exists() and lock_held(p) for p in locks):
             continue
-        for name in sorted(names):
-            try:
-                (shm_dir / name).unlink()
-                removed.append(name)
-            except OSError:
-                pass
+        removed += _remove(shm_dir, sorted(names))
     return removed
