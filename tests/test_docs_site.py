@@ -46,6 +46,7 @@ def _parse(path: Path) -> _Refs:
     return p
 
 
+@pytest.mark.duration(133)
 @pytest.mark.timeout(900)  # a fresh checkout's first build makes the figure runs (cached after)
 def test_the_site_builds_clean_with_every_page_link_and_figure(tmp_path):
     """One build (a second worker would build it again), every check of the built site."""

@@ -429,6 +429,7 @@ def _study_peak_kb(out: Path, runs: int) -> int:
 
 
 @pytest.mark.slow
+@pytest.mark.duration(48)
 def test_a_studys_memory_does_not_grow_with_its_samples(tmp_path):
     """150 and 1,500 samples of a short run: the study's peak memory is the same within 2 MB (each sample's draw,
     summary and row on disk, not in memory; the bootstrap in blocks of the same size from 131 samples on; measured

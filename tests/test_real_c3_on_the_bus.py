@@ -84,6 +84,7 @@ def _series(bag_dir: Path, topic: str, dt_s: float, msg_type: str = VECTOR3) -> 
 
 
 @pytest.mark.slow
+@pytest.mark.duration(383)
 @pytest.mark.timeout(900)
 def test_the_real_c3_detumbles_the_emulated_cards(tmp_path: Path) -> None:
     assert c3_python().is_file(), 'no .venv-c3: scripts/setup_env.sh creates it'

@@ -67,6 +67,7 @@ def _wait_port(err: Path, proc: subprocess.Popen, timeout_s: float) -> int:
 
 
 @pytest.mark.slow
+@pytest.mark.duration(111)
 @pytest.mark.timeout(600)
 def test_the_canopen_master_detumbles_within_ten_percent_of_the_built_in(tmp_path: Path) -> None:
     path = _scenario(tmp_path)
