@@ -375,17 +375,22 @@ _FROM_ROW: dict[Output, Callable[[list[float]], Any]] = {}
 
 def _same_rows(layout: Any, out: Output) -> bool:
     """Whether the row ``layout`` of a topic (:class:`acds_common.cdr.RowLayout`) lays a value of ``out`` out as the
-    kernel's row does (:func:`~acds_common.fused.leaves`): then its rows are the observer's."""
-    known = _SAME_ROWS.get((id(layout), out))
+    kernel's row does (:func:`~acds_common.fused.leaves`): then its rows are the observer's.
+
+    Known by what the answer depends on, the layout's width and ``flatten`` (one per message type, kept for the
+    process) and ``out``: every codec has a layout object of its own, so a key by the object's ``id`` grew by ~20
+    entries with every sample of a study and could meet a dead layout's ``id`` again."""
+    key = (layout.width, layout.flatten, out)
+    known = _SAME_ROWS.get(key)
     if known is None:
         n = width(out.shape)
         row = [float(i + 1) for i in range(n)]
-        known = layout.width == n and list(layout.flatten(_from_row(out)(row))) == row
-        _SAME_ROWS[(id(layout), out)] = known
+        known = _SAME_ROWS[key] = layout.width == n and list(layout.flatten(_from_row(out)(row))) == row
     return known
 
 
-_SAME_ROWS: dict[tuple[int, Output], bool] = {}
+#: :func:`_same_rows` by (layout width, layout flatten, output).
+_SAME_ROWS: dict[tuple[int, Callable[[Any], tuple[float, ...]], Output], bool] = {}
 
 
 @dataclass(frozen=True)
