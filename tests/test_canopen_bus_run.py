@@ -44,13 +44,14 @@ class Master:
         self.stop = threading.Event()
         self.writes = 0
         self.timeouts = 0
-        #: SDO request frames (0x638) handed to the bus: each download's, a retry's, an abort's.
+        #: SDO request frames (the card's SDO request COB-ID, canopen's ``rx_cobid``: 0x638) handed to the bus:
+        #: each download's, a retry's, an abort's.
         self.sdo_frames = 0
         send = self.net.send_message
 
         def counted(can_id: int, data: bytes, remote: bool = False) -> None:
             send(can_id, data, remote)
-            self.sdo_frames += can_id == 0x638
+            self.sdo_frames += can_id == self.adcs.sdo.rx_cobid
         self.net.send_message = counted
         self.rates: list[tuple[int, int, int]] = []
         self.first_pdo = threading.Event()
@@ -151,7 +152,7 @@ def test_a_scripted_master_flies_the_cards_and_the_replay_gives_the_same_truth(t
     assert len(rows) == len(frames) + 1
     # Every SDO request the cards answered is in the log, and nothing the master did not send; the download the run
     # ended on may be missing (its request, its retry, its abort: loaded CI logged 91 against 90 answered).
-    logged = sum(f.arbitration_id == 0x638 for f in frames)
+    logged = sum(f.arbitration_id == master.adcs.sdo.rx_cobid for f in frames)
     assert master.writes <= logged <= master.sdo_frames <= logged + 3, (master.writes, logged, master.sdo_frames)
     # Replay without the flight computer: the same truth, bit for bit; without the setpoints it differs.
     replay = _run(tmp_path, 'replay', '--replay-can', str(log))
