@@ -41,8 +41,8 @@ step inside it), ``fused_us_per_model`` (node → µs per step of its fused kern
 ``direct_kernel_ratio_cpu`` (the whole six-model step against the rigid-body kernel alone: direct / core, per wall and
 per CPU second), ``dispersion_samples_per_s``, ``dispersion_samples_per_cpu_s``, ``dispersion_sample_overhead_ms``,
 ``dispersion_draw_ms``, ``fsw_sample_overhead_s``,
-``fsw_sample_steps_per_s``, ``cores`` (and
-``cpu_ms_per_step``, ``load_average``).
+``fsw_sample_steps_per_s``, ``cores``, ``cpu_model`` and ``simd`` (the SIMD targets numpy dispatches to here:
+figures compare between hosts of one model and level only), ``cpu_ms_per_step`` and ``load_average``.
 """
 
 from __future__ import annotations
@@ -50,6 +50,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import platform
 import resource
 import shutil
 import subprocess
@@ -84,6 +85,22 @@ def bench_steps(text: str) -> int:
     if value < MIN_STEPS:
         raise argparse.ArgumentTypeError(f'{value} steps is too few to measure: at least {MIN_STEPS}')
     return value
+
+
+def cpu_model(cpuinfo: str | None = None) -> str:
+    """The CPU's model name (``/proc/cpuinfo``, or ``cpuinfo`` given), else what :mod:`platform` says (an aarch64
+    ``/proc/cpuinfo`` has no model name): a bench's figures compare only between hosts of one model and one SIMD
+    level (Measurements)."""
+    if cpuinfo is None:
+        try:
+            cpuinfo = Path('/proc/cpuinfo').read_text()
+        except OSError:
+            cpuinfo = ''
+    for line in cpuinfo.splitlines():
+        key, sep, value = line.partition(':')
+        if sep and key.strip() == 'model name' and value.strip():
+            return value.strip()
+    return platform.processor() or platform.machine() or 'unknown'
 
 
 def _cpu_s(pid: int) -> float:
@@ -277,7 +294,10 @@ def _bench_modules() -> list:
 
 def main(args: argparse.Namespace) -> int:
     """Run the measurements and print them (``--json``: last line one JSON object)."""
+    from acds_common.numeric_config import numeric_configuration
     from acds_runtime.placement import describe, placement_cpus
+
+    simd = numeric_configuration()['simd']
 
     graph = graph_rate(args.steps)
     bare = bare_chain_rate(graph['hops'], args.steps)
@@ -314,7 +334,7 @@ def main(args: argparse.Namespace) -> int:
               'dispersion_sample_overhead_ms': round(dispersion['overhead_ms'], 2),
               'dispersion_draw_ms': round(dispersion['draw_ms'], 2),
               'fsw_sample_overhead_s': round(fsw_overhead, 3), 'fsw_sample_steps_per_s': round(fsw_rate, 1),
-              'cores': os.cpu_count(),
+              'cores': os.cpu_count(), 'cpu_model': cpu_model(), 'simd': simd,
               'cpu_ms_per_step': {k: round(v, 3) for k, v in graph['cpu_ms_per_step'].items()},
               'load_average': [round(x, 2) for x in os.getloadavg()]}
     print(f'six-node graph ({SCENARIO}, recording on):    {graph["steps_per_s"]:10.1f} steps/s'
@@ -350,7 +370,8 @@ def main(args: argparse.Namespace) -> int:
         result.update(fields)
         for line in lines:
             print(line)
-    print(f'machine: {os.cpu_count()} cores, load average {", ".join(f"{x:.2f}" for x in os.getloadavg())}')
+    print(f'machine: {os.cpu_count()} cores ({result["cpu_model"]}; numpy SIMD {simd}), load average '
+          f'{", ".join(f"{x:.2f}" for x in os.getloadavg())}')
     if args.json:
         print(json.dumps(result))
     return 0
