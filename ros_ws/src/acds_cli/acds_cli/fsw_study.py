@@ -169,7 +169,7 @@ def cmd_fsw_study(args: argparse.Namespace, base: Scenario) -> int:
     out = study_folder('montecarlo', base.name, args)
     steps = _steps(base, args.until_min)
     rerun = rerun_command(args.scenario, args.seed, '{index}', args.vary, args.until_min)
-    _sampler, samples = draw_samples(base, args.seed, args.runs, args.vary, rerun)
+    _sampler, samples = draw_samples(base, args.seed, args.runs, args.vary, rerun, args.jobs)
     items = [f'{i}={r.rpartition("/")[2]}' for i, r in external.items()]
     run_length = _run_length(base, steps, samples)
     extra = [a for e in args.external for a in ('--external', e)]

@@ -31,7 +31,6 @@ a stage of an earlier step still has its timeout.
 
 from __future__ import annotations
 
-import ctypes
 import faulthandler
 import importlib
 import os
@@ -74,6 +73,7 @@ from acds_common.parameters import (
     node_param_specs,
     normalize,
 )
+from acds_common.parent_death import die_with
 from acds_common.profiling import profiled
 from acds_common.stepper import StepError, load_stepper
 from acds_common.timing import StepTimes, overrun
@@ -792,11 +792,7 @@ def _die_with_launcher() -> bool:
     has no launcher to follow.
     """
     launcher = int(os.environ.get(LAUNCHER_PID_ENV, '0') or 0)
-    if not launcher:
-        return True
-    pr_set_pdeathsig = 1
-    ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL, 0, 0, 0)
-    return os.getppid() == launcher
+    return die_with(launcher) if launcher else True
 
 
 def numeric_mismatch() -> str | None:

@@ -38,6 +38,7 @@ from typing import Any
 
 import yaml
 from acds_common.parameters import node_parameters
+from acds_common.parent_death import kill_on_parent_death
 from acds_common.scenario import Scenario
 
 from .launcher import VENV_BIN, GraphRun, LaunchError
@@ -135,21 +136,11 @@ def external_env(graph: GraphRun, extra: dict[str, str] | None = None) -> dict[s
     return env
 
 
-def _die_with_parent() -> Any:
-    """What the child runs before exec (resolved here, before the fork): ``prctl(PR_SET_PDEATHSIG, SIGKILL)``, so it
-    is killed when the thread that started it ends (its study, its Dask worker killed)."""
-    import ctypes
-    import functools
-
-    pr_set_pdeathsig = 1
-    return functools.partial(ctypes.CDLL(None, use_errno=True).prctl, pr_set_pdeathsig, signal.SIGKILL)
-
-
 def start_process(argv: Sequence[str], env: dict[str, str], log: Path) -> subprocess.Popen[bytes]:
     """Start a user's node in a session of its own, its output (stdout and stderr) into ``log``."""
     with log.open('wb') as out:
         return subprocess.Popen(list(argv), stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT, env=env,
-                                start_new_session=True, preexec_fn=_die_with_parent())
+                                start_new_session=True, preexec_fn=kill_on_parent_death())
 
 
 def interrupt(proc: subprocess.Popen[Any]) -> float | None:

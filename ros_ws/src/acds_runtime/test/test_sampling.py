@@ -145,3 +145,57 @@ def test_inclination_to_the_dipole_spans_the_tilt_band(base):
     incl = [initial_geometry(s.draw(i).scenario)['orbit_dipole_inclination_deg'] for i in range(40)]
     assert 11.5 - 1e-9 <= min(incl) and max(incl) <= 33.5 + 1e-9
     assert max(incl) - min(incl) > 12.0
+
+
+def _children() -> set[int]:
+    """This process's child processes (of its main thread), multiprocessing's resource tracker started first (it
+    lives as long as this process, shared by every pool and cluster it starts)."""
+    import os
+    from pathlib import Path
+
+    from acds_runtime.montecarlo import quiet_resource_tracker
+
+    quiet_resource_tracker()
+    return {int(p) for p in Path(f'/proc/{os.getpid()}/task/{os.getpid()}/children').read_text().split()}
+
+
+def test_samples_drawn_in_processes_are_the_ones_drawn_here_in_order(base):
+    from acds_runtime.sampling import kept_samples
+
+    sampler = Sampler(base, 3, ['magnetometer.residual_field_gauss=normal(0, 0.002)'], command='rerun {index}')
+    before = _children()
+    here = list(kept_samples(sampler, 1, 24, 1))
+    there = list(kept_samples(sampler, 1, 24, 2, minimum=0, chunk=5))
+    assert [s.index for s in there] == list(range(1, 24))
+    assert there == here
+    assert _children() == before  # every drawing process joined
+
+
+def test_a_bad_draw_in_a_drawing_process_is_the_same_error_here(base):
+    from acds_common.scenario import ScenarioError
+    from acds_runtime.sampling import kept_samples
+
+    sampler = Sampler(base, 3, ['orbit.altitude_nmi=uniform(-500, -400)'])
+    errors = []
+    for processes, minimum in ((1, 0), (2, 0)):
+        with pytest.raises(ScenarioError) as caught:
+            list(kept_samples(sampler, 1, 12, processes, minimum=minimum, chunk=3))
+        errors.append(str(caught.value))
+    assert errors[0] == errors[1] and 'altitude' in errors[0]
+
+
+def test_a_drawing_process_that_dies_is_one_error_not_a_lost_sample(base):
+    import os
+    import signal
+
+    from acds_runtime.sampling import kept_samples
+
+    before = _children()
+    samples = kept_samples(Sampler(base, 3), 0, 400, 2, minimum=0, chunk=5)
+    first = next(samples)
+    assert first.index == 0
+    for pid in _children() - before:
+        os.kill(pid, signal.SIGKILL)
+    with pytest.raises(SamplingError, match=r'a process drawing samples \d+–\d+ ended before it had drawn them'):
+        list(samples)
+    assert _children() == before

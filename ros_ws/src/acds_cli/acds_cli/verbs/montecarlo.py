@@ -143,19 +143,27 @@ def _run_length(scenario: Scenario, steps: int | None, samples: list[Any] | None
     return text
 
 
-def draw_samples(base: Scenario, seed: int, runs: int, vary: list[str], command: str) -> tuple[Any, Any]:
+def draw_samples(base: Scenario, seed: int, runs: int, vary: list[str], command: str,
+                 jobs: int = 1) -> tuple[Any, Any]:
     """The sampler and its ``runs`` samples as the study keeps them (``KeptSample``: each validated, then its
-    Scenario let go; the first pre-flighted: every stepper built), on disk (``SpooledSamples``: the study's memory
-    does not grow with its samples)."""
-    from acds_runtime.sampling import SpooledSamples
+    Scenario let go; the first pre-flighted here: every stepper built), on disk (``SpooledSamples``: the study's
+    memory does not grow with its samples); a large study's drawn in ``jobs`` processes
+    (:func:`acds_runtime.sampling.kept_samples`)."""
+    from contextlib import closing
+
+    from acds_runtime.sampling import SamplingError, SpooledSamples, kept_samples
 
     sampler = _sampler(base, seed, vary, command)
     samples = SpooledSamples()
-    for i in range(runs):
-        sample = _draw(sampler, i)
-        if i == 0:
-            _preflight(sample)
-        samples.append(sample.kept())
+    first = _draw(sampler, 0)
+    _preflight(first)
+    samples.append(first.kept())
+    try:
+        with closing(kept_samples(sampler, 1, runs, jobs)) as rest:
+            for sample in rest:
+                samples.append(sample)
+    except SamplingError as exc:
+        raise UsageError(str(exc)) from None
     return sampler, samples
 
 
@@ -354,7 +362,7 @@ def cmd_montecarlo(args: argparse.Namespace) -> int:
     check_disk(out, args.runs)
     steps = _steps(base, args.until_min)
     rerun = rerun_command(args.scenario, args.seed, '{index}', args.vary, args.until_min)
-    sampler, samples = draw_samples(base, args.seed, args.runs, args.vary, rerun)
+    sampler, samples = draw_samples(base, args.seed, args.runs, args.vary, rerun, args.jobs)
     variables = [v.text for v in sampler.variables]
     run_length = _run_length(base, steps, samples)
     command = study_command(['montecarlo', args.scenario], args)

@@ -211,7 +211,7 @@ def cmd_paired(args: argparse.Namespace) -> int:
             raise UsageError(str(exc)) from None
         for text in skipped:
             print(f'[sweep] {sc.name}: --vary {text} not applied (the case sets that key itself)', file=sys.stderr)
-        _sampler, samples = draw_samples(sc, args.seed, args.runs, vary, '')
+        _sampler, samples = draw_samples(sc, args.seed, args.runs, vary, '', args.jobs)
         samples_by_case.append(samples)
         steps_by_case.append(None if args.until_min is None else max(1, round(args.until_min * 60 /
                                                                                sc.control_period_s)))
