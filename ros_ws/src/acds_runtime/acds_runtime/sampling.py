@@ -526,10 +526,12 @@ def kept_samples(sampler: Sampler, start: int, stop: int, processes: int, *, min
     """Samples ``start`` … ``stop − 1`` of ``sampler`` as a study keeps them, in index order: drawn here, or, with
     ``processes`` > 1 and at least ``minimum`` of them, in that many processes (spawned: they inherit nothing of
     the study's process but the sampler) ``chunk`` at a time. The same samples either way: sample K depends only
-    on the base, the seed, K and the distributions (module doc). A study's first minutes on 2 cores were its draw,
-    one process working (10,000 samples: ~29 s on the slower host of Measurements). A drawing process ignores
-    Ctrl-C (the study's process answers it, and stops them) and is killed with the study's process
-    (:mod:`acds_common.parent_death`). A :class:`SamplingError` in a drawing process is raised here."""
+    on the base, the seed, K and the distributions (module doc). Drawn here, a study's first seconds had one core
+    working (10,000 samples: 24.4 s on the slower host of Measurements; 13.8 s in two processes). A drawing process
+    ignores Ctrl-C (the study's process answers it, and stops them) and is killed with the study's process
+    (:mod:`acds_common.parent_death`). A bad draw in a drawing process raises here the error the same draw raises
+    here (:class:`SamplingError`, a scenario error); a drawing process that dies is a :class:`SamplingError`
+    naming its samples."""
     if processes < 2 or stop - start < max(minimum, 2):
         for index in range(start, stop):
             yield sampler.draw(index).kept()
