@@ -32,9 +32,18 @@ def c3_dictionary() -> canopen.ObjectDictionary:
     return OreSatConfig('oresat1').od_db['c3']
 
 
+#: Seconds this client waits for each SDO answer of the C3 (canopen's default 0.3 s, one retry): the C3 is a Python
+#: program answering in its own thread, beside its ADCS loop and the cards' PDOs; on a loaded 2-core machine an upload
+#: of its ``adcs`` record went unanswered in 0.3 s twice (a fresh clone's suite, the real-C3 test).
+SDO_RESPONSE_TIMEOUT_S = 2.0
+
+
 def connect(network: canopen.Network) -> canopen.RemoteNode:
-    """The C3 as a remote node on ``network`` (SDO client on COB-IDs 0x601/0x581)."""
-    return network.add_node(canopen.RemoteNode(C3_NODE_ID, c3_dictionary()))
+    """The C3 as a remote node on ``network`` (SDO client on COB-IDs 0x601/0x581, waiting
+    :data:`SDO_RESPONSE_TIMEOUT_S` for each answer)."""
+    node = network.add_node(canopen.RemoteNode(C3_NODE_ID, c3_dictionary()))
+    node.sdo.RESPONSE_TIMEOUT = SDO_RESPONSE_TIMEOUT_S
+    return node
 
 
 def command_detumble(c3: canopen.RemoteNode, orbit_period_s: float, inclination_rad: float) -> dict[str, float]:
